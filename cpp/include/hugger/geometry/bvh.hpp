@@ -1,0 +1,77 @@
+/// \file bvh.hpp
+/// An axis-aligned bounding-volume hierarchy over a triangle soup, answering exact
+/// nearest-feature queries for points and segments, and ray-crossing counts.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "hugger/geometry/distance.hpp"
+#include "hugger/types.hpp"
+
+namespace hugger {
+
+struct Aabb {
+  Vec3 lo = Vec3::Constant(kInf);
+  Vec3 hi = Vec3::Constant(-kInf);
+  void grow(const Vec3& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  void grow(const Aabb& b) {
+    lo = lo.cwiseMin(b.lo);
+    hi = hi.cwiseMax(b.hi);
+  }
+  Vec3 centre() const { return 0.5 * (lo + hi); }
+  Vec3 extent() const { return hi - lo; }
+  /// Squared distance from p to the box (0 inside).
+  double squared_distance(const Vec3& p) const {
+    return (lo - p).cwiseMax(p - hi).cwiseMax(0.0).squaredNorm();
+  }
+  /// Squared distance between two boxes (0 when they overlap).
+  double squared_distance(const Aabb& b) const {
+    return (lo - b.hi).cwiseMax(b.lo - hi).cwiseMax(0.0).squaredNorm();
+  }
+};
+
+/// Result of a nearest-feature query: which triangle, which feature of it, both points.
+struct NearestResult {
+  double distance = kInf;  ///< Euclidean distance (>= 0); 0 when the query touches or crosses the mesh
+  Vec3 on_query = Vec3::Zero();  ///< closest point of the query primitive
+  Vec3 on_mesh = Vec3::Zero();   ///< closest point of the mesh
+  int triangle = -1;             ///< index of the triangle in the input faces (-1: nothing within the bound)
+  TriangleFeature feature = TriangleFeature::kFace;
+  bool crosses = false;  ///< the query segment crosses (or touches) a triangle
+};
+
+class TriangleBvh {
+ public:
+  TriangleBvh() = default;
+  /// Builds over triangles `faces` of `vertices` (indices already validated).
+  TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int leaf_size = 4);
+
+  /// Nearest mesh point to segment [a, b] (a == b: a point query). Triangles farther than
+  /// `max_distance` may be skipped; then `triangle` is -1 and `distance` is infinite.
+  NearestResult nearest(const Vec3& a, const Vec3& b, double max_distance = kInf) const;
+
+  /// Number of triangles crossed by the ray origin + t * dir, t > 0.
+  int ray_crossings(const Vec3& origin, const Vec3& dir) const;
+
+  const Aabb& bounds() const { return nodes_.front().box; }
+  std::size_t size() const { return tris_.size(); }
+
+ private:
+  struct Node {
+    Aabb box;
+    int left = -1, right = -1;  ///< children (internal node)
+    int first = 0, count = 0;   ///< range in tris_ (leaf when count > 0)
+  };
+  int build(std::vector<int>& ids, int begin, int end, const std::vector<Vec3>& centroids,
+            const std::vector<Aabb>& boxes, int leaf_size, std::vector<int>& order);
+
+  std::vector<Node> nodes_;
+  std::vector<std::array<Vec3, 3>> tris_;  ///< triangles in leaf order
+  std::vector<int> ids_;                   ///< input index of each triangle in tris_
+};
+
+}  // namespace hugger

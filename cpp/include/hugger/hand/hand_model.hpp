@@ -1,0 +1,68 @@
+/// \file hand_model.hpp
+/// The hand (DESIGN.md section 2): a round palm and M planar fingers of N revolute links.
+#pragma once
+
+#include <vector>
+
+#include "hugger/types.hpp"
+
+namespace hugger {
+
+/// A finger plane: origin, the radial unit vector u (xi axis) and the palm normal p (eta axis).
+/// In-plane coordinates (xi, eta) map to origin + xi * u + eta * p.
+struct FingerPlane {
+  Vec3 origin = Vec3::Zero();
+  Vec3 u = Vec3::UnitX();
+  Vec3 p = Vec3::UnitZ();
+  Vec3 to_world(const Vec2& x) const { return origin + x.x() * u + x.y() * p; }
+  Vec2 to_plane(const Vec3& x) const { return Vec2((x - origin).dot(u), (x - origin).dot(p)); }
+  Vec3 normal() const { return p.cross(u); }
+};
+
+/// Immutable description of the hand. Sizes in metres.
+class HandModel {
+ public:
+  /// Throws std::invalid_argument for non-positive counts or sizes, negative radius,
+  /// or a `link_lengths` matrix that is not fingers x links.
+  HandModel(int fingers, int links, const MatrixX& link_lengths, double link_radius, double palm_radius,
+            double palm_thickness);
+  /// All links of equal length.
+  static HandModel uniform(int fingers, int links, double link_length, double link_radius, double palm_radius,
+                           double palm_thickness);
+
+  int fingers() const { return fingers_; }
+  int links() const { return links_; }
+  double link_length(int m, int n) const { return lengths_(m, n); }
+  const MatrixX& link_lengths() const { return lengths_; }
+  double finger_length(int m) const { return lengths_.row(m).sum(); }
+  double link_radius() const { return link_radius_; }
+  double palm_radius() const { return palm_radius_; }
+  double palm_thickness() const { return palm_thickness_; }
+  /// phi_m = 2 pi m / M, the angle of finger m's root about the palm normal.
+  double finger_angle(int m) const { return finger_angles_[m]; }
+  const std::vector<double>& finger_angles() const { return finger_angles_; }
+  /// Largest distance from P_o of any joint of the extended hand.
+  double extended_radius() const;
+
+  /// Root R_m in the world for palm pose T_WP.
+  Vec3 root(const Pose& palm, int m) const;
+  /// Finger m's plane for palm pose T_WP, with its origin at P_o.
+  FingerPlane plane(const Pose& palm, int m) const;
+
+  /// Forward kinematics: joints (M*(N+1) points, finger-major) from angles (M x N).
+  std::vector<Vec3> forward(const Pose& palm, const MatrixX& angles) const;
+  /// In-plane forward kinematics of one finger from its root (xi, eta) and its angles.
+  std::vector<Vec2> forward_planar(int m, const Vec2& root, const double* angles) const;
+  /// Joint angles of one finger from its in-plane joint positions (N+1 points).
+  static void planar_angles(const std::vector<Vec2>& joints, double* angles);
+  /// Joint angles (M x N) from world joint positions (finger-major, M*(N+1)).
+  MatrixX angles_from_joints(const Pose& palm, const std::vector<Vec3>& joints) const;
+
+ private:
+  int fingers_, links_;
+  MatrixX lengths_;
+  double link_radius_, palm_radius_, palm_thickness_;
+  std::vector<double> finger_angles_;
+};
+
+}  // namespace hugger

@@ -1,0 +1,101 @@
+/// \file planner.hpp
+/// The Hugger algorithm (Reznik & Lumelsky 1994; DESIGN.md section 3) as an iterator.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hugger/hand/hand_model.hpp"
+#include "hugger/sensing/sensing.hpp"
+#include "hugger/types.hpp"
+
+namespace hugger {
+
+enum class TipState : std::int8_t { kFrozen = 0, kContact = 1, kDone = 2 };
+enum class Status : std::int8_t { kRunning = 0, kDone = 1, kMaxIterations = 2 };
+std::string to_string(Status s);
+
+/// Planner parameters. NaN selects the documented default; any other value must be positive.
+struct PlannerParams {
+  double step = std::numeric_limits<double>::quiet_NaN();   ///< fingertip step s (m); default: shortest link / 20
+  double epsilon = std::numeric_limits<double>::quiet_NaN();  ///< overextension threshold (m); default: step / 10
+  double contact_tolerance = std::numeric_limits<double>::quiet_NaN();  ///< sensing distance delta (m); default 1e-4
+  long max_iterations = 20000;     ///< bound on Phase 2 iterations
+};
+
+/// One hand configuration (DESIGN.md section 2).
+struct Configuration {
+  Pose palm = Pose::Identity();   ///< T_WP
+  std::vector<Vec3> joints;       ///< M*(N+1) points in the world, finger-major
+  MatrixX angles;                 ///< M x N joint angles (rad)
+  std::vector<TipState> tip_state;///< per finger, after this configuration
+  int phase = 0;                  ///< 0 for C_init, then 1 or 2
+  long iteration = 0;             ///< index of this configuration in the plan
+};
+
+/// Counters of one plan, for inspection and benchmarks.
+struct PlannerStats {
+  long phase1_configurations = 0;
+  long phase2_iterations = 0;
+  long first_contact_iteration = -1;  ///< Phase 2 iteration of the first touch (-1: none yet)
+  long palm_contact_iteration = -1;   ///< Phase 2 iteration at which the palm touched
+  long sigma_retries = 0;             ///< iterations whose palm step had to be taken back
+  long finger_collisions = 0;         ///< fingers stopped by another finger or themselves
+  long clinging_failures = 0;         ///< fingers stopped because no free link position was found
+};
+
+class Planner {
+ public:
+  /// Checks the inputs and plans Phase 1. Throws std::invalid_argument when the palm pose is
+  /// not rigid, a parameter is out of range, or the hand touches O at C_init or during Phase 1.
+  Planner(HandModel hand, std::shared_ptr<const Sensing> sensing, const Vec3& target, const Pose& palm_pose,
+          PlannerParams params = {});
+
+  /// The next configuration, or nothing when the plan has ended.
+  std::optional<Configuration> step();
+  /// Runs to the end; returns the final status.
+  Status plan();
+
+  Status status() const { return status_; }
+  bool finished() const { return status_ != Status::kRunning && next_ >= history_.size(); }
+  const std::vector<Configuration>& history() const { return history_; }
+  const HandModel& hand() const { return hand_; }
+  const PlannerParams& params() const { return params_; }
+  const PlannerStats& stats() const { return stats_; }
+  const Vec3& target() const { return target_; }
+
+ private:
+  using Chain = std::vector<Vec2>;
+  void plan_phase1(const Pose& start);
+  void check_clear(const Configuration& c, const char* when) const;
+  Configuration make_configuration(int phase) const;
+  void phase2_iteration();
+  bool chain_free(int m, const Chain& chain) const;
+  bool head2tail(int m, const Vec2& head, Chain& chain) const;
+  bool tail2head(int m, const Vec2& root, Chain& chain) const;
+  bool fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const;
+  double link_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
+
+  HandModel hand_;
+  std::shared_ptr<const Sensing> sensing_;
+  Vec3 target_;
+  PlannerParams params_;
+  Status status_ = Status::kRunning;
+  std::vector<Configuration> history_;
+  std::size_t next_ = 0;  ///< next configuration step() hands out
+  PlannerStats stats_;
+
+  // Phase 2 state: each finger lives in a fixed plane; the palm has moved eta_ along p.
+  bool phase2_started_ = false;
+  Pose palm2_ = Pose::Identity();  ///< palm pose when Phase 2 started
+  std::vector<FingerPlane> planes_;
+  std::vector<Chain> chains_;
+  std::vector<TipState> states_;
+  double eta_ = 0.0;
+  bool palm_touched_ = false;
+  bool any_contact_ = false;
+};
+
+}  // namespace hugger

@@ -1,0 +1,88 @@
+/// \file sensing.hpp
+/// The whole-sensitive skin: every fact the planner learns about the object comes through
+/// this interface (DESIGN.md section 4). The simulated world implements its two primitive
+/// queries; the higher-level queries (tip contact, boundary following, rotating a link until
+/// it touches or frees) are built on them here and may be overridden by a faster or a real
+/// implementation.
+#pragma once
+
+#include "hugger/hand/hand_model.hpp"
+#include "hugger/types.hpp"
+
+namespace hugger {
+
+/// What a piece of skin senses: the gap to the object and where. Signed: gap < 0 when the part
+/// penetrates O or lies inside it (FCL's convention). Exact when gap <= the query's `cap`;
+/// otherwise any value >= cap may be returned.
+struct Touch {
+  double gap = kInf;               ///< metres between the part's surface and O
+  Vec3 on_hand = Vec3::Zero();     ///< nearest point of the part's axis (capsules) or centre
+  Vec3 on_object = Vec3::Zero();   ///< nearest point of O
+  Vec3 normal = Vec3::UnitZ();     ///< gradient of the signed distance at on_hand (unit, outward)
+};
+
+/// Boundary following in a finger plane (DESIGN.md section 3, decision 5).
+struct FollowRequest {
+  FingerPlane plane;
+  Vec2 tip = Vec2::Zero();       ///< current fingertip (xi, eta)
+  double radius = 0.0;           ///< link radius
+  double step = 1e-3;            ///< chord length from the tip to the head H
+  double level = 5e-5;           ///< gap the head keeps from O while sliding (> 0)
+  Vec2 root = Vec2::Zero();      ///< finger root; H stays within `reach` of it
+  double reach = kInf;
+  double front = -kInf;          ///< eta of the palm's front plane: H stays in front of it
+};
+struct FollowResult {
+  Vec2 head = Vec2::Zero();  ///< H
+  double gap = kInf;         ///< gap of the tip sphere at H
+  int steps = 0;             ///< marching steps used
+};
+
+/// Rotating a link [pivot, end] about pivot.
+struct RotateRequest {
+  FingerPlane plane;
+  Vec2 pivot = Vec2::Zero();
+  Vec2 end = Vec2::Zero();
+  double radius = 0.0;
+  double front = -kInf;          ///< neither end may pass behind this eta
+  double max_angle = kPi;        ///< search range (radians)
+  double tolerance = 1e-5;       ///< metres of end motion to which the result is resolved
+  double touch_gap = 1e-4;       ///< rotate_until_touch: stop when the gap is at most this
+  double level = 5e-5;           ///< rotate_until_touch: never come closer than this
+  double sample_angle = 0.05;    ///< rotate_until_free: coarse search increment (radians)
+};
+struct RotateResult {
+  bool ok = false;         ///< a free position was found (until_free) / the link touched (until_touch)
+  Vec2 end = Vec2::Zero(); ///< the link's new free end
+  double angle = 0.0;      ///< signed rotation, counter-clockwise positive (= flexion)
+  double gap = kInf;       ///< gap of the link at its new position
+};
+
+class Sensing {
+ public:
+  virtual ~Sensing() = default;
+
+  /// Gap between the capsule of axis [a, b] and `radius` and O (a == b: a sphere).
+  virtual Touch capsule(const Vec3& a, const Vec3& b, double radius, double cap = kInf) const = 0;
+  /// Gap between the palm (a disk of `radius` and `thickness` behind the front face of pose
+  /// T_WP) and O.
+  virtual double palm(const Pose& palm, double radius, double thickness, double cap = kInf) const = 0;
+
+  /// Gap of a link given in finger-plane coordinates.
+  Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap = kInf) const {
+    return capsule(plane.to_world(a), plane.to_world(b), radius, cap);
+  }
+  /// True when the link is collision-free and in front of the palm's front plane.
+  bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front) const;
+
+  /// Slide the fingertip along O's boundary in its plane, counter-clockwise (interior on the
+  /// left), to the first point whose chord from the tip is `step`.
+  virtual FollowResult follow_boundary(const FollowRequest& req) const;
+  /// Flex the link about its pivot (counter-clockwise) until it touches O, up to max_angle.
+  virtual RotateResult rotate_until_touch(const RotateRequest& req) const;
+  /// Rotate a colliding link about its pivot by the smallest angle (either way) that frees it,
+  /// leaving it tangent to O.
+  virtual RotateResult rotate_until_free(const RotateRequest& req) const;
+};
+
+}  // namespace hugger

@@ -1,0 +1,23 @@
+/// \file types.hpp
+/// Aliases every part of Hugger uses. Units: metres, radians.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <limits>
+
+namespace hugger {
+
+using Vec2 = Eigen::Vector2d;
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
+using Pose = Eigen::Isometry3d;  ///< rigid transform, the same type as fcl::Transform3d
+using PointsN3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using FacesN3 = Eigen::Matrix<std::int64_t, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using MatrixX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kPi = 3.14159265358979323846;
+
+}  // namespace hugger

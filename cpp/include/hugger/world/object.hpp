@@ -1,0 +1,64 @@
+/// \file object.hpp
+/// The object O: a closed, consistently oriented triangle mesh in the world frame, with
+/// the acceleration structures the simulated world answers sensing queries from.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "hugger/geometry/bvh.hpp"
+#include "hugger/geometry/section.hpp"
+#include "hugger/types.hpp"
+
+namespace fcl {
+template <typename S>
+class CollisionObject;
+}
+
+namespace hugger {
+
+/// Signed nearest-feature result: distance < 0 when the query lies inside O.
+struct SignedNearest {
+  double signed_distance = kInf;  ///< metres; > 0 outside O, < 0 inside (FCL's sign convention)
+  Vec3 on_query = Vec3::Zero();   ///< closest point of the query
+  Vec3 on_object = Vec3::Zero();  ///< closest point of O's surface
+  int triangle = -1;              ///< triangle of O holding on_object (-1: nothing within the bound)
+  bool crosses = false;           ///< a segment query crosses O's surface (its depth is not measured)
+};
+
+class Object {
+ public:
+  /// Validates and builds. Throws std::invalid_argument naming what is wrong: empty arrays,
+  /// non-finite vertices, indices out of range, degenerate (repeated-index) faces, a mesh that
+  /// is not closed or not consistently oriented, or one whose normals point inward.
+  Object(const PointsN3& vertices, const FacesN3& faces);
+
+  const PointsN3& vertices() const { return vertices_; }
+  const FacesN3& faces() const { return faces_; }
+  const Aabb& bounds() const { return bvh_.bounds(); }
+  double volume() const { return volume_; }
+
+  /// Signed distance query for segment [a, b] (a == b: a point). Features farther than
+  /// `max_distance` may be skipped (then signed_distance is +inf or -inf).
+  SignedNearest nearest(const Vec3& a, const Vec3& b, double max_distance = kInf) const;
+  /// True when p is strictly inside O (ray parity, majority of three rays).
+  bool inside(const Vec3& p) const;
+  /// The planar section of O in the plane through `origin` spanned by orthonormal u, v.
+  Section section(const Vec3& origin, const Vec3& u, const Vec3& v) const;
+  /// FCL collision object of the mesh (a BVHModel<OBBRSSd>) in the world frame.
+  const fcl::CollisionObject<double>& fcl_object() const { return *fcl_object_; }
+
+ private:
+  double sign_at(const Vec3& query, const Vec3& on_mesh, int triangle, TriangleFeature f) const;
+
+  PointsN3 vertices_;
+  FacesN3 faces_;
+  TriangleBvh bvh_;
+  std::vector<Vec3> face_normals_;            ///< unit (zero for degenerate faces)
+  std::vector<std::array<Vec3, 3>> edge_normals_;  ///< per face, pseudo-normal of edges ab, bc, ca
+  std::vector<Vec3> vertex_normals_;          ///< angle-weighted pseudo-normals
+  double volume_ = 0.0;
+  std::shared_ptr<fcl::CollisionObject<double>> fcl_object_;
+};
+
+}  // namespace hugger

@@ -1,0 +1,25 @@
+/// \file simulated_world.hpp
+/// The simulated world: answers the whole-sensitive skin's queries from a known mesh.
+#pragma once
+
+#include <memory>
+
+#include "hugger/sensing/sensing.hpp"
+#include "hugger/world/object.hpp"
+
+namespace hugger {
+
+class SimulatedWorld final : public Sensing {
+ public:
+  explicit SimulatedWorld(std::shared_ptr<const Object> object);
+
+  Touch capsule(const Vec3& a, const Vec3& b, double radius, double cap = kInf) const override;
+  double palm(const Pose& palm, double radius, double thickness, double cap = kInf) const override;
+
+  const Object& object() const { return *object_; }
+
+ private:
+  std::shared_ptr<const Object> object_;
+};
+
+}  // namespace hugger

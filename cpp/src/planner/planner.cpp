@@ -1,0 +1,401 @@
+#include "hugger/planner/planner.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "hugger/geometry/distance.hpp"
+
+namespace hugger {
+
+std::string to_string(Status s) {
+  switch (s) {
+    case Status::kRunning: return "running";
+    case Status::kDone: return "done";
+    case Status::kMaxIterations: return "max_iterations";
+  }
+  return "unknown";
+}
+
+namespace {
+
+[[noreturn]] void invalid(const std::string& what) { throw std::invalid_argument(what); }
+
+std::string fmt(double x) {
+  std::ostringstream os;
+  os << x;
+  return os.str();
+}
+
+double resolve(double value, double fallback, const char* name) {
+  if (std::isnan(value)) return fallback;
+  if (!std::isfinite(value) || value <= 0.0) invalid(std::string(name) + " must be a positive finite number, got " + fmt(value));
+  return value;
+}
+
+}  // namespace
+
+Planner::Planner(HandModel hand, std::shared_ptr<const Sensing> sensing, const Vec3& target, const Pose& palm_pose,
+                 PlannerParams params)
+    : hand_(std::move(hand)), sensing_(std::move(sensing)), target_(target), params_(params) {
+  if (!sensing_) invalid("the planner needs a sensing interface");
+  if (!target_.allFinite()) invalid("target must be a finite 3-vector");
+  double shortest = kInf;
+  for (int m = 0; m < hand_.fingers(); ++m)
+    for (int n = 0; n < hand_.links(); ++n) shortest = std::min(shortest, hand_.link_length(m, n));
+  params_.step = resolve(params.step, shortest / 20.0, "step");
+  if (params_.step > shortest)
+    invalid("step (" + fmt(params_.step) + " m) must not exceed the shortest link (" + fmt(shortest) + " m)");
+  params_.contact_tolerance = resolve(params.contact_tolerance, 1e-4, "contact_tolerance");
+  if (params_.contact_tolerance >= params_.step)
+    invalid("contact_tolerance (" + fmt(params_.contact_tolerance) + " m) must be smaller than step (" +
+            fmt(params_.step) + " m)");
+  params_.epsilon = resolve(params.epsilon, params_.step / 10.0, "epsilon");
+  if (params_.epsilon > params_.step)
+    invalid("epsilon (" + fmt(params_.epsilon) + " m) must not exceed step (" + fmt(params_.step) + " m)");
+  if (params_.max_iterations < 1) invalid("max_iterations must be at least 1, got " + std::to_string(params_.max_iterations));
+
+  const Mat3 R = palm_pose.linear();
+  const double orth = (R.transpose() * R - Mat3::Identity()).cwiseAbs().maxCoeff();
+  if (!palm_pose.matrix().allFinite() || !(orth <= 1e-6) || !(std::abs(R.determinant() - 1.0) <= 1e-6))
+    invalid("palm_pose must be a rigid transform (orthonormal rotation with determinant +1); orthonormality error " +
+            fmt(orth));
+  // Re-orthonormalise so that every emitted pose is rigid to machine precision.
+  Pose start = Pose::Identity();
+  start.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
+  start.translation() = palm_pose.translation();
+  if ((target_ - start.translation()).norm() <= 1e-9) invalid("target coincides with the palm origin P_o");
+  plan_phase1(start);
+}
+
+void Planner::check_clear(const Configuration& c, const char* when) const {
+  const double delta = params_.contact_tolerance;
+  const int N = hand_.links();
+  for (int m = 0; m < hand_.fingers(); ++m)
+    for (int n = 0; n < N; ++n) {
+      const Touch t = sensing_->capsule(c.joints[m * (N + 1) + n], c.joints[m * (N + 1) + n + 1], hand_.link_radius(), delta);
+      if (t.gap <= delta)
+        invalid(std::string("the hand touches or penetrates the object ") + when + ": link " + std::to_string(n) +
+                " of finger " + std::to_string(m) + " has a gap of " + fmt(t.gap) +
+                " m; start the palm farther from the object");
+    }
+  const double pg = sensing_->palm(c.palm, hand_.palm_radius(), hand_.palm_thickness(), delta);
+  if (pg <= delta)
+    invalid(std::string("the palm touches, penetrates or lies inside the object ") + when + " (gap " + fmt(pg) +
+            " m); start the palm farther from the object");
+}
+
+void Planner::plan_phase1(const Pose& start) {
+  const MatrixX zero = MatrixX::Zero(hand_.fingers(), hand_.links());
+  auto extended = [&](const Pose& palm, int phase) {
+    Configuration c;
+    c.palm = palm;
+    c.joints = hand_.forward(palm, zero);
+    c.angles = zero;
+    c.tip_state.assign(hand_.fingers(), TipState::kFrozen);
+    c.phase = phase;
+    c.iteration = static_cast<long>(history_.size());
+    return c;
+  };
+  history_.push_back(extended(start, 0));
+  check_clear(history_.back(), "at the start (C_init)");
+  const Vec3 p = start.linear().col(2), t = target_ - start.translation();
+  const Vec3 axis_raw = p.cross(t);
+  const double alpha = std::atan2(axis_raw.norm(), p.dot(t));
+  if (alpha > 1e-12) {
+    const Vec3 axis = axis_raw.norm() > 1e-12 * t.norm() ? Vec3(axis_raw.normalized()) : Vec3(start.linear().col(0));
+    const long n = std::max(1L, static_cast<long>(std::ceil(alpha * hand_.extended_radius() / params_.step)));
+    if (n > 10000000) invalid("Phase 1 would need more than 10^7 increments: the step is too small for this hand");
+    for (long k = 1; k <= n; ++k) {
+      Pose palm = start;
+      palm.linear() = Eigen::AngleAxisd(alpha * static_cast<double>(k) / static_cast<double>(n), axis).toRotationMatrix() *
+                      start.linear();
+      history_.push_back(extended(palm, 1));
+      const std::string when = "during Phase 1 (reorientation, increment " + std::to_string(k) + " of " +
+                               std::to_string(n) + ")";
+      check_clear(history_.back(), when.c_str());
+    }
+    stats_.phase1_configurations = n;
+  }
+  // Phase 2 state: each finger in its plane, fixed in the world while the palm translates.
+  palm2_ = history_.back().palm;
+  for (int m = 0; m < hand_.fingers(); ++m) {
+    planes_.push_back(hand_.plane(palm2_, m));
+    Chain c(hand_.links() + 1);
+    c[0] = Vec2(hand_.palm_radius(), 0.0);
+    for (int n = 0; n < hand_.links(); ++n) c[n + 1] = c[n] + Vec2(0.0, hand_.link_length(m, n));
+    chains_.push_back(std::move(c));
+  }
+  states_.assign(hand_.fingers(), TipState::kFrozen);
+}
+
+Configuration Planner::make_configuration(int phase) const {
+  Configuration c;
+  c.palm = palm2_;
+  c.palm.translation() += eta_ * palm2_.linear().col(2);
+  const int M = hand_.fingers(), N = hand_.links();
+  c.joints.reserve(M * (N + 1));
+  c.angles.resize(M, N);
+  for (int m = 0; m < M; ++m) {
+    for (const Vec2& x : chains_[m]) c.joints.push_back(planes_[m].to_world(x));
+    HandModel::planar_angles(chains_[m], c.angles.row(m).data());
+  }
+  c.tip_state = states_;
+  c.phase = phase;
+  c.iteration = static_cast<long>(history_.size());
+  return c;
+}
+
+double Planner::link_gap(int m, const Vec2& a, const Vec2& b, double cap) const {
+  return sensing_->link(planes_[m], a, b, hand_.link_radius(), cap).gap;
+}
+
+bool Planner::head2tail(int m, const Vec2& head, Chain& chain) const {
+  const int N = hand_.links();
+  const Chain old = chain;
+  chain[N] = head;
+  RotateRequest req;
+  req.plane = planes_[m];
+  req.radius = hand_.link_radius();
+  req.front = eta_;
+  req.tolerance = params_.contact_tolerance / 8.0;
+  for (int n = N - 1; n >= 0; --n) {
+    const double L = hand_.link_length(m, n);
+    Vec2 dir = old[n] - chain[n + 1];
+    if (dir.norm() < 1e-15) dir = old[n] - old[n + 1];
+    chain[n] = chain[n + 1] + L * dir.normalized();
+    if (!sensing_->link_free(planes_[m], chain[n], chain[n + 1], req.radius, req.front)) {
+      req.pivot = chain[n + 1];
+      req.end = chain[n];
+      req.sample_angle = std::min(0.1, params_.step / (2.0 * L));
+      const RotateResult r = sensing_->rotate_until_free(req);
+      if (!r.ok) return false;
+      chain[n] = r.end;
+    }
+  }
+  return true;
+}
+
+bool Planner::tail2head(int m, const Vec2& root, Chain& chain) const {
+  const int N = hand_.links();
+  const Chain old = chain;
+  chain[0] = root;
+  RotateRequest req;
+  req.plane = planes_[m];
+  req.radius = hand_.link_radius();
+  req.front = root.y();
+  req.tolerance = params_.contact_tolerance / 8.0;
+  for (int n = 0; n < N; ++n) {
+    const double L = hand_.link_length(m, n);
+    Vec2 dir = old[n + 1] - chain[n];
+    if (dir.norm() < 1e-15) dir = old[n + 1] - old[n];
+    chain[n + 1] = chain[n] + L * dir.normalized();
+    if (!sensing_->link_free(planes_[m], chain[n], chain[n + 1], req.radius, req.front)) {
+      req.pivot = chain[n];
+      req.end = chain[n + 1];
+      req.sample_angle = std::min(0.1, params_.step / (2.0 * L));
+      const RotateResult r = sensing_->rotate_until_free(req);
+      if (!r.ok) return false;
+      chain[n + 1] = r.end;
+    }
+  }
+  return true;
+}
+
+bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const {
+  const int N = hand_.links();
+  const double r = hand_.link_radius();
+  const double sep = std::max(2.0 * r, 1e-7);
+  const double sep2 = sep * sep;
+  std::vector<Vec3> mine(N + 1);
+  for (int n = 0; n <= N; ++n) mine[n] = planes_[m].to_world(chain[n]);
+  for (int a = 0; a < N; ++a)
+    for (int b = a + 2; b < N; ++b)
+      if (segment_segment_squared(mine[a], mine[a + 1], mine[b], mine[b + 1]) < sep2) return false;
+  std::vector<Vec3> theirs(N + 1);
+  for (int k = 0; k < hand_.fingers(); ++k) {
+    if (k == m) continue;
+    for (int n = 0; n <= N; ++n) theirs[n] = planes_[k].to_world(others[k][n]);
+    for (int a = 0; a < N; ++a)
+      for (int b = 0; b < N; ++b)
+        if (segment_segment_squared(mine[a], mine[a + 1], theirs[b], theirs[b + 1]) < sep2) return false;
+  }
+  return true;
+}
+
+void Planner::phase2_iteration() {
+  const int M = hand_.fingers(), N = hand_.links();
+  const double s = params_.step, delta = params_.contact_tolerance, level = 0.5 * delta;
+  const double r = hand_.link_radius();
+  const long it = stats_.phase2_iterations;
+  Pose palm = palm2_;
+  palm.translation() += eta_ * palm2_.linear().col(2);
+
+  // (a) contact sensing: a FROZEN finger touched anywhere becomes CONTACT (decision 4).
+  for (int m = 0; m < M; ++m) {
+    if (states_[m] != TipState::kFrozen) continue;
+    for (int n = 0; n < N; ++n)
+      if (link_gap(m, chains_[m][n], chains_[m][n + 1], delta) <= delta) {
+        states_[m] = TipState::kContact;
+        break;
+      }
+  }
+  double palm_gap = kInf;
+  if (!palm_touched_) {
+    palm_gap = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), s + delta);
+    if (palm_gap <= delta) {
+      palm_touched_ = true;
+      stats_.palm_contact_iteration = it;
+    }
+  }
+  if (palm_touched_)  // decision 3: the palm stops for good; every finger closes
+    for (auto& st : states_)
+      if (st == TipState::kFrozen) st = TipState::kContact;
+  for (auto st : states_)
+    if (st != TipState::kFrozen && !any_contact_) {
+      any_contact_ = true;
+      stats_.first_contact_iteration = it;
+    }
+
+  // (b) FollowBoundary and Head2Tail for every CONTACT finger.
+  const std::vector<Chain> old = chains_;
+  std::vector<Chain> cand = chains_;
+  const Vec2 root(hand_.palm_radius(), eta_);
+  for (int m = 0; m < M; ++m) {
+    if (states_[m] != TipState::kContact) continue;
+    const Vec2 tip = old[m][N];
+    Vec2 head = tip;
+    if (link_gap(m, tip, tip, delta) <= delta) {
+      FollowRequest fr;
+      fr.plane = planes_[m];
+      fr.tip = tip;
+      fr.radius = r;
+      fr.step = s;
+      fr.level = level;
+      // H within reach of the root where the palm step may take it this iteration (sigma <= s).
+      fr.root = palm_touched_ ? root : Vec2(root.x(), root.y() + s);
+      fr.reach = hand_.finger_length(m);
+      fr.front = eta_;
+      head = sensing_->follow_boundary(fr).head;
+    } else {
+      RotateRequest rr;
+      rr.plane = planes_[m];
+      rr.pivot = old[m][N - 1];
+      rr.end = tip;
+      rr.radius = r;
+      rr.front = eta_;
+      rr.max_angle = s / hand_.link_length(m, N - 1);
+      rr.touch_gap = delta;
+      rr.level = level;
+      head = sensing_->rotate_until_touch(rr).end;
+    }
+    if (!head2tail(m, head, cand[m])) {
+      cand[m] = old[m];
+      ++stats_.clinging_failures;
+    }
+  }
+
+  // (c) the palm step sigma: mean tail gap, clipped to [0, s] and to the free distance.
+  double sigma = 0.0;
+  if (!palm_touched_) {
+    const bool none_in_contact =
+        std::none_of(states_.begin(), states_.end(), [](TipState t) { return t == TipState::kContact; });
+    if (none_in_contact) {
+      sigma = s;  // decision 1: approach until a touch (also once every touching finger is DONE)
+    } else {
+      for (int m = 0; m < M; ++m)
+        if (states_[m] == TipState::kContact) sigma += (cand[m][0].y() - eta_) / M;
+      sigma = std::clamp(sigma, 0.0, s);
+    }
+    if (sigma > 0.0) {
+      double free = palm_gap;
+      const double cap = s + delta;
+      for (int m = 0; m < M; ++m) {
+        free = std::min(free, link_gap(m, root, root, cap));
+        if (states_[m] == TipState::kFrozen)
+          for (int n = 0; n < N; ++n) free = std::min(free, link_gap(m, old[m][n], old[m][n + 1], cap));
+      }
+      sigma = std::min(sigma, std::max(0.0, free - level));
+    }
+  }
+
+  // (d) Tail2Head toward the moved roots; commit finger by finger, checking the fingers
+  // against each other. If anything fails with the palm moved, retry with the palm still.
+  auto attempt = [&](double sig, bool last, std::vector<Chain>& out, std::vector<TipState>& st) {
+    out = old;
+    st = states_;
+    const Vec2 new_root(hand_.palm_radius(), eta_ + sig);
+    for (int m = 0; m < M; ++m) {
+      Chain c;
+      switch (st[m]) {
+        case TipState::kFrozen:
+          c = old[m];
+          for (Vec2& x : c) x.y() += sig;
+          break;
+        case TipState::kDone:
+          c = old[m];
+          if (sig > 0.0 && !tail2head(m, new_root, c)) return false;
+          break;
+        case TipState::kContact:
+          c = cand[m];
+          if (!tail2head(m, new_root, c)) {
+            if (!last) return false;
+            c = old[m];
+            st[m] = TipState::kDone;
+            ++stats_.clinging_failures;
+          }
+          break;
+      }
+      if (!fingers_clear(m, c, out)) {
+        if (!last) return false;
+        c = old[m];
+        st[m] = TipState::kDone;
+        ++stats_.finger_collisions;
+      }
+      out[m] = std::move(c);
+    }
+    return true;
+  };
+  std::vector<Chain> next;
+  std::vector<TipState> next_states;
+  if (!attempt(sigma, sigma == 0.0, next, next_states)) {
+    ++stats_.sigma_retries;
+    sigma = 0.0;
+    attempt(0.0, true, next, next_states);
+  }
+  for (int m = 0; m < M; ++m)
+    if (next_states[m] == TipState::kContact && (next[m][N] - old[m][N]).norm() < params_.epsilon)
+      next_states[m] = TipState::kDone;
+  // The hand is blocked (it cannot advance and no finger is sliding): the remaining FROZEN
+  // fingers close, as on palm contact (decision 3).
+  const bool blocked = sigma == 0.0 && std::none_of(next_states.begin(), next_states.end(),
+                                                    [](TipState t) { return t == TipState::kContact; });
+  if (blocked)
+    for (auto& st : next_states)
+      if (st == TipState::kFrozen) st = TipState::kContact;
+  chains_ = std::move(next);
+  states_ = std::move(next_states);
+  eta_ += sigma;
+  ++stats_.phase2_iterations;
+  history_.push_back(make_configuration(2));
+  if (std::all_of(states_.begin(), states_.end(), [](TipState t) { return t == TipState::kDone; }))
+    status_ = Status::kDone;
+  else if (stats_.phase2_iterations >= params_.max_iterations)
+    status_ = Status::kMaxIterations;
+}
+
+std::optional<Configuration> Planner::step() {
+  if (next_ < history_.size()) return history_[next_++];
+  if (status_ != Status::kRunning) return std::nullopt;
+  phase2_iteration();
+  return history_[next_++];
+}
+
+Status Planner::plan() {
+  while (status_ == Status::kRunning) phase2_iteration();
+  next_ = history_.size();
+  return status_;
+}
+
+}  // namespace hugger

@@ -1,0 +1,205 @@
+#include "hugger/world/object.hpp"
+
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/math/bv/OBBRSS.h>
+#include <fcl/narrowphase/collision_object.h>
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <unordered_map>
+
+namespace hugger {
+
+namespace {
+
+std::uint64_t edge_key(std::int64_t a, std::int64_t b) {
+  return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint64_t>(b);
+}
+
+[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument(what); }
+
+}  // namespace
+
+Object::Object(const PointsN3& vertices, const FacesN3& faces) : vertices_(vertices), faces_(faces) {
+  const std::int64_t nv = vertices_.rows(), nf = faces_.rows();
+  if (nv == 0 || nf == 0) fail("object mesh is empty: it needs vertices (V,3) and faces (F,3), got V=" +
+                               std::to_string(nv) + ", F=" + std::to_string(nf));
+  if (nv >= (std::int64_t(1) << 31)) fail("object mesh has too many vertices");
+  for (std::int64_t i = 0; i < nv; ++i)
+    if (!vertices_.row(i).allFinite()) {
+      std::ostringstream os;
+      os << "object vertex " << i << " is not finite (" << vertices_(i, 0) << ", " << vertices_(i, 1) << ", "
+         << vertices_(i, 2) << ")";
+      fail(os.str());
+    }
+  for (std::int64_t f = 0; f < nf; ++f) {
+    for (int k = 0; k < 3; ++k)
+      if (faces_(f, k) < 0 || faces_(f, k) >= nv)
+        fail("object face " + std::to_string(f) + " indexes vertex " + std::to_string(faces_(f, k)) +
+             ", outside 0.." + std::to_string(nv - 1));
+    if (faces_(f, 0) == faces_(f, 1) || faces_(f, 1) == faces_(f, 2) || faces_(f, 2) == faces_(f, 0))
+      fail("object face " + std::to_string(f) + " repeats a vertex (degenerate triangle)");
+  }
+  // Closed and consistently oriented: every directed edge once, and its reverse once.
+  std::unordered_map<std::uint64_t, std::int64_t> directed;
+  directed.reserve(static_cast<std::size_t>(3 * nf));
+  for (std::int64_t f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const std::int64_t a = faces_(f, k), b = faces_(f, (k + 1) % 3);
+      auto [it, fresh] = directed.emplace(edge_key(a, b), f);
+      if (!fresh) {
+        std::ostringstream os;
+        os << "object mesh is not consistently oriented or not manifold: edge (" << a << ", " << b
+           << ") is used in the same direction by faces " << it->second << " and " << f;
+        fail(os.str());
+      }
+    }
+  edge_normals_.resize(nf);
+  face_normals_.resize(nf);
+  for (std::int64_t f = 0; f < nf; ++f) {
+    const Vec3 a = vertices_.row(faces_(f, 0)), b = vertices_.row(faces_(f, 1)), c = vertices_.row(faces_(f, 2));
+    const Vec3 n = (b - a).cross(c - a);
+    volume_ += a.dot(b.cross(c)) / 6.0;
+    const double len = n.norm();
+    face_normals_[f] = len > 0.0 ? Vec3(n / len) : Vec3::Zero();
+  }
+  for (std::int64_t f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const std::int64_t a = faces_(f, k), b = faces_(f, (k + 1) % 3);
+      auto it = directed.find(edge_key(b, a));
+      if (it == directed.end()) {
+        std::ostringstream os;
+        os << "object mesh is not closed: edge (" << a << ", " << b << ") of face " << f
+           << " has no neighbouring face (a hole or a boundary)";
+        fail(os.str());
+      }
+      edge_normals_[f][k] = face_normals_[f] + face_normals_[it->second];
+    }
+  if (!(volume_ > 0.0)) {
+    std::ostringstream os;
+    os << "object mesh encloses a non-positive volume (" << volume_
+       << " m^3): its faces point inward (reverse the winding) or it is flat";
+    fail(os.str());
+  }
+  vertex_normals_.assign(nv, Vec3::Zero());
+  for (std::int64_t f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 p = vertices_.row(faces_(f, k)), q = vertices_.row(faces_((f), (k + 1) % 3)),
+                 r = vertices_.row(faces_(f, (k + 2) % 3));
+      const Vec3 e1 = q - p, e2 = r - p;
+      const double l1 = e1.norm(), l2 = e2.norm();
+      if (l1 > 0 && l2 > 0) {
+        const double angle = std::acos(std::clamp(e1.dot(e2) / (l1 * l2), -1.0, 1.0));
+        vertex_normals_[faces_(f, k)] += angle * face_normals_[f];
+      }
+    }
+  bvh_ = TriangleBvh(vertices_, faces_);
+
+  auto model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
+  std::vector<fcl::Vector3d> pts(nv);
+  for (std::int64_t i = 0; i < nv; ++i) pts[i] = vertices_.row(i).transpose();
+  std::vector<fcl::Triangle> tris(nf);
+  for (std::int64_t f = 0; f < nf; ++f) tris[f] = fcl::Triangle(faces_(f, 0), faces_(f, 1), faces_(f, 2));
+  model->beginModel(static_cast<int>(nf), static_cast<int>(nv));
+  model->addSubModel(pts, tris);
+  model->endModel();
+  fcl_object_ = std::make_shared<fcl::CollisionObjectd>(model, fcl::Transform3d::Identity());
+}
+
+double Object::sign_at(const Vec3& query, const Vec3& on_mesh, int triangle, TriangleFeature f) const {
+  Vec3 n;
+  switch (f) {
+    case TriangleFeature::kFace: n = face_normals_[triangle]; break;
+    case TriangleFeature::kEdgeAB: n = edge_normals_[triangle][0]; break;
+    case TriangleFeature::kEdgeBC: n = edge_normals_[triangle][1]; break;
+    case TriangleFeature::kEdgeCA: n = edge_normals_[triangle][2]; break;
+    case TriangleFeature::kVertexA: n = vertex_normals_[faces_(triangle, 0)]; break;
+    case TriangleFeature::kVertexB: n = vertex_normals_[faces_(triangle, 1)]; break;
+    default: n = vertex_normals_[faces_(triangle, 2)]; break;
+  }
+  return (query - on_mesh).dot(n) < 0.0 ? -1.0 : 1.0;
+}
+
+SignedNearest Object::nearest(const Vec3& a, const Vec3& b, double max_distance) const {
+  const NearestResult r = bvh_.nearest(a, b, max_distance);
+  SignedNearest out;
+  out.crosses = r.crosses;
+  if (r.triangle < 0) {
+    // Nothing within the bound: the sign is that of any point of the query.
+    out.signed_distance = inside(a) ? -kInf : kInf;
+    return out;
+  }
+  out.on_query = r.on_query;
+  out.on_object = r.on_mesh;
+  out.triangle = r.triangle;
+  if (r.crosses) {
+    out.signed_distance = -std::numeric_limits<double>::min();  // depth unknown, sign certain
+    return out;
+  }
+  out.signed_distance = sign_at(r.on_query, r.on_mesh, r.triangle, r.feature) * r.distance;
+  return out;
+}
+
+bool Object::inside(const Vec3& p) const {
+  const NearestResult r = bvh_.nearest(p, p);
+  if (r.triangle < 0 || r.distance == 0.0) return false;
+  return sign_at(p, r.on_mesh, r.triangle, r.feature) < 0.0;
+}
+
+Section Object::section(const Vec3& origin, const Vec3& u, const Vec3& v) const {
+  const Vec3 n = u.cross(v);
+  const std::int64_t nv = vertices_.rows();
+  std::vector<double> d(nv);
+  for (std::int64_t i = 0; i < nv; ++i) {
+    d[i] = (Vec3(vertices_.row(i)) - origin).dot(n);
+    if (d[i] == 0.0) d[i] = 1e-300;  // symbolic perturbation: vertices on the plane count as above it
+  }
+  std::unordered_map<std::uint64_t, int> point_of_edge, start_of_edge;
+  std::vector<Vec2> points;
+  std::vector<std::pair<int, int>> segs;  // point indices
+  auto edge_point = [&](std::int64_t i, std::int64_t j) {
+    if (i > j) std::swap(i, j);
+    auto [it, fresh] = point_of_edge.emplace(edge_key(i, j), static_cast<int>(points.size()));
+    if (fresh) {
+      const Vec3 pi = vertices_.row(i), pj = vertices_.row(j);
+      const Vec3 x = pi + (d[i] / (d[i] - d[j])) * (pj - pi) - origin;
+      points.emplace_back(x.dot(u), x.dot(v));
+    }
+    return it->second;
+  };
+  for (std::int64_t f = 0; f < faces_.rows(); ++f) {
+    const std::int64_t idx[3] = {faces_(f, 0), faces_(f, 1), faces_(f, 2)};
+    const bool pos[3] = {d[idx[0]] > 0, d[idx[1]] > 0, d[idx[2]] > 0};
+    if (pos[0] == pos[1] && pos[1] == pos[2]) continue;
+    int k = 0;  // the vertex alone on its side
+    if (pos[0] == pos[1]) k = 2;
+    else if (pos[0] == pos[2]) k = 1;
+    const std::int64_t prev = idx[(k + 2) % 3], me = idx[k], next = idx[(k + 1) % 3];
+    const int p_prev = edge_point(prev, me), p_next = edge_point(me, next);
+    if (pos[k]) segs.emplace_back(p_next, p_prev);
+    else segs.emplace_back(p_prev, p_next);
+  }
+  std::unordered_map<int, int> seg_from;  // start point -> segment
+  for (int s = 0; s < static_cast<int>(segs.size()); ++s) seg_from[segs[s].first] = s;
+  std::vector<char> used(segs.size(), 0);
+  std::vector<std::vector<Vec2>> loops;
+  for (int s0 = 0; s0 < static_cast<int>(segs.size()); ++s0) {
+    if (used[s0]) continue;
+    std::vector<Vec2> loop;
+    int s = s0;
+    bool closed = false;
+    while (!used[s]) {
+      used[s] = 1;
+      loop.push_back(points[segs[s].first]);
+      auto it = seg_from.find(segs[s].second);
+      if (it == seg_from.end()) break;
+      s = it->second;
+      if (s == s0) closed = true;
+    }
+    if (closed && loop.size() >= 3) loops.push_back(std::move(loop));
+  }
+  return Section(std::move(loops));
+}
+
+}  // namespace hugger

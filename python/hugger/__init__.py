@@ -1,0 +1,39 @@
+"""Hugger: sensor-based enveloping ("hugging") grasp planning for multi-finger hands.
+
+After D. Reznik and V. Lumelsky, "Multi-Finger Hugging: A Robust Approach to
+Sensor-Based Grasp Planning", ICRA 1994. The engine is C++17 (``hugger._core``);
+this package holds the Python API::
+
+    import hugger
+    hand = hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004,
+                       palm_radius=0.03, palm_thickness=0.01)
+    obj = hugger.objects.sphere(radius=0.04)
+    planner = hugger.Planner(hand, obj, target=[0, 0, 0], palm_pose=hugger.look_at([0.2, 0, 0], [0, 0, 0]))
+    traj = planner.plan()
+    traj.save("plan.npz")
+"""
+from __future__ import annotations
+
+from . import objects
+from .hand import Hand
+from .planner import FROZEN, CONTACT, DONE, Configuration, Planner, look_at, plan
+from .trajectory import FORMAT_VERSION, Trajectory
+from .world import Object
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "CONTACT",
+    "DONE",
+    "FORMAT_VERSION",
+    "FROZEN",
+    "Configuration",
+    "Hand",
+    "Object",
+    "Planner",
+    "Trajectory",
+    "look_at",
+    "objects",
+    "plan",
+    "__version__",
+]

@@ -1,0 +1,150 @@
+"""The planner front end: Phase 1 (reorientation) and Phase 2 (approach and hugging)."""
+from __future__ import annotations
+
+import json
+import numbers
+from dataclasses import dataclass
+from typing import Any, Iterator
+
+import numpy as np
+
+from . import _core
+from .hand import Hand
+from .trajectory import Trajectory
+from .world import Object
+
+FROZEN, CONTACT, DONE = 0, 1, 2
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """One hand configuration (DESIGN.md section 2)."""
+
+    palm_pose: np.ndarray  #: (4, 4) T_WP
+    joints: np.ndarray  #: (M, N+1, 3) joint positions in the world, j_m0 (tail) .. j_mN (tip)
+    angles: np.ndarray  #: (M, N) joint angles (rad), positive = flexion
+    tip_state: np.ndarray  #: (M,) int8: 0 FROZEN, 1 CONTACT, 2 DONE
+    phase: int  #: 0 for C_init, then 1 (reorientation) or 2 (approach and hugging)
+    iteration: int  #: index of this configuration in the plan
+
+
+def look_at(position: Any, target: Any, up: Any = None) -> np.ndarray:
+    """A palm pose (4, 4) at ``position`` whose normal (z axis) points at ``target``."""
+    p = np.asarray(position, dtype=np.float64).reshape(3)
+    z = np.asarray(target, dtype=np.float64).reshape(3) - p
+    if not np.all(np.isfinite(z)) or np.linalg.norm(z) == 0:
+        raise ValueError("position and target must be finite and distinct")
+    z /= np.linalg.norm(z)
+    u = np.array([0.0, 0.0, 1.0]) if up is None else np.asarray(up, dtype=np.float64).reshape(3)
+    if np.linalg.norm(np.cross(u, z)) < 1e-6:
+        u = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(u, z)
+    x /= np.linalg.norm(x)
+    pose = np.eye(4)
+    pose[:3, 0], pose[:3, 1], pose[:3, 2], pose[:3, 3] = x, np.cross(z, x), z, p
+    return pose
+
+
+def _optional_count(name: str, value: Any) -> int | None:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ValueError(f"{name} must be a whole number, got {value!r}")
+    return int(value)
+
+
+def _optional_size(name: str, value: Any) -> float | None:
+    if value is None:
+        return None
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    if not np.isfinite(v) or v <= 0:
+        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+    return v
+
+
+class Planner:
+    """Plans a hugging grasp of ``obj`` by ``hand``, told only the point ``target`` inside it.
+
+    ``palm_pose`` (4, 4) is the initial palm pose T_WP (fingers extended). Defaults:
+    ``step`` = shortest link / 20, ``epsilon`` = step / 10, ``contact_tolerance`` = 1e-4 m,
+    ``max_iterations`` = 20000 Phase 2 iterations. Raises ``ValueError`` for bad input, T
+    outside O, or a hand that touches O at the start or while turning in Phase 1.
+
+    ``step()`` returns the next :class:`Configuration` (or None at the end), so a plan can
+    stream to a robot; ``plan()`` runs to the end with the GIL released and returns the
+    :class:`Trajectory`.
+    """
+
+    def __init__(self, hand: Hand, obj: Object, target: Any, palm_pose: Any, step: float | None = None,
+                 epsilon: float | None = None, contact_tolerance: float | None = None,
+                 max_iterations: int | None = None) -> None:
+        if not isinstance(hand, Hand):
+            raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
+        if not isinstance(obj, Object):
+            raise ValueError(f"obj must be a hugger.Object, got {type(obj).__name__}")
+        t = np.asarray(target, dtype=np.float64)
+        if t.shape != (3,) or not np.all(np.isfinite(t)):
+            raise ValueError(f"target must be a finite 3-vector, got {target!r}")
+        pose = np.asarray(palm_pose, dtype=np.float64)
+        if pose.shape != (4, 4) or not np.all(np.isfinite(pose)):
+            raise ValueError("palm_pose must be a finite (4, 4) homogeneous transform")
+        self.hand, self.object, self.target = hand, obj, t
+        self._core = _core.Planner(hand._core, obj._core, t, pose, _optional_size("step", step),
+                                   _optional_size("epsilon", epsilon),
+                                   _optional_size("contact_tolerance", contact_tolerance),
+                                   _optional_count("max_iterations", max_iterations))
+
+    @property
+    def status(self) -> str:
+        """``running`` until the plan ends, then ``done`` or ``max_iterations``."""
+        return self._core.status
+
+    @property
+    def params(self) -> dict:
+        """The parameters in force, defaults resolved."""
+        return dict(self._core.params)
+
+    @property
+    def stats(self) -> dict:
+        """Counters: Phase 1 configurations, Phase 2 iterations, first and palm contact, ..."""
+        return dict(self._core.stats)
+
+    def step(self) -> Configuration | None:
+        d = self._core.step()
+        return None if d is None else Configuration(**d)
+
+    def __iter__(self) -> Iterator[Configuration]:
+        while (c := self.step()) is not None:
+            yield c
+
+    def plan(self) -> Trajectory:
+        """Run to the end and return the whole trajectory, from C_init."""
+        self._core.plan()
+        return self.trajectory()
+
+    def trajectory(self) -> Trajectory:
+        """The configurations planned so far, as a :class:`Trajectory`."""
+        h = self._core.history()
+        params = self.params
+        return Trajectory(
+            hand_json=self.hand.to_json(),
+            params_json=json.dumps(params),
+            object_vertices=self.object.vertices,
+            object_faces=self.object.faces,
+            target=self.target,
+            palm_pose=h["palm_pose"],
+            joints=h["joints"],
+            angles=h["angles"],
+            tip_state=h["tip_state"],
+            phase=h["phase"],
+            status=self.status,
+            stats_json=json.dumps(self.stats),
+        )
+
+
+def plan(hand: Hand, obj: Object, target: Any, palm_pose: Any, **params: Any) -> Trajectory:
+    """Plan in one call: ``Planner(hand, obj, target, palm_pose, **params).plan()``."""
+    return Planner(hand, obj, target, palm_pose, **params).plan()
