@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "hugger/geometry/distance.hpp"
+#include "hugger/planner/snake.hpp"
 
 namespace hugger {
 
@@ -19,6 +20,11 @@ std::string to_string(Status s) {
 }
 
 namespace {
+
+/// Largest flexion (rad) of the distal joint that a free swing (decision 5) may reach.
+constexpr double kMaxSwingFlexion = kPi / 2.0;
+/// Iterations a CONTACT tip may stay within 2 steps of one place before it counts as overextended.
+constexpr int kStallWindow = 20;
 
 [[noreturn]] void invalid(const std::string& what) { throw std::invalid_argument(what); }
 
@@ -128,6 +134,8 @@ void Planner::plan_phase1(const Pose& start) {
     chains_.push_back(std::move(c));
   }
   states_.assign(hand_.fingers(), TipState::kFrozen);
+  anchors_.assign(hand_.fingers(), Vec2(kInf, kInf));
+  stalled_.assign(hand_.fingers(), 0);
 }
 
 Configuration Planner::make_configuration(int phase) const {
@@ -151,56 +159,17 @@ double Planner::link_gap(int m, const Vec2& a, const Vec2& b, double cap) const 
   return sensing_->link(planes_[m], a, b, hand_.link_radius(), cap).gap;
 }
 
-bool Planner::head2tail(int m, const Vec2& head, Chain& chain) const {
-  const int N = hand_.links();
-  const Chain old = chain;
-  chain[N] = head;
-  RotateRequest req;
+SnakeRequest Planner::snake_request(int m, double front) const {
+  SnakeRequest req;
   req.plane = planes_[m];
+  req.lengths = hand_.link_lengths().row(m).data();
   req.radius = hand_.link_radius();
-  req.front = eta_;
+  req.front = front;
   req.tolerance = params_.contact_tolerance / 8.0;
-  for (int n = N - 1; n >= 0; --n) {
-    const double L = hand_.link_length(m, n);
-    Vec2 dir = old[n] - chain[n + 1];
-    if (dir.norm() < 1e-15) dir = old[n] - old[n + 1];
-    chain[n] = chain[n + 1] + L * dir.normalized();
-    if (!sensing_->link_free(planes_[m], chain[n], chain[n + 1], req.radius, req.front)) {
-      req.pivot = chain[n + 1];
-      req.end = chain[n];
-      req.sample_angle = std::min(0.1, params_.step / (2.0 * L));
-      const RotateResult r = sensing_->rotate_until_free(req);
-      if (!r.ok) return false;
-      chain[n] = r.end;
-    }
-  }
-  return true;
-}
-
-bool Planner::tail2head(int m, const Vec2& root, Chain& chain) const {
-  const int N = hand_.links();
-  const Chain old = chain;
-  chain[0] = root;
-  RotateRequest req;
-  req.plane = planes_[m];
-  req.radius = hand_.link_radius();
-  req.front = root.y();
-  req.tolerance = params_.contact_tolerance / 8.0;
-  for (int n = 0; n < N; ++n) {
-    const double L = hand_.link_length(m, n);
-    Vec2 dir = old[n + 1] - chain[n];
-    if (dir.norm() < 1e-15) dir = old[n + 1] - old[n];
-    chain[n + 1] = chain[n] + L * dir.normalized();
-    if (!sensing_->link_free(planes_[m], chain[n], chain[n + 1], req.radius, req.front)) {
-      req.pivot = chain[n];
-      req.end = chain[n + 1];
-      req.sample_angle = std::min(0.1, params_.step / (2.0 * L));
-      const RotateResult r = sensing_->rotate_until_free(req);
-      if (!r.ok) return false;
-      chain[n + 1] = r.end;
-    }
-  }
-  return true;
+  double shortest = kInf;
+  for (int n = 0; n < hand_.links(); ++n) shortest = std::min(shortest, hand_.link_length(m, n));
+  req.sample_angle = std::min(0.1, params_.step / (2.0 * shortest));
+  return req;
 }
 
 bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const {
@@ -285,12 +254,17 @@ void Planner::phase2_iteration() {
       rr.end = tip;
       rr.radius = r;
       rr.front = eta_;
-      rr.max_angle = s / hand_.link_length(m, N - 1);
+      // The distal joint flexes at most to kMaxSwingFlexion: a finger that swings free of O
+      // stops there (its tip then moves less than epsilon and it becomes DONE).
+      const Vec2 d1 = old[m][N] - old[m][N - 1];
+      const Vec2 d0 = N >= 2 ? Vec2(old[m][N - 1] - old[m][N - 2]) : Vec2(0.0, 1.0);
+      const double flexion = std::atan2(d0.x() * d1.y() - d0.y() * d1.x(), d0.dot(d1));
+      rr.max_angle = std::clamp(kMaxSwingFlexion - flexion, 0.0, s / hand_.link_length(m, N - 1));
       rr.touch_gap = delta;
       rr.level = level;
       head = sensing_->rotate_until_touch(rr).end;
     }
-    if (!head2tail(m, head, cand[m])) {
+    if (!head_to_tail(*sensing_, snake_request(m, eta_), head, cand[m])) {
       cand[m] = old[m];
       ++stats_.clinging_failures;
     }
@@ -335,11 +309,11 @@ void Planner::phase2_iteration() {
           break;
         case TipState::kDone:
           c = old[m];
-          if (sig > 0.0 && !tail2head(m, new_root, c)) return false;
+          if (sig > 0.0 && !tail_to_head(*sensing_, snake_request(m, new_root.y()), new_root, c)) return false;
           break;
         case TipState::kContact:
           c = cand[m];
-          if (!tail2head(m, new_root, c)) {
+          if (!tail_to_head(*sensing_, snake_request(m, new_root.y()), new_root, c)) {
             if (!last) return false;
             c = old[m];
             st[m] = TipState::kDone;
@@ -364,9 +338,18 @@ void Planner::phase2_iteration() {
     sigma = 0.0;
     attempt(0.0, true, next, next_states);
   }
-  for (int m = 0; m < M; ++m)
-    if (next_states[m] == TipState::kContact && (next[m][N] - old[m][N]).norm() < params_.epsilon)
+  for (int m = 0; m < M; ++m) {
+    if (next_states[m] != TipState::kContact) continue;
+    if ((next[m][N] - old[m][N]).norm() < params_.epsilon) next_states[m] = TipState::kDone;
+    // Overextension over a window: a tip that oscillates (pulled off by Tail2Head, swung back)
+    // without getting farther than 2 s from where it was kStallWindow iterations ago is DONE.
+    if ((next[m][N] - anchors_[m]).norm() > 2.0 * s) {
+      anchors_[m] = next[m][N];
+      stalled_[m] = 0;
+    } else if (++stalled_[m] >= kStallWindow) {
       next_states[m] = TipState::kDone;
+    }
+  }
   // The hand is blocked (it cannot advance and no finger is sliding): the remaining FROZEN
   // fingers close, as on palm contact (decision 3).
   const bool blocked = sigma == 0.0 && std::none_of(next_states.begin(), next_states.end(),

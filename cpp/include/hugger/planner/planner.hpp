@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "hugger/hand/hand_model.hpp"
+#include "hugger/planner/snake.hpp"
 #include "hugger/sensing/sensing.hpp"
 #include "hugger/types.hpp"
 
@@ -67,14 +68,12 @@ class Planner {
   const Vec3& target() const { return target_; }
 
  private:
-  using Chain = std::vector<Vec2>;
   void plan_phase1(const Pose& start);
   void check_clear(const Configuration& c, const char* when) const;
   Configuration make_configuration(int phase) const;
   void phase2_iteration();
   bool chain_free(int m, const Chain& chain) const;
-  bool head2tail(int m, const Vec2& head, Chain& chain) const;
-  bool tail2head(int m, const Vec2& root, Chain& chain) const;
+  SnakeRequest snake_request(int m, double front) const;
   bool fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const;
   double link_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
 
@@ -93,6 +92,8 @@ class Planner {
   std::vector<FingerPlane> planes_;
   std::vector<Chain> chains_;
   std::vector<TipState> states_;
+  std::vector<Vec2> anchors_;  ///< per finger, where its tip was when it last made progress
+  std::vector<int> stalled_;   ///< per finger, iterations since then
   double eta_ = 0.0;
   bool palm_touched_ = false;
   bool any_contact_ = false;

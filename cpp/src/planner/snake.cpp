@@ -1,0 +1,50 @@
+#include "hugger/planner/snake.hpp"
+
+#include <algorithm>
+
+namespace hugger {
+
+namespace {
+
+/// Place chain[to] at distance L from chain[from], toward the old position of `to`; cling if needed.
+bool place(const Sensing& sensing, const SnakeRequest& req, const Chain& old, int from, int to, double L,
+           Chain& chain) {
+  Vec2 dir = old[to] - chain[from];
+  if (dir.norm() < 1e-15) dir = old[to] - old[from];
+  chain[to] = chain[from] + L * dir.normalized();
+  if (sensing.link_free(req.plane, chain[from], chain[to], req.radius, req.front)) return true;
+  RotateRequest rr;
+  rr.plane = req.plane;
+  rr.pivot = chain[from];
+  rr.end = chain[to];
+  rr.radius = req.radius;
+  rr.front = req.front;
+  rr.tolerance = req.tolerance;
+  rr.sample_angle = req.sample_angle;
+  const RotateResult r = sensing.rotate_until_free(rr);
+  if (!r.ok) return false;
+  chain[to] = r.end;
+  return true;
+}
+
+}  // namespace
+
+bool head_to_tail(const Sensing& sensing, const SnakeRequest& req, const Vec2& head, Chain& chain) {
+  const Chain old = chain;
+  const int N = static_cast<int>(chain.size()) - 1;
+  chain[N] = head;
+  for (int n = N - 1; n >= 0; --n)
+    if (!place(sensing, req, old, n + 1, n, req.lengths[n], chain)) return false;
+  return true;
+}
+
+bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& root, Chain& chain) {
+  const Chain old = chain;
+  const int N = static_cast<int>(chain.size()) - 1;
+  chain[0] = root;
+  for (int n = 0; n < N; ++n)
+    if (!place(sensing, req, old, n, n + 1, req.lengths[n], chain)) return false;
+  return true;
+}
+
+}  // namespace hugger

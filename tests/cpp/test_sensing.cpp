@@ -1,0 +1,135 @@
+// The skin's higher-level queries on a sphere, where every answer is known.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "hugger/planner/snake.hpp"
+#include "hugger/world/simulated_world.hpp"
+#include "meshes.hpp"
+
+using namespace hugger;
+
+namespace {
+
+struct SphereWorld {
+  double R = 0.04;
+  std::shared_ptr<Object> obj;
+  std::unique_ptr<SimulatedWorld> world;
+  FingerPlane plane;  // the plane z = 0: xi = x, eta = y; the sphere's section is a circle of radius R
+  SphereWorld() {
+    const auto mesh = test::icosphere(5, Vec3::Constant(R));
+    obj = std::make_shared<Object>(mesh.vertices, mesh.faces);
+    world = std::make_unique<SimulatedWorld>(obj);
+    plane.origin = Vec3::Zero();
+    plane.u = Vec3::UnitX();
+    plane.p = Vec3::UnitY();
+  }
+};
+
+}  // namespace
+
+TEST(Sensing, FollowBoundaryStepsCounterClockwiseOnTheGrownCircle) {
+  SphereWorld w;
+  for (double r : {0.0, 0.004}) {
+    for (int k = 0; k < 12; ++k) {
+      const double a = -1.5 + 0.25 * k;
+      FollowRequest req;
+      req.plane = w.plane;
+      req.radius = r;
+      req.step = 0.001;
+      req.level = 5e-5;
+      req.tip = (w.R + r + req.level) * Vec2(std::cos(a), std::sin(a));
+      const FollowResult res = w.world->follow_boundary(req);
+      EXPECT_NEAR((res.head - req.tip).norm(), req.step, 2e-6);       // chord of one step
+      EXPECT_NEAR(res.head.norm(), w.R + r + req.level, 2.5e-4);        // on the grown circle
+      EXPECT_GE(res.gap, 0.0);                                          // never inside
+      const double cross = req.tip.x() * res.head.y() - req.tip.y() * res.head.x();
+      EXPECT_GT(cross, 0.0);  // counter-clockwise: interior on the left
+    }
+  }
+}
+
+TEST(Sensing, RotateUntilFreeLeavesTheLinkTangent) {
+  SphereWorld w;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(0, 2 * kPi);
+  int rotated = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const double r = trial % 2 ? 0.003 : 0.0;
+    const double a = U(rng);
+    RotateRequest req;
+    req.plane = w.plane;
+    req.radius = r;
+    req.pivot = (w.R + r + 2e-4) * Vec2(std::cos(a), std::sin(a));
+    const double b = U(rng);
+    req.end = req.pivot + 0.02 * Vec2(std::cos(b), std::sin(b));
+    req.tolerance = 1e-5;
+    const bool was_free = w.world->link_free(req.plane, req.pivot, req.end, r, -kInf);
+    const RotateResult res = w.world->rotate_until_free(req);
+    ASSERT_TRUE(res.ok);
+    EXPECT_NEAR((res.end - req.pivot).norm(), 0.02, 1e-12);
+    EXPECT_GE(res.gap, 0.0);
+    if (!was_free) {
+      ++rotated;
+      EXPECT_LE(res.gap, 1e-4);  // resting on the surface
+    }
+  }
+  EXPECT_GT(rotated, 10);
+}
+
+TEST(Sensing, RotateUntilTouchStopsOnContact) {
+  SphereWorld w;
+  RotateRequest req;
+  req.plane = w.plane;
+  req.radius = 0.002;
+  req.pivot = Vec2(0.05, -0.02);
+  req.end = Vec2(0.05, 0.0);  // pointing along +eta; flexion swings it toward the sphere
+  req.max_angle = kPi / 2;
+  req.touch_gap = 1e-4;
+  req.level = 5e-5;
+  const RotateResult res = w.world->rotate_until_touch(req);
+  EXPECT_TRUE(res.ok);
+  EXPECT_GT(res.angle, 0.0);
+  EXPECT_GE(res.gap, 0.0);
+  EXPECT_LE(res.gap, 1e-4);
+  // limited to max_angle when nothing is in reach
+  req.pivot = Vec2(0.2, 0.0);
+  req.end = Vec2(0.2, 0.02);
+  req.max_angle = 0.1;
+  const RotateResult free = w.world->rotate_until_touch(req);
+  EXPECT_FALSE(free.ok);
+  EXPECT_NEAR(free.angle, 0.1, 1e-12);
+}
+
+TEST(Snake, FollowTheLeaderInFreeSpace) {
+  // Far from the object: no clinging; link lengths exact and no joint moves more than the head.
+  SphereWorld w;
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (int trial = 0; trial < 100; ++trial) {
+    const int N = 2 + trial % 7;
+    std::vector<double> L(N);
+    Chain chain(N + 1);
+    chain[0] = Vec2(0.5, 0.5);
+    double theta = 0;
+    for (int n = 0; n < N; ++n) {
+      L[n] = 0.01 + 0.01 * std::abs(U(rng));
+      theta += 0.5 * U(rng);
+      chain[n + 1] = chain[n] + L[n] * Vec2(-std::sin(theta), std::cos(theta));
+    }
+    SnakeRequest req;
+    req.plane = w.plane;
+    req.lengths = L.data();
+    const Chain before = chain;
+    const Vec2 head = chain[N] + 0.001 * Vec2(U(rng), U(rng));
+    ASSERT_TRUE(head_to_tail(*w.world, req, head, chain));
+    const double head_step = (head - before[N]).norm();
+    for (int n = 0; n < N; ++n) {
+      EXPECT_NEAR((chain[n + 1] - chain[n]).norm(), L[n], 1e-14);
+      EXPECT_LE((chain[n] - before[n]).norm(), head_step + 1e-14);  // tail drift <= head step
+    }
+    ASSERT_TRUE(tail_to_head(*w.world, req, before[0], chain));
+    EXPECT_LT((chain[0] - before[0]).norm(), 1e-15);
+    for (int n = 0; n < N; ++n) EXPECT_NEAR((chain[n + 1] - chain[n]).norm(), L[n], 1e-14);
+  }
+}

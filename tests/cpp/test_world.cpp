@@ -1,0 +1,155 @@
+// The object's sensing queries (BVH, signs, inside, sections) against brute force and analytic shapes.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "hugger/world/object.hpp"
+#include "hugger/world/simulated_world.hpp"
+#include "meshes.hpp"
+
+using namespace hugger;
+
+namespace {
+
+double brute_segment_mesh(const test::Mesh& m, const Vec3& a, const Vec3& b) {
+  double best = kInf;
+  for (int f = 0; f < m.faces.rows(); ++f) {
+    Vec3 s, t;
+    TriangleFeature ft;
+    best = std::min(best, segment_triangle_squared(a, b, m.vertices.row(m.faces(f, 0)), m.vertices.row(m.faces(f, 1)),
+                                                   m.vertices.row(m.faces(f, 2)), &s, &t, &ft));
+  }
+  return std::sqrt(best);
+}
+
+}  // namespace
+
+TEST(Object, NearestMatchesLinearScan) {
+  const auto mesh = test::icosphere(3, Vec3(0.05, 0.04, 0.03));
+  const Object obj(mesh.vertices, mesh.faces);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(-0.08, 0.08);
+  for (int trial = 0; trial < 300; ++trial) {
+    const Vec3 a(U(rng), U(rng), U(rng));
+    const Vec3 b = trial % 3 == 0 ? a : Vec3(a + 0.3 * Vec3(U(rng), U(rng), U(rng)));
+    const SignedNearest sn = obj.nearest(a, b);
+    const double brute = brute_segment_mesh(mesh, a, b);
+    EXPECT_NEAR(std::abs(sn.signed_distance), brute, 1e-12) << trial;
+  }
+}
+
+TEST(Object, SignAgreesWithRayParityAndAnalyticEllipsoid) {
+  const Vec3 radii(0.05, 0.04, 0.03);
+  const auto mesh = test::icosphere(4, radii);
+  const Object obj(mesh.vertices, mesh.faces);
+  const TriangleBvh bvh(mesh.vertices, mesh.faces);
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<double> U(-0.07, 0.07);
+  int inside = 0;
+  for (int trial = 0; trial < 500; ++trial) {
+    const Vec3 p(U(rng), U(rng), U(rng));
+    const double level = p.cwiseQuotient(radii).squaredNorm();
+    if (std::abs(level - 1.0) < 0.05) continue;  // too close to call against the faceted mesh
+    const bool analytic = level < 1.0;
+    const bool parity = bvh.ray_crossings(p, Vec3(0.5377, 0.8622, 0.3188).normalized()) % 2 == 1;
+    EXPECT_EQ(obj.inside(p), analytic) << trial;
+    EXPECT_EQ(parity, analytic) << trial;
+    EXPECT_EQ(obj.nearest(p, p).signed_distance < 0.0, analytic);
+    inside += analytic;
+  }
+  EXPECT_GT(inside, 20);
+}
+
+TEST(Object, RejectsBadMeshes) {
+  const auto mesh = test::icosphere(1);
+  auto expect_invalid = [](const PointsN3& v, const FacesN3& f, const char* what) {
+    try {
+      Object o(v, f);
+      ADD_FAILURE() << "accepted: " << what;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  expect_invalid(PointsN3(0, 3), FacesN3(0, 3), "empty");
+  PointsN3 nan = mesh.vertices;
+  nan(3, 1) = std::numeric_limits<double>::quiet_NaN();
+  expect_invalid(nan, mesh.faces, "not finite");
+  FacesN3 out_of_range = mesh.faces;
+  out_of_range(2, 2) = 1000;
+  expect_invalid(mesh.vertices, out_of_range, "outside");
+  FacesN3 open = mesh.faces.topRows(mesh.faces.rows() - 1);
+  expect_invalid(mesh.vertices, open, "not closed");
+  FacesN3 flipped = mesh.faces;
+  std::swap(flipped(0, 1), flipped(0, 2));
+  expect_invalid(mesh.vertices, flipped, "consistently oriented");
+  FacesN3 inward = mesh.faces;
+  inward.col(1).swap(inward.col(2));
+  expect_invalid(mesh.vertices, inward, "inward");
+}
+
+TEST(Section, SphereSectionIsACircle) {
+  const double R = 0.04;
+  const auto mesh = test::icosphere(5, Vec3::Constant(R));
+  const Object obj(mesh.vertices, mesh.faces);
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 10; ++trial) {
+    const Vec3 n = test::random_unit(rng);
+    const double offset = 0.6 * R * (trial / 10.0);
+    const Vec3 u = n.unitOrthogonal(), v = n.cross(u);
+    const Section s = obj.section(offset * n, u, v);
+    ASSERT_EQ(s.loops().size(), 1u);
+    const double rho = std::sqrt(R * R - offset * offset);
+    EXPECT_NEAR(s.area(), kPi * rho * rho, 0.01 * kPi * rho * rho);  // > 0: counter-clockwise
+    EXPECT_NEAR(s.perimeter(), 2 * kPi * rho, 0.01 * 2 * kPi * rho);
+    for (const Vec2& p : s.loops()[0]) EXPECT_NEAR(p.norm(), rho, 2e-4);
+    for (int k = 0; k < 20; ++k) {
+      const Vec2 q(0.03 * std::cos(k), 0.05 * std::sin(2.0 * k));
+      EXPECT_NEAR(s.boundary_distance(q), std::abs(q.norm() - rho), 2e-4);
+      if (std::abs(q.norm() - rho) > 1e-3) {
+        EXPECT_EQ(s.inside(q), q.norm() < rho);
+      }
+    }
+  }
+}
+
+TEST(Section, EllipsoidSectionIsAnEllipse) {
+  const Vec3 radii(0.05, 0.03, 0.02);
+  const auto mesh = test::icosphere(5, radii);
+  const Object obj(mesh.vertices, mesh.faces);
+  // The plane z = 0 cuts the ellipse x^2/a^2 + y^2/b^2 = 1.
+  const Section s = obj.section(Vec3::Zero(), Vec3::UnitX(), Vec3::UnitY());
+  ASSERT_EQ(s.loops().size(), 1u);
+  EXPECT_NEAR(s.area(), kPi * 0.05 * 0.03, 0.01 * kPi * 0.05 * 0.03);
+  for (const Vec2& p : s.loops()[0]) EXPECT_NEAR(std::hypot(p.x() / 0.05, p.y() / 0.03), 1.0, 5e-3);
+  // The plane y = 0 (u = z, v = x) cuts x^2/a^2 + z^2/c^2 = 1.
+  const Section t = obj.section(Vec3::Zero(), Vec3::UnitZ(), Vec3::UnitX());
+  EXPECT_NEAR(t.area(), kPi * 0.05 * 0.02, 0.01 * kPi * 0.05 * 0.02);
+}
+
+TEST(SimulatedWorld, CapsuleAndPalmGapsMatchGeometry) {
+  const double R = 0.04;
+  const auto mesh = test::icosphere(5, Vec3::Constant(R));
+  auto obj = std::make_shared<Object>(mesh.vertices, mesh.faces);
+  SimulatedWorld world(obj);
+  std::mt19937 rng(8);
+  for (int trial = 0; trial < 50; ++trial) {
+    const Vec3 d = test::random_unit(rng);
+    const double h = 0.005 + 0.02 * trial / 50.0;
+    // a capsule tangent to the sphere's normal direction at distance h from the surface
+    const Vec3 t = d.unitOrthogonal();
+    const Touch touch = world.capsule((R + h) * d - 0.01 * t, (R + h) * d + 0.01 * t, 0.002);
+    EXPECT_NEAR(touch.gap, h - 0.002, 2e-4);  // the mesh is inscribed: at most 0.2 mm farther
+    EXPECT_GT(touch.normal.dot(d), 0.99);
+    // the palm facing the sphere's centre at distance h
+    Pose palm = Pose::Identity();
+    palm.linear().col(2) = -d;
+    palm.linear().col(0) = t;
+    palm.linear().col(1) = (-d).cross(t);
+    palm.translation() = (R + h) * d;
+    EXPECT_NEAR(world.palm(palm, 0.03, 0.01), h, 2e-4);
+  }
+  // inside: negative
+  EXPECT_LT(world.capsule(Vec3::Zero(), Vec3(0.001, 0, 0), 0.0).gap, 0.0);
+  Pose inside = Pose::Identity();
+  EXPECT_LT(world.palm(inside, 0.01, 0.005), 0.0);
+}

@@ -1,0 +1,117 @@
+"""Shared helpers of the test suite: random scenarios and the independent checker."""
+from __future__ import annotations
+
+import importlib.util
+import math
+from pathlib import Path
+
+import numpy as np
+
+import hugger
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED = ROOT.parent / "shared"
+CHECKER = SHARED / "tools" / "check_trajectory.py"
+OBJECTS_DIR = SHARED / "data" / "objects"
+SHARED_MISSING = "../shared (checker and meshes beside the project root) is not present in this checkout"
+
+
+def load_checker():
+    spec = importlib.util.spec_from_file_location("check_trajectory", CHECKER)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def check_file(checker, path: Path, every: int = 1) -> tuple[bool, list[str], dict]:
+    """Run the independent checker on a saved trajectory; (ok, failures, figures)."""
+    d = checker.load(str(path))
+    rep = checker.Report()
+    if checker.check_structure(d, rep):
+        import json
+
+        hand = json.loads(str(d["hand_json"]))
+        r = float(hand["link_radius"])
+        tol = max(0.02 * r, 5e-5)
+        checker.check_kinematics(d, rep, 1e-7)
+        checker.check_algorithm(d, rep, 1e-7)
+        checker.check_collision(d, rep, tol, every)
+    return rep.ok(), rep.failures, rep.figures
+
+
+def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Minimal Wavefront OBJ reader (v and f lines; polygons fanned into triangles)."""
+    verts, faces = [], []
+    for line in Path(path).read_text().splitlines():
+        if line.startswith("v "):
+            verts.append([float(x) for x in line.split()[1:4]])
+        elif line.startswith("f "):
+            idx = [int(tok.split("/")[0]) for tok in line.split()[1:]]
+            idx = [i - 1 if i > 0 else len(verts) + i for i in idx]
+            faces += [(idx[0], idx[k], idx[k + 1]) for k in range(1, len(idx) - 1)]
+    return np.array(verts, dtype=float), np.array(faces, dtype=np.int64)
+
+
+def ycb_paths() -> list[Path]:
+    return sorted(OBJECTS_DIR.glob("*.obj")) if OBJECTS_DIR.is_dir() else []
+
+
+def random_rotation(rng: np.random.Generator) -> np.ndarray:
+    q = rng.normal(size=4)
+    q /= np.linalg.norm(q)
+    w, x, y, z = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def bounding_radius(obj: hugger.Object, centre: np.ndarray) -> float:
+    return float(np.linalg.norm(obj.vertices - centre, axis=1).max())
+
+
+def safe_start(rng: np.random.Generator, obj: hugger.Object, hand: hugger.Hand, target: np.ndarray) -> np.ndarray:
+    """A random palm pose far enough from O to turn freely in Phase 1, randomly oriented."""
+    reach = math.hypot(hand.palm_radius, hand.reach) + hand.link_radius
+    reach = max(reach, math.hypot(hand.palm_radius, hand.palm_thickness))
+    d = rng.normal(size=3)
+    d /= np.linalg.norm(d)
+    dist = bounding_radius(obj, target) + reach + 0.005 + rng.uniform(0.0, 0.03)
+    pose = np.eye(4)
+    pose[:3, :3] = random_rotation(rng)
+    pose[:3, 3] = target + dist * d
+    return pose
+
+
+def random_object(rng: np.random.Generator, kind: str, size: float) -> tuple[hugger.Object, np.ndarray]:
+    """A built-in shape of about ``size`` (bounding radius, m) and a point inside it."""
+    o = hugger.objects
+    if kind == "sphere":
+        obj = o.sphere(size, subdivisions=3)
+    elif kind == "ellipsoid":
+        obj = o.ellipsoid(size * rng.uniform(0.5, 1.0, size=3), subdivisions=3)
+    elif kind == "box":
+        obj = o.box(2 * size * rng.uniform(0.4, 0.7, size=3), divisions=3)
+    elif kind == "cylinder":
+        obj = o.cylinder(size * rng.uniform(0.4, 0.7), 2 * size * rng.uniform(0.5, 0.8), sections=32, rings=4)
+    elif kind == "blob":
+        obj = o.blob(size * 0.8, amplitude=rng.uniform(0.2, 0.4), seed=int(rng.integers(1 << 30)), subdivisions=3)
+    else:
+        raise ValueError(kind)
+    pose = np.eye(4)
+    pose[:3, :3] = random_rotation(rng)
+    v = obj.vertices @ pose[:3, :3].T
+    obj = hugger.Object(v, obj.faces)
+    return obj, np.zeros(3)
+
+
+def random_hand(rng: np.random.Generator, size: float) -> hugger.Hand:
+    """A hand with M in 2..8, N in 2..8, sized to the object; link radius 0 or > 0."""
+    m, n = int(rng.integers(2, 9)), int(rng.integers(2, 9))
+    palm = size * rng.uniform(0.5, 0.9)
+    finger = size * rng.uniform(1.5, 3.0)
+    link = finger / n
+    radius = 0.0 if rng.random() < 0.4 else min(rng.uniform(0.02, 0.12) * size, 0.4 * link,
+                                                 0.45 * palm * math.sin(math.pi / m))
+    lengths = link * rng.uniform(0.8, 1.2, size=(m, n)) if rng.random() < 0.3 else link
+    return hugger.Hand(fingers=m, links=n, link_length=lengths, link_radius=radius, palm_radius=palm,
+                       palm_thickness=0.3 * palm)
