@@ -86,14 +86,14 @@ class Trajectory:
     def load(cls, path: str | os.PathLike) -> Trajectory:
         """Read and check a trajectory file; ``ValueError`` if it is not a valid format-1 file."""
         try:
-            with np.load(path, allow_pickle=False) as z:
+            with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
                 data = {k: z[k] for k in z.files}
         except FileNotFoundError:
             raise
+        except AttributeError:  # a plain .npy array has no .files
+            raise ValueError(f"{os.fspath(path)!r} holds a single array, not a trajectory file") from None
         except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as exc:
             raise ValueError(f"cannot read trajectory file {os.fspath(path)!r}: {exc}") from None
-        if not isinstance(data, dict):
-            raise ValueError(f"{os.fspath(path)!r} is a single array, not a trajectory file")
         return cls.from_arrays(data, source=os.fspath(path))
 
     @classmethod

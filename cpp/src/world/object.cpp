@@ -134,7 +134,9 @@ SignedNearest Object::nearest(const Vec3& a, const Vec3& b, double max_distance)
   out.on_object = r.on_mesh;
   out.triangle = r.triangle;
   if (r.crosses) {
-    out.signed_distance = -std::numeric_limits<double>::min();  // depth unknown, sign certain
+    // A point on the surface is at distance 0; a segment crossing it penetrates by an unmeasured
+    // depth, reported as the smallest negative number.
+    out.signed_distance = a == b ? 0.0 : -std::numeric_limits<double>::min();
     return out;
   }
   out.signed_distance = sign_at(r.on_query, r.on_mesh, r.triangle, r.feature) * r.distance;
