@@ -54,6 +54,40 @@ void bind_world(py::module_& m) {
           },
           py::arg("points"), "Signed distance (n,) of each point (n, 3) to O's surface; negative inside.")
       .def(
+          "closest",
+          [](const Object& o, const ArrayD& points) {
+            check_shape(points, {-1, 3}, "points");
+            const py::ssize_t n = points.shape(0);
+            py::array_t<double> dist(n), on({n, py::ssize_t(3)}), normal({n, py::ssize_t(3)});
+            py::array_t<std::int64_t> tri(n);
+            auto r = points.unchecked<2>();
+            auto wd = dist.mutable_unchecked<1>();
+            auto wp = on.mutable_unchecked<2>();
+            auto wn = normal.mutable_unchecked<2>();
+            auto wt = tri.mutable_unchecked<1>();
+            const auto& F = o.faces();
+            const auto& V = o.vertices();
+            for (py::ssize_t i = 0; i < n; ++i) {
+              const Vec3 p(r(i, 0), r(i, 1), r(i, 2));
+              const SignedNearest sn = o.nearest(p, p);
+              const int t = sn.triangle;
+              const Vec3 a = V.row(F(t, 0)), b = V.row(F(t, 1)), c = V.row(F(t, 2));
+              const Vec3 fn = (b - a).cross(c - a).normalized();
+              wd(i) = sn.signed_distance;
+              wt(i) = t;
+              for (int k = 0; k < 3; ++k) wp(i, k) = sn.on_object[k], wn(i, k) = fn[k];
+            }
+            py::dict d;
+            d["distance"] = dist;
+            d["point"] = on;
+            d["normal"] = normal;
+            d["triangle"] = tri;
+            return d;
+          },
+          py::arg("points"),
+          "For points (n, 3): signed distance (n,), closest surface point (n, 3), the outward unit normal "
+          "of its triangle (n, 3) and the triangle index (n,).")
+      .def(
           "segment_distance",
           [](const Object& o, const ArrayD& a, const ArrayD& b) {
             check_shape(a, {-1, 3}, "a");

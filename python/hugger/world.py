@@ -73,6 +73,12 @@ class Object:
         p = np.asarray(points, dtype=np.float64)
         return self._core.signed_distance(p.reshape(-1, 3)).reshape(p.shape[:-1])
 
+    def closest(self, points: Any) -> dict[str, np.ndarray]:
+        """For points (n, 3): ``distance`` (n,) signed (negative inside), closest surface ``point``
+        (n, 3), outward unit ``normal`` (n, 3) of its triangle, and the ``triangle`` index (n,)."""
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        return self._core.closest(p)
+
     def segment_distance(self, a: Any, b: Any) -> np.ndarray:
         """Signed distance (n,) of segments [a_i, b_i] to O (<= 0 when crossing the surface)."""
         return self._core.segment_distance(np.asarray(a, dtype=np.float64).reshape(-1, 3),
