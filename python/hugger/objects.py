@@ -1,11 +1,16 @@
-"""Built-in test objects: closed, outward-oriented meshes generated with numpy.
+"""Objects to grasp: built-in shapes generated with numpy, and mesh files read with trimesh.
 
-Each function returns a :class:`hugger.Object` centred at ``center`` (default the origin),
-so the centre is a natural target point T. Sizes are in metres.
+Each generator returns a closed, outward-oriented :class:`hugger.Object`. Sizes are in metres.
+Every built-in has a natural target point T (the origin, except the torus, whose centre is not
+inside it) and a default approach direction; ``get(name)`` builds one, ``BUILTINS`` lists them
+and ``load(path)`` reads any mesh file trimesh reads (STL, OBJ, PLY, OFF, GLB), repairing it
+when that is safe (see :func:`load`).
 """
 from __future__ import annotations
 
-from typing import Any
+import os
+from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 
@@ -123,3 +128,200 @@ def cylinder(radius: float = 0.035, height: float = 0.1, center: Any = (0, 0, 0)
         for k in range(r):
             faces += [(ring(k, i), ring(k, i + 1), ring(k + 1, i + 1)), (ring(k, i), ring(k + 1, i + 1), ring(k + 1, i))]
     return Object(np.array(pts) + _center(center), np.array(faces, dtype=np.int64))
+
+
+def _star(v: np.ndarray, f: np.ndarray, rho: np.ndarray, center: Any) -> Object:
+    """The star-shaped body whose surface is the unit sphere's point v moved to v * rho(v)."""
+    return Object(v * rho[:, None] + _center(center), f)
+
+
+def apple(radius: float = 0.04, center: Any = (0, 0, 0), subdivisions: int = 5) -> Object:
+    """An apple: a sphere of ``radius`` (default 4 cm) widened at the equator (8.4 cm wide, 6.9 cm tall)
+    with a stem dimple on top (+z) and a shallower calyx dimple below."""
+    v, f = icosphere(subdivisions)
+    theta = np.arccos(np.clip(v[:, 2], -1.0, 1.0))  # angle from +z
+    rho = (1.0 - 0.30 * np.exp(-((theta / 0.38) ** 2)) - 0.15 * np.exp(-(((np.pi - theta) / 0.40) ** 2))
+           + 0.05 * np.sin(theta) ** 2)
+    rho = rho * radius
+    return _star(v, f, rho, center)
+
+
+def curvy(size: float = 0.04, center: Any = (0, 0, 0), subdivisions: int = 5) -> Object:
+    """The paper's "complex curvilinear body": a smooth, non-convex, bumpy body about
+    ``2.1 * size`` long (x) and ``2 * size`` across (default 4 cm: about 9 x 8 x 8 cm), 20480 triangles.
+
+    The unit sphere's point v = (x, y, z) moves to ``v * rho(v) * size``, then x is stretched by 1.2::
+
+        rho = 1 + 0.20 sin(3.0x+0.7) cos(2.5y-0.3) + 0.12 sin(4.0z+1.2) cos(2.0x-0.5)
+                + 0.10 cos(3.5y+0.9) sin(2.5z) - 0.10 exp(-((x-0.1)/0.3)^2)
+
+    (The benchmark binary ``hugger_bench`` builds the same body.)
+    """
+    v, f = icosphere(subdivisions)
+    x, y, z = v.T
+    rho = (1.0 + 0.20 * np.sin(3.0 * x + 0.7) * np.cos(2.5 * y - 0.3) + 0.12 * np.sin(4.0 * z + 1.2) * np.cos(2.0 * x - 0.5)
+           + 0.10 * np.cos(3.5 * y + 0.9) * np.sin(2.5 * z) - 0.10 * np.exp(-(((x - 0.1) / 0.3) ** 2)))
+    p = v * (rho * float(size))[:, None]
+    p[:, 0] *= 1.2
+    return Object(p + _center(center), f)
+
+
+def torus(major_radius: float = 0.04, minor_radius: float = 0.015, center: Any = (0, 0, 0), sections: int = 96,
+          rings: int = 32) -> Object:
+    """A ring about z: tube radius ``minor_radius`` (default 1.5 cm) around a circle of ``major_radius``
+    (default 4 cm), so 11 x 11 x 3 cm. Its centre is not inside it: the natural target is in the tube,
+    at (major_radius, 0, 0) from the centre."""
+    if not 0 < minor_radius < major_radius:
+        raise ValueError("torus needs 0 < minor_radius < major_radius")
+    s, r = max(3, int(sections)), max(3, int(rings))
+    u = 2 * np.pi * np.arange(s) / s
+    w = 2 * np.pi * np.arange(r) / r
+    uu, ww = np.meshgrid(u, w, indexing="ij")
+    rad = major_radius + minor_radius * np.cos(ww)
+    pts = np.stack([rad * np.cos(uu), rad * np.sin(uu), minor_radius * np.sin(ww)], axis=-1).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(s), np.arange(r), indexing="ij")
+    a, b = i * r + j, ((i + 1) % s) * r + j
+    c, d = ((i + 1) % s) * r + (j + 1) % r, i * r + (j + 1) % r
+    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    return Object(pts + _center(center), faces.astype(np.int64))
+
+
+@dataclass(frozen=True)
+class Builtin:
+    """A built-in object: how to make it, its size, the natural target T and approach direction."""
+
+    name: str
+    make: Callable[[], Object]
+    size: str
+    description: str
+    target: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    approach: tuple[float, float, float] = (0.0, 0.0, 1.0)  #: direction from T to the default start
+
+
+BUILTINS: dict[str, Builtin] = {b.name: b for b in (
+    Builtin("sphere", sphere, "r 4 cm", "sphere, 5120 triangles"),
+    Builtin("apple", apple, "8.4 x 8.4 x 6.9 cm", "apple with stem and calyx dimples, 20480 triangles"),
+    Builtin("ellipsoid", ellipsoid, "10 x 8 x 6 cm", "ellipsoid with semi-axes 5, 4, 3 cm, 5120 triangles"),
+    Builtin("cylinder", cylinder, "r 3.5 cm, h 10 cm", "cylinder along z with flat caps", approach=(1.0, 0.0, 0.0)),
+    Builtin("box", box, "6 x 5 x 4 cm", "box, each face a 4 x 4 grid"),
+    Builtin("torus", torus, "11 x 11 x 3 cm", "ring (tube r 1.5 cm on a 4 cm circle); T inside the tube",
+            target=(0.04, 0.0, 0.0), approach=(1.0, 0.0, 0.0)),
+    Builtin("curvy", curvy, "8.7 x 8.1 x 8.1 cm", "smooth non-convex bumpy body, the paper's example, 20480 triangles"),
+)}
+
+
+def names() -> list[str]:
+    """Names of the built-in objects."""
+    return list(BUILTINS)
+
+
+def get(name: str) -> Object:
+    """The built-in object ``name`` (see ``BUILTINS``)."""
+    try:
+        return BUILTINS[name].make()
+    except KeyError:
+        raise ValueError(f"unknown built-in object {name!r}; choose from {', '.join(BUILTINS)}") from None
+
+
+MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
+
+
+def load(path: str | os.PathLike, scale: float = 1.0) -> Object:
+    """Read a mesh file (any format trimesh reads: STL, OBJ, PLY, OFF, GLB) as an Object.
+
+    ``scale`` multiplies the coordinates (0.001 for a file in millimetres). See :func:`load_mesh`
+    for what is repaired; a mesh that cannot be repaired safely raises ``ValueError``.
+    """
+    return load_mesh(path, scale)[0]
+
+
+def load_mesh(path: str | os.PathLike, scale: float = 1.0) -> tuple[Object, list[str]]:
+    """Like :func:`load`, and also say what was repaired.
+
+    Safe repairs, which change no enclosed volume: coincident vertices merged; faces that
+    repeat a vertex dropped; a face repeated with the same orientation kept once; a face
+    repeated with both orientations (a zero-volume fin) dropped; consistent but inward
+    orientation flipped; a closed, manifold mesh with inconsistent winding re-wound. A mesh
+    with holes or non-manifold edges that remain is refused: guessing its surface could make
+    the planner grasp something that is not there.
+    """
+    try:
+        import trimesh
+    except ImportError:
+        raise ImportError("reading mesh files needs trimesh: pip install 'hugger[mesh]'") from None
+    path = os.fspath(path)
+    scale = float(scale)
+    if not np.isfinite(scale) or scale <= 0:
+        raise ValueError(f"scale must be a positive number, got {scale}")
+    if not os.path.isfile(path):
+        raise FileNotFoundError(f"no such mesh file: {path}")
+    try:
+        mesh = trimesh.load(path, force="mesh", process=False)
+    except Exception as exc:  # trimesh raises many types for unreadable files
+        raise ValueError(f"cannot read mesh file {path!r}: {exc}") from None
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        raise ValueError(f"{path!r} holds no triangles")
+    vertices = np.asarray(mesh.vertices, dtype=np.float64) * scale
+    faces = np.asarray(mesh.faces, dtype=np.int64)
+    vertices, faces, repairs = _repair(vertices, faces)
+    try:
+        return Object(vertices, faces), repairs
+    except ValueError as exc:
+        raise ValueError(f"{os.path.basename(path)}: {exc}; it cannot be repaired safely") from None
+
+
+def _repair(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    import trimesh
+
+    repairs: list[str] = []
+    if not np.all(np.isfinite(v)):
+        return v, f, repairs  # Object says which vertex
+    n0 = len(v)
+    mesh = trimesh.Trimesh(v, f, process=False)
+    mesh.merge_vertices()
+    v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces, dtype=np.int64)
+    if len(v) < n0:
+        repairs.append(f"merged {n0 - len(v)} coincident vertices")
+    repeat = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
+    if repeat.any():
+        f = f[~repeat]
+        repairs.append(f"dropped {int(repeat.sum())} faces that repeat a vertex")
+    key = np.sort(f, axis=1)
+    _, first, inverse, counts = np.unique(key, axis=0, return_index=True, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    if np.any(counts > 1):
+        # Orientation of each face relative to its sorted key: even or odd permutation.
+        rolled = np.array([np.roll(row, -int(np.argmin(row))) for row in f])
+        parity = rolled[:, 1] < rolled[:, 2]
+        keep = np.ones(len(f), dtype=bool)
+        fins = same = 0
+        for g in np.flatnonzero(counts > 1):
+            members = np.flatnonzero(inverse == g)
+            up, down = members[parity[members]], members[~parity[members]]
+            keep[members] = False
+            if len(up) == len(down):
+                fins += len(members)
+            else:  # keep one face of the majority orientation, minus the cancelling pairs
+                survivor = up[0] if len(up) > len(down) else down[0]
+                keep[survivor] = True
+                same += len(members) - 1
+        f = f[keep]
+        if fins:
+            repairs.append(f"dropped {fins} faces forming zero-volume fins (a face and its reverse)")
+        if same:
+            repairs.append(f"dropped {same} duplicate faces")
+    mesh = trimesh.Trimesh(v, f, process=False)
+    if mesh.is_watertight and not mesh.is_winding_consistent:
+        trimesh.repair.fix_winding(mesh)
+        if mesh.is_winding_consistent:
+            f = np.asarray(mesh.faces, dtype=np.int64)
+            repairs.append("re-wound faces to a consistent orientation")
+    if mesh.is_watertight and mesh.is_winding_consistent and mesh.volume < 0:
+        f = f[:, ::-1].copy()
+        repairs.append("flipped inward-facing orientation")
+    used = np.unique(f)
+    if len(used) < len(v):
+        remap = np.full(len(v), -1, dtype=np.int64)
+        remap[used] = np.arange(len(used))
+        v, f = v[used], remap[f]
+    return v, f, repairs

@@ -1,0 +1,128 @@
+"""Ready-made planning cases: an object, a target point T inside it, and a safe start pose.
+
+``default_case("curvy", hand)`` or ``default_case("mug.stl", hand, scale=0.001)`` gives what the
+``hugger`` command plans by default: T is the built-in's natural target (for a mesh file: its
+volume centroid, or the deepest interior point when the centroid lies outside or near the
+surface), and the palm starts on the approach direction (+z for mesh files) at
+:func:`safe_distance`, facing T.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from . import objects
+from .hand import Hand
+from .planner import look_at
+from .world import Object
+
+
+@dataclass(frozen=True)
+class Case:
+    """One planning problem: ``Planner(hand, case.obj, case.target, case.palm_pose)``."""
+
+    name: str
+    obj: Object
+    target: np.ndarray  #: T (3,), inside obj
+    palm_pose: np.ndarray  #: (4, 4) start pose, clear of obj
+    repairs: list[str] = field(default_factory=list)  #: what loading a mesh file repaired
+
+
+def safe_distance(obj: Object, hand: Hand, target: Any, margin: float = 0.005) -> float:
+    """A palm distance from T at which the hand, in any orientation, clears the object by
+    ``margin``: the object's radius about T plus the hand's radius about the palm centre."""
+    t = np.asarray(target, dtype=np.float64).reshape(3)
+    body = float(np.linalg.norm(obj.vertices - t, axis=1).max())
+    hand_radius = max(math.hypot(hand.palm_radius, hand.reach) + hand.link_radius,
+                      math.hypot(hand.palm_radius, hand.palm_thickness))
+    return body + hand_radius + margin
+
+
+def start_pose(obj: Object, hand: Hand, target: Any, direction: Any = (0.0, 0.0, 1.0), turn_deg: float = 0.0,
+               distance: float | None = None) -> np.ndarray:
+    """The palm at ``distance`` (default :func:`safe_distance`) from T along ``direction``, facing T,
+    then turned by ``turn_deg`` about its own y axis so that Phase 1 has work to do."""
+    t = np.asarray(target, dtype=np.float64).reshape(3)
+    d = _unit("direction", direction)
+    dist = safe_distance(obj, hand, t) if distance is None else float(distance)
+    pose = look_at(t + dist * d, t)
+    if turn_deg:
+        c, s = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+        pose[:3, :3] = pose[:3, :3] @ np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    return pose
+
+
+def interior_target(obj: Object) -> np.ndarray:
+    """A natural T for an arbitrary mesh: its volume centroid when that is inside and at least
+    half as deep as the deepest point found on a 24^3 grid; otherwise that deepest point."""
+    lo, hi = obj.bounds
+    axes = [np.linspace(lo[i], hi[i], 26)[1:-1] for i in range(3)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    depth = -obj.signed_distance(grid)
+    best = grid[int(np.argmax(depth))]
+    c = obj.centroid
+    c_depth = -float(obj.signed_distance(c[None])[0])
+    return c if c_depth > 0 and c_depth >= 0.5 * float(depth.max()) else best
+
+
+def load_object(spec: str | os.PathLike, scale: float = 1.0) -> tuple[str, Object, list[str]]:
+    """A built-in name or a mesh file path -> (name, Object, repairs)."""
+    s = os.fspath(spec)
+    if s in objects.BUILTINS:
+        if scale != 1.0:
+            b = objects.BUILTINS[s].make()
+            return s, Object(b.vertices * float(scale), b.faces), []
+        return s, objects.get(s), []
+    if os.path.splitext(s)[1].lower() in objects.MESH_SUFFIXES or os.path.exists(s):
+        obj, repairs = objects.load_mesh(s, scale)
+        return os.path.basename(s), obj, repairs
+    raise ValueError(f"{s!r} is neither a built-in object ({', '.join(objects.BUILTINS)}) nor a mesh file")
+
+
+def default_case(spec: str | os.PathLike, hand: Hand | None = None, scale: float = 1.0, target: Any = None,
+                 start: Any = None, normal: Any = None, turn_deg: float = 0.0) -> Case:
+    """The case the ``hugger plan`` command solves for ``spec`` (built-in name or mesh file).
+
+    ``target`` overrides T; ``start`` the palm centre; ``normal`` the palm normal (default: towards T).
+    """
+    hand = hand if hand is not None else Hand()
+    name, obj, repairs = load_object(spec, scale)
+    builtin = objects.BUILTINS.get(os.fspath(spec))
+    if target is not None:
+        t = _finite("target", target)
+    elif builtin is not None:
+        t = np.asarray(builtin.target, dtype=np.float64) * float(scale)
+    else:
+        t = interior_target(obj)
+    if not bool(obj.inside(t[None])[0]):
+        raise ValueError(f"target T {t.tolist()} is not inside {name}")
+    if start is None and normal is None:
+        approach = builtin.approach if builtin is not None else (0.0, 0.0, 1.0)
+        pose = start_pose(obj, hand, t, approach, turn_deg)
+    else:
+        p = _finite("start", start) if start is not None else t - safe_distance(obj, hand, t) * _unit("normal", normal)
+        n = _unit("normal", normal) if normal is not None else _unit("start - target", t - p)
+        pose = look_at(p, p + n)
+    return Case(name=name, obj=obj, target=t, palm_pose=pose, repairs=repairs)
+
+
+def _finite(name: str, value: Any) -> np.ndarray:
+    try:
+        a = np.asarray(value, dtype=np.float64).reshape(3)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be three numbers") from None
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be finite, got {a.tolist()}")
+    return a
+
+
+def _unit(name: str, value: Any) -> np.ndarray:
+    a = _finite(name, value)
+    n = float(np.linalg.norm(a))
+    if n == 0.0:
+        raise ValueError(f"{name} must be a non-zero vector")
+    return a / n

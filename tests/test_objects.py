@@ -1,0 +1,143 @@
+"""Built-in objects, mesh files and default scenarios."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import hugger
+from hugger import objects, scenarios
+
+from helpers import OBJECTS_DIR, SHARED_MISSING
+
+trimesh = pytest.importorskip("trimesh", reason="mesh files need the mesh extra (trimesh)")
+
+
+@pytest.mark.parametrize("name", objects.names())
+def test_builtin_is_closed_outward_and_holds_its_target(name):
+    b = objects.BUILTINS[name]
+    obj = objects.get(name)
+    mesh = trimesh.Trimesh(obj.vertices, obj.faces, process=False)
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    assert obj.volume > 0 and mesh.volume == pytest.approx(obj.volume, rel=1e-9)
+    assert obj.inside(np.array([b.target]))[0]
+    assert -obj.signed_distance(np.array([b.target]))[0] > 0.005  # T well inside
+    extent = obj.bounds[1] - obj.bounds[0]
+    assert 0.02 < extent.min() and extent.max() < 0.15  # all fit a hand of about 10 cm
+
+
+def test_documented_sizes_match_the_meshes():
+    ext = lambda n: np.round(100 * (objects.get(n).bounds[1] - objects.get(n).bounds[0]), 1)  # noqa: E731 (cm)
+    assert np.allclose(ext("apple"), [8.4, 8.4, 6.9], atol=0.06)
+    assert np.allclose(ext("curvy"), [8.7, 8.1, 8.1], atol=0.06)
+    assert np.allclose(ext("torus"), [11, 11, 3], atol=0.06)
+    assert np.allclose(ext("box"), [6, 5, 4], atol=1e-9)
+
+
+def test_curvy_and_apple_are_not_convex():
+    from scipy.spatial import ConvexHull
+
+    for name in ("curvy", "apple", "torus"):
+        obj = objects.get(name)
+        hull = ConvexHull(obj.vertices)
+        depth = -(obj.vertices @ hull.equations[:, :3].T + hull.equations[:, 3]).max(axis=1)  # inside the hull, m
+        assert depth.max() > 0.003, name  # a dent at least 3 mm deep
+
+
+def test_torus_centre_is_outside():
+    assert not objects.torus().inside(np.zeros((1, 3)))[0]
+    with pytest.raises(ValueError, match="minor_radius"):
+        objects.torus(0.01, 0.02)
+
+
+def test_unknown_builtin_names_the_choices():
+    with pytest.raises(ValueError, match="choose from sphere, apple"):
+        objects.get("banana")
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".obj", ".ply", ".off", ".glb"])
+def test_mesh_files_round_trip(tmp_path, suffix):
+    src = objects.sphere(0.03, subdivisions=2)
+    path = tmp_path / f"ball{suffix}"
+    trimesh.Trimesh(src.vertices, src.faces, process=False).export(path)
+    obj = objects.load(path)
+    assert len(obj.faces) == len(src.faces)
+    assert obj.volume == pytest.approx(src.volume, rel=1e-6)
+
+
+def test_scale_turns_millimetres_into_metres(tmp_path):
+    src = objects.box((60.0, 50.0, 40.0))  # a box "in millimetres"
+    path = tmp_path / "box_mm.stl"
+    trimesh.Trimesh(src.vertices, src.faces, process=False).export(path)
+    obj = objects.load(path, scale=0.001)
+    assert np.allclose(obj.bounds[1] - obj.bounds[0], [0.06, 0.05, 0.04])
+    with pytest.raises(ValueError, match="scale"):
+        objects.load(path, scale=0)
+
+
+def test_safe_repairs_are_made_and_reported(tmp_path):
+    src = objects.sphere(0.03, subdivisions=2)
+    v, f = src.vertices, src.faces
+    # A fin (a face and its reverse), a repeated face, a face repeating a vertex, inward orientation.
+    extra = np.array([[0, 1, 2], [2, 1, 0], f[5, ::-1], [3, 3, 4]])
+    bad = np.concatenate([f[:, ::-1], extra])
+    path = tmp_path / "messy.obj"
+    trimesh.Trimesh(v, bad, process=False).export(path)
+    obj, repairs = objects.load_mesh(path)
+    assert obj.volume == pytest.approx(src.volume, rel=1e-6)
+    text = " ".join(repairs)
+    for phrase in ("repeat a vertex", "zero-volume fins", "duplicate", "inward"):
+        assert phrase in text
+
+
+def test_a_mesh_with_a_hole_is_refused(tmp_path):
+    src = objects.sphere(0.03, subdivisions=2)
+    path = tmp_path / "open.stl"
+    trimesh.Trimesh(src.vertices, src.faces[1:], process=False).export(path)
+    with pytest.raises(ValueError, match="open.stl: .*cannot be repaired safely"):
+        objects.load(path)
+
+
+def test_unreadable_and_missing_files(tmp_path):
+    bad = tmp_path / "junk.stl"
+    bad.write_bytes(b"\x00\x01 not a mesh")
+    with pytest.raises(ValueError):
+        objects.load(bad)
+    with pytest.raises(FileNotFoundError):
+        objects.load(tmp_path / "absent.obj")
+
+
+@pytest.mark.skipif(not OBJECTS_DIR.is_dir(), reason=SHARED_MISSING)
+def test_the_scanned_mug_is_repaired():
+    obj, repairs = objects.load_mesh(OBJECTS_DIR / "ycb_mug.obj")
+    assert obj.volume > 0 and repairs
+
+
+def test_default_case_is_clear_of_the_object_and_faces_t():
+    hand = hugger.Hand()
+    for name in objects.names():
+        case = scenarios.default_case(name, hand)
+        assert case.obj.inside(case.target[None])[0]
+        roots = hand.roots(case.palm_pose)
+        assert np.all(case.obj.signed_distance(roots) > hand.reach)
+        to_t = case.target - case.palm_pose[:3, 3]
+        assert np.dot(case.palm_pose[:3, 2], to_t / np.linalg.norm(to_t)) == pytest.approx(1.0)
+
+
+def test_default_case_options():
+    hand = hugger.Hand()
+    case = scenarios.default_case("sphere", hand, start=[0.0, 0.3, 0.0])
+    assert np.allclose(case.palm_pose[:3, 3], [0, 0.3, 0]) and np.allclose(case.palm_pose[:3, 2], [0, -1, 0])
+    case = scenarios.default_case("sphere", hand, normal=[1.0, 0.0, 0.0])
+    assert case.palm_pose[0, 3] < -0.1 and np.allclose(case.palm_pose[:3, 2], [1, 0, 0])
+    turned = scenarios.default_case("sphere", hand, turn_deg=60)
+    assert np.dot(turned.palm_pose[:3, 2], [0, 0, -1]) == pytest.approx(0.5)
+    with pytest.raises(ValueError, match="not inside"):
+        scenarios.default_case("torus", hand, target=[0, 0, 0])
+    with pytest.raises(ValueError, match="non-zero"):
+        scenarios.default_case("sphere", hand, normal=[0, 0, 0])
+
+
+def test_interior_target_of_a_ring_is_in_the_tube():
+    t = scenarios.interior_target(objects.torus())
+    assert objects.torus().inside(t[None])[0]
+    assert np.hypot(t[0], t[1]) == pytest.approx(0.04, abs=0.006)
