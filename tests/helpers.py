@@ -65,17 +65,11 @@ def random_rotation(rng: np.random.Generator) -> np.ndarray:
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
-def bounding_radius(obj: hugger.Object, centre: np.ndarray) -> float:
-    return float(np.linalg.norm(obj.vertices - centre, axis=1).max())
-
-
 def safe_start(rng: np.random.Generator, obj: hugger.Object, hand: hugger.Hand, target: np.ndarray) -> np.ndarray:
     """A random palm pose far enough from O to turn freely in Phase 1, randomly oriented."""
-    reach = math.hypot(hand.palm_radius, hand.reach) + hand.link_radius
-    reach = max(reach, math.hypot(hand.palm_radius, hand.palm_thickness))
     d = rng.normal(size=3)
     d /= np.linalg.norm(d)
-    dist = bounding_radius(obj, target) + reach + 0.005 + rng.uniform(0.0, 0.03)
+    dist = hugger.scenarios.safe_distance(obj, hand, target) + rng.uniform(0.0, 0.03)
     pose = np.eye(4)
     pose[:3, :3] = random_rotation(rng)
     pose[:3, 3] = target + dist * d

@@ -14,7 +14,7 @@ this package holds the Python API::
 """
 from __future__ import annotations
 
-from . import objects
+from . import objects, scenarios
 from .hand import Hand
 from .planner import FROZEN, CONTACT, DONE, Configuration, Planner, look_at, plan
 from .trajectory import FORMAT_VERSION, Trajectory
@@ -35,5 +35,6 @@ __all__ = [
     "look_at",
     "objects",
     "plan",
+    "scenarios",
     "__version__",
 ]
