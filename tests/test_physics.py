@@ -1,0 +1,337 @@
+"""MuJoCo physics check (hugger.physics) and the close-until-contact baseline (bench/baseline.py)."""
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hugger
+
+mujoco = pytest.importorskip("mujoco", reason="the physics extra is not installed (pip install 'hugger[physics]')")
+
+from hugger import physics  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+BENCH = ROOT / "bench"
+
+
+def _bench_module(name: str):
+    spec = importlib.util.spec_from_file_location(f"hugger_bench_{name}", BENCH / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.path.insert(0, str(BENCH))
+    try:
+        spec.loader.exec_module(mod)
+    finally:
+        sys.path.remove(str(BENCH))
+    return mod
+
+
+@pytest.fixture(scope="module")
+def hand() -> hugger.Hand:
+    return hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
+
+
+@pytest.fixture(scope="module")
+def sphere_plan(hand) -> hugger.Trajectory:
+    """Hugger's grasp of a 4 cm sphere from 20 cm above: palm and many links touch, a cage."""
+    obj = hugger.objects.sphere(0.04, subdivisions=3)
+    traj = hugger.plan(hand, obj, [0, 0, 0], hugger.look_at([0, 0, 0.2], [0, 0, 0]))
+    assert traj.status == "done"
+    return traj
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("coacd-cache")
+
+
+def _far_away(traj: hugger.Trajectory, distance: float = 0.5) -> hugger.Trajectory:
+    """The same trajectory with the whole hand moved ``distance`` back along the final palm normal."""
+    shift = -distance * traj.palm_pose[-1, :3, 2]
+    pose = traj.palm_pose.copy()
+    pose[:, :3, 3] += shift
+    return dataclasses.replace(traj, palm_pose=pose, joints=traj.joints + shift)
+
+
+# ------------------------------------------------------------------------------------------
+# mesh helpers
+
+
+def test_mass_properties_match_closed_forms():
+    box = hugger.objects.box((0.06, 0.04, 0.02), center=(0.1, -0.2, 0.3), divisions=2)
+    vol, centre, inertia = physics.mass_properties(box.vertices, box.faces)
+    assert vol == pytest.approx(0.06 * 0.04 * 0.02, rel=1e-12)
+    np.testing.assert_allclose(centre, [0.1, -0.2, 0.3], atol=1e-12)
+    a, b, c = 0.06, 0.04, 0.02
+    expect = vol / 12 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
+    np.testing.assert_allclose(inertia, expect, rtol=1e-9, atol=1e-20)
+
+    ball = hugger.objects.sphere(0.05, subdivisions=4)
+    vol, centre, inertia = physics.mass_properties(ball.vertices, ball.faces)
+    assert vol == pytest.approx(ball.volume, rel=1e-9)
+    np.testing.assert_allclose(inertia, 0.4 * vol * 0.05 ** 2 * np.eye(3), rtol=0.01, atol=1e-12)
+
+
+def test_mass_properties_rejects_inside_out():
+    box = hugger.objects.box()
+    with pytest.raises(ValueError, match="positive volume"):
+        physics.mass_properties(box.vertices, box.faces[:, ::-1])
+
+
+def test_convex_object_is_one_piece_without_coacd(monkeypatch, cache):
+    ball = hugger.objects.sphere(0.04, subdivisions=3)
+    monkeypatch.setitem(sys.modules, "coacd", None)  # would raise if CoACD were called
+    pieces = physics.convex_pieces(ball.vertices, ball.faces, cache_dir=cache)
+    assert len(pieces) == 1
+    np.testing.assert_array_equal(pieces[0][0], ball.vertices)
+
+
+def test_nonconvex_object_is_decomposed_and_cached(monkeypatch, cache):
+    blob = hugger.objects.blob(0.04, amplitude=0.6, seed=1, subdivisions=2)
+    assert physics.hull_volume(blob.vertices) / blob.volume > physics.CONVEX_RATIO
+    pytest.importorskip("coacd", reason="CoACD is not installed (pip install 'hugger[physics]')")
+    first = physics.convex_pieces(blob.vertices, blob.faces, cache_dir=cache)
+    assert len(first) > 1
+    assert len(list(cache.glob("*.npz"))) == 1
+    total = sum(physics.mass_properties(v, f)[0] for v, f in first)
+    assert 0.9 * blob.volume < total < 1.5 * blob.volume
+    monkeypatch.setitem(sys.modules, "coacd", None)  # the second call must come from the cache
+    second = physics.convex_pieces(blob.vertices, blob.faces, cache_dir=cache)
+    assert len(second) == len(first)
+    for (v1, f1), (v2, f2) in zip(first, second):
+        np.testing.assert_array_equal(v1, v2)
+        np.testing.assert_array_equal(f1, f2)
+    assert len(physics.convex_pieces(blob.vertices, blob.faces, decompose=False)) == 1
+
+
+def test_missing_coacd_raises_import_error_naming_the_extra(monkeypatch, tmp_path):
+    blob = hugger.objects.blob(0.04, amplitude=0.6, seed=1, subdivisions=2)
+    assert physics.hull_volume(blob.vertices) / blob.volume > physics.CONVEX_RATIO
+    monkeypatch.setitem(sys.modules, "coacd", None)  # and an empty cache: CoACD would be needed
+    with pytest.raises(ImportError, match=r"hugger\[physics\]"):
+        physics.convex_pieces(blob.vertices, blob.faces, cache_dir=tmp_path)
+
+
+def test_missing_mujoco_raises_import_error_naming_the_extra(monkeypatch, sphere_plan):
+    monkeypatch.setitem(sys.modules, "mujoco", None)
+    with pytest.raises(ImportError, match=r"hugger\[physics\]"):
+        physics.export_mjcf(sphere_plan)
+    with pytest.raises(ImportError, match=r"hugger\[physics\]"):
+        physics.validate(sphere_plan)
+
+
+# ------------------------------------------------------------------------------------------
+# MJCF export
+
+
+@pytest.mark.parametrize("k", [0, -1])
+def test_export_round_trip_reproduces_configuration(sphere_plan, tmp_path, k):
+    traj = sphere_plan
+    path = tmp_path / "hand.xml"
+    xml = physics.export_mjcf(traj, path, k=k)
+    assert path.read_text() == xml
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    m_count, n_count = traj.angles.shape[1:]
+    assert model.nu == m_count * n_count
+    # qpos of the hinges set from the trajectory, everything else from the model's defaults
+    data.mocap_pos[0] = traj.palm_pose[k, :3, 3]
+    data.mocap_quat[0] = physics._quat(traj.palm_pose[k, :3, :3])
+    for m in range(m_count):
+        for n in range(n_count):
+            j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, f"f{m}_j{n}")
+            data.qpos[model.jnt_qposadr[j]] = traj.angles[k, m, n]
+    mujoco.mj_forward(model, data)
+    joints = traj.joints[k]
+    worst = 0.0
+    for m in range(m_count):
+        for n in range(n_count):
+            b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"f{m}_l{n}")
+            g = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"f{m}_l{n}")
+            j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, f"f{m}_j{n}")
+            tail = data.xpos[b]
+            half = model.geom_size[g, 1]
+            tip = data.geom_xpos[g] + data.geom_xmat[g].reshape(3, 3)[:, 2] * half
+            worst = max(worst, np.abs(tail - joints[m, n]).max(), np.abs(tip - joints[m, n + 1]).max())
+            # the hinge is at j_mn, its axis normal to the finger plane
+            np.testing.assert_allclose(data.xanchor[j], joints[m, n], atol=1e-9)
+            assert abs(float(data.xaxis[j] @ (joints[m, n + 1] - joints[m, n]))) < 1e-9
+            assert abs(float(data.xaxis[j] @ traj.palm_pose[k, :3, 2])) < 1e-9
+            lo, hi = model.jnt_range[j]
+            assert lo <= traj.angles[k, m, n] <= hi
+    assert worst < 1e-6
+    # the palm: a cylinder behind the front face, radius and thickness of the hand
+    g = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "palm")
+    hand = traj.hand
+    np.testing.assert_allclose(model.geom_size[g, :2], [hand["palm_radius"], hand["palm_thickness"] / 2])
+    centre = traj.palm_pose[k, :3, 3] - traj.palm_pose[k, :3, 2] * hand["palm_thickness"] / 2
+    np.testing.assert_allclose(data.geom_xpos[g], centre, atol=1e-12)
+    # the object: a free body of 0.1 kg at the mesh's centre of volume
+    obj = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "object")
+    assert model.body_mass[obj] == pytest.approx(0.1)
+    np.testing.assert_allclose(data.xipos[obj], traj.object().centroid, atol=1e-9)
+
+
+def test_export_keyframe_holds_the_configuration(sphere_plan):
+    model, data = physics.load_model(sphere_plan)
+    angles = []
+    for m in range(5):
+        for n in range(5):
+            j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, f"f{m}_j{n}")
+            angles.append(data.qpos[model.jnt_qposadr[j]])
+    np.testing.assert_allclose(np.reshape(angles, (5, 5)), sphere_plan.angles[-1], atol=1e-12)
+    np.testing.assert_allclose(data.ctrl, sphere_plan.angles[-1].ravel(), atol=1e-12)
+    assert model.opt.gravity[2] < 0  # the file keeps gravity for the object...
+    assert np.all(model.body_gravcomp[2:-1] == 1)  # ...and compensates it on the finger links (body 1: the palm)
+
+
+def test_export_zero_radius_links_and_nonconvex_object(cache):
+    thin = hugger.Hand(fingers=3, links=3, link_length=0.03, link_radius=0.0, palm_radius=0.03, palm_thickness=0.01)
+    blob = hugger.objects.blob(0.04, amplitude=0.6, seed=1, subdivisions=2)  # decomposition cached above
+    traj = hugger.plan(thin, blob, [0, 0, 0], hugger.look_at([0, 0, 0.25], [0, 0, 0]))
+    xml = physics.export_mjcf(traj, cache_dir=cache)
+    model = mujoco.MjModel.from_xml_string(xml)
+    g = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "f0_l0")
+    assert model.geom_size[g, 0] == pytest.approx(physics.ZERO_RADIUS_SUBSTITUTE)
+    obj = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "object")
+    assert int(np.sum(model.geom_bodyid == obj)) > 1
+    single = mujoco.MjModel.from_xml_string(physics.export_mjcf(traj, decompose=False))
+    assert int(np.sum(single.geom_bodyid == obj)) == 1
+
+
+def test_export_rejects_bad_input(sphere_plan):
+    with pytest.raises(ValueError, match="out of range"):
+        physics.export_mjcf(sphere_plan, k=len(sphere_plan))
+    with pytest.raises(ValueError, match="object_mass"):
+        physics.export_mjcf(sphere_plan, object_mass=-1)
+    with pytest.raises(ValueError, match="friction"):
+        physics.export_mjcf(sphere_plan, friction=float("nan"))
+    with pytest.raises(ValueError, match="Trajectory"):
+        physics.export_mjcf({"not": "a trajectory"})
+
+
+# ------------------------------------------------------------------------------------------
+# validate
+
+
+def test_caged_sphere_is_held_in_all_six_directions(sphere_plan):
+    res = physics.validate(sphere_plan)
+    json.dumps(res, allow_nan=False)  # plain JSON
+    assert set(res["directions"]) == {"+x", "-x", "+y", "-y", "+z", "-z"}
+    for name, d in res["directions"].items():
+        assert d["held"], (name, d)
+        assert d["displacement_m"] < 0.05 and d["rotation_deg"] < 15.0
+    assert res["held"] is True
+    assert all(res["touching_fingers"])
+    s = res["settings"]
+    assert s["mass_kg"] == 0.1 and s["mu"] == 0.6 and s["force_N"] == pytest.approx(10 * 0.1 * 9.81)
+    for key in ("timestep_s", "integrator", "condim", "solref", "solimp", "kp_Nm_per_rad", "squeeze_rad", "duration_s",
+                "gravity", "impratio"):
+        assert key in s
+
+
+def test_hand_moved_away_holds_nothing(sphere_plan):
+    res = physics.validate(_far_away(sphere_plan), duration=0.5)
+    assert res["held"] is False
+    assert not any(res["touching_fingers"])
+    toward_hand = -sphere_plan.palm_pose[-1, :3, 2]  # the hand was moved back along this
+    for name, d in res["directions"].items():
+        assert not d["held"], name
+        assert d["displacement_m"] > 0.3
+        if abs(float(np.dot(physics.DIRECTIONS[name], toward_hand))) < 1e-9:
+            # free flight under 10 x 9.81 m/s^2 for 0.5 s (toward the hand it hits the hand 0.5 m away)
+            assert d["displacement_m"] == pytest.approx(0.5 * 98.1 * 0.5 ** 2, rel=0.01)
+
+
+def test_validate_is_deterministic(sphere_plan):
+    a = physics.validate(sphere_plan, duration=0.3)
+    b = physics.validate(sphere_plan, duration=0.3)
+    assert json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
+
+
+def test_validate_rejects_bad_input(sphere_plan):
+    for kwargs, word in (({"mass": 0}, "mass"), ({"mu": -0.1}, "mu"), ({"duration": 0}, "duration"),
+                         ({"squeeze": -0.01}, "squeeze"), ({"force_factor": float("inf")}, "force_factor"),
+                         ({"k": 1.5}, "k")):
+        with pytest.raises(ValueError, match=word):
+            physics.validate(sphere_plan, **kwargs)
+
+
+def test_validate_reads_trajectory_files(sphere_plan, tmp_path):
+    path = tmp_path / "plan.npz"
+    sphere_plan.save(path)
+    assert physics.export_mjcf(path) == physics.export_mjcf(sphere_plan)
+
+
+# ------------------------------------------------------------------------------------------
+# the close-until-contact baseline
+
+
+@pytest.fixture(scope="module")
+def baseline_sphere(hand):
+    mod = _bench_module("baseline")
+    obj = hugger.objects.sphere(0.04, subdivisions=3)
+    return mod.plan_baseline(hand, obj, [0, 0, 0], hugger.look_at([0, 0, 0.2], [0, 0, 0]))
+
+
+def test_baseline_is_a_valid_trajectory(baseline_sphere, checker, tmp_path):
+    import helpers
+
+    traj = baseline_sphere
+    assert traj.status == "done"
+    assert np.all(traj.tip_state[-1] == hugger.DONE)
+    assert traj.phase[0] == 0 and np.all(traj.phase[1:] == 2)
+    path = tmp_path / "baseline.npz"
+    traj.save(path)
+    ok, failures, figures = helpers.check_file(checker, path, every=4)
+    assert ok, failures
+    # it stopped on a touch: every finger ends within the contact tolerance of the object
+    gaps = traj.link_gaps(-1)
+    assert np.all(gaps.min(axis=1) <= traj.params["contact_tolerance"] + 1e-6)
+    assert traj.stats["plan_time_s"] > 0
+
+
+def test_baseline_touches_less_than_hugger(baseline_sphere, sphere_plan):
+    base, hug = baseline_sphere.summary(), sphere_plan.summary()
+    assert base["links_in_contact"] < hug["links_in_contact"]
+    assert hug["palm_contact"] and not base["palm_contact"]
+    res = physics.validate(baseline_sphere, duration=0.5)  # validate applies to it unchanged
+    assert set(res["directions"]) == set(physics.DIRECTIONS)
+
+
+def test_baseline_turns_to_face_the_target_first(hand, checker, tmp_path):
+    import helpers
+
+    mod = _bench_module("baseline")
+    obj = hugger.objects.sphere(0.03, subdivisions=2)
+    start = hugger.look_at([0.0, 0.0, 0.2], [0.05, 0.0, 0.0])  # not facing T
+    traj = mod.plan_baseline(hand, obj, [0, 0, 0], start, step=0.002)
+    assert np.sum(traj.phase == 1) > 0
+    path = tmp_path / "turn.npz"
+    traj.save(path)
+    ok, failures, _ = helpers.check_file(checker, path, every=8)
+    assert ok, failures
+
+
+def test_baseline_rejects_bad_starts(hand):
+    mod = _bench_module("baseline")
+    obj = hugger.objects.sphere(0.03, subdivisions=2)
+    with pytest.raises(ValueError, match="inside the object"):
+        mod.plan_baseline(hand, obj, [0.1, 0, 0], hugger.look_at([0, 0, 0.2], [0.1, 0, 0]))
+    with pytest.raises(ValueError, match="at the start"):
+        mod.plan_baseline(hand, obj, [0, 0, 0], hugger.look_at([0, 0, 0.05], [0, 0, 0]))
+
+
+def test_compare_script_writes_a_table(tmp_path, capsys):
+    pytest.importorskip("scipy", reason="the comparison's grasp quality needs scipy (pip install 'hugger[analysis]')")
+    mod = _bench_module("compare_baseline")
+    out = tmp_path / "table.md"
+    assert mod.main(["--objects", "sphere", "--out", str(out), "--no-validate"]) == 0
+    text = out.read_text()
+    assert "| sphere | hugger | done |" in text and "| sphere | baseline | done |" in text
+    assert "sphere" in capsys.readouterr().out
