@@ -6,12 +6,13 @@ BIN    := $(CURDIR)/$(VENV)/bin
 APT_PACKAGES := libeigen3-dev libfcl-dev libgtest-dev
 export PATH := $(BIN):$(PATH)
 
-.PHONY: help deps venv install demo test test-cpp test-py test-sanitize clean
+.PHONY: help deps venv install demo test test-cpp test-py test-sanitize fuzz clean
 
 help:
-	@echo "make demo           set up and plan a grasp of the built-in default object"
+	@echo "make demo           set up and run 'hugger demo': the paper's example, figures and animation in demo-out/"
 	@echo "make test           set up and run the C++ (ctest) and Python (pytest) suites"
 	@echo "make test-sanitize  C++ tests under AddressSanitizer + UndefinedBehaviorSanitizer"
+	@echo "make fuzz           the long hypothesis fuzzing run (HUGGER_FUZZ_PROFILE=long)"
 	@echo "make install        system packages, .venv, and the package with its test extras"
 
 deps:
@@ -38,7 +39,7 @@ install: deps venv
 	$(BIN)/python -m pip install -q --no-build-isolation -Cbuild-dir=build/py -e ".[test]"
 
 demo: install
-	$(BIN)/python -m hugger.demo --out demo-out
+	$(BIN)/hugger demo --out demo-out
 
 test-cpp: install
 	$(BIN)/cmake -S . -B build/ctest -G Ninja -DHUGGER_BUILD_TESTS=ON -DHUGGER_BUILD_PYTHON=OFF -DCMAKE_BUILD_TYPE=Release >/dev/null
@@ -60,6 +61,9 @@ test-sanitize: install
 	  -DHUGGER_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 	$(BIN)/cmake --build build/sanitize -j 2
 	cd build/sanitize && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 $(BIN)/ctest --output-on-failure -j 2
+
+fuzz: install
+	HUGGER_FUZZ_PROFILE=long $(BIN)/python -m pytest -q tests/test_fuzz.py
 
 clean:
 	rm -rf build $(VENV) demo-out

@@ -112,9 +112,13 @@ def test_stream_equals_plan(hand, sphere):
 
 
 def test_step_then_plan_continues(hand, sphere):
-    planner = hugger.Planner(hand, sphere, [0, 0, 0], start())
+    turned = hugger.scenarios.start_pose(sphere, hand, [0, 0, 0], turn_deg=60)  # Phase 1 has work to do
+    planner = hugger.Planner(hand, sphere, [0, 0, 0], turned)
     first = [planner.step() for _ in range(10)]
     assert planner.status == "running"
+    partial = planner.trajectory()  # exactly what step() handed out, although Phase 1 is precomputed
+    assert len(partial) == 10
+    np.testing.assert_array_equal(partial.joints[-1], first[-1].joints)
     traj = planner.plan()
     assert traj.status == "done" and planner.step() is None
     np.testing.assert_array_equal(traj.joints[9], first[9].joints)

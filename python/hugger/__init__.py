@@ -22,6 +22,18 @@ from .world import Object
 
 __version__ = "0.1.0"
 
+_LAZY = ("analysis", "viz", "physics", "cli")
+
+
+def __getattr__(name: str):
+    """Submodules with optional dependencies load on first use: ``hugger.analysis``, ``hugger.viz``,
+    ``hugger.physics`` (``import hugger`` itself needs only numpy)."""
+    if name in _LAZY:
+        import importlib
+
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 __all__ = [
     "CONTACT",
     "DONE",

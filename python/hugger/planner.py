@@ -96,6 +96,7 @@ class Planner:
                                    _optional_size("epsilon", epsilon),
                                    _optional_size("contact_tolerance", contact_tolerance),
                                    _optional_count("max_iterations", max_iterations))
+        self._emitted: int | None = 0  # configurations handed out by step(); None after plan()
 
     @property
     def status(self) -> str:
@@ -113,8 +114,13 @@ class Planner:
         return dict(self._core.stats)
 
     def step(self) -> Configuration | None:
+        """The next configuration (C_init first), or None when the plan has ended."""
         d = self._core.step()
-        return None if d is None else Configuration(**d)
+        if d is None:
+            return None
+        if self._emitted is not None:
+            self._emitted = d["iteration"] + 1
+        return Configuration(**d)
 
     def __iter__(self) -> Iterator[Configuration]:
         while (c := self.step()) is not None:
@@ -123,11 +129,15 @@ class Planner:
     def plan(self) -> Trajectory:
         """Run to the end and return the whole trajectory, from C_init."""
         self._core.plan()
+        self._emitted = None
         return self.trajectory()
 
     def trajectory(self) -> Trajectory:
-        """The configurations planned so far, as a :class:`Trajectory`."""
+        """The configurations handed out so far (by ``step()``, or all after ``plan()``), as a
+        :class:`Trajectory`."""
         h = self._core.history()
+        if self._emitted is not None and self._emitted < len(h["phase"]):
+            h = {key: value[: self._emitted] for key, value in h.items()}
         params = self.params
         return Trajectory(
             hand_json=self.hand.to_json(),

@@ -72,6 +72,9 @@ def interior_target(obj: Object) -> np.ndarray:
 def load_object(spec: str | os.PathLike, scale: float = 1.0) -> tuple[str, Object, list[str]]:
     """A built-in name or a mesh file path -> (name, Object, repairs)."""
     s = os.fspath(spec)
+    scale = float(scale)
+    if not math.isfinite(scale) or scale <= 0:
+        raise ValueError(f"scale must be a positive number, got {scale}")
     if s in objects.BUILTINS:
         if scale != 1.0:
             b = objects.BUILTINS[s].make()

@@ -1,0 +1,357 @@
+"""The ``hugger`` command: plan grasps, judge them, draw them.
+
+    hugger plan OBJECT --out plan.npz [--json]   plan a grasp of a built-in object or a mesh file
+    hugger demo [--out DIR]                       the paper's example, with figures and animation
+    hugger render plan.npz --out fig.png|.gif|.mp4
+    hugger info plan.npz [--json]                 what a trajectory file holds, and its grasp
+    hugger objects                                the built-in objects
+    hugger validate plan.npz [--json]             hold test in MuJoCo (extra: physics)
+    hugger export-mjcf plan.npz --out hand.xml    the hand and object as MJCF
+
+Exit status: 0 success, 2 bad input or a missing optional dependency (one line on standard
+error, no traceback), 1 an internal error.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Any, Sequence
+
+from ._progress import Progress
+
+EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
+
+
+class UsageError(Exception):
+    """Bad input from the command line: reported in one line, exit 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, exit 2, no usage dump
+        raise UsageError(f"{message} (see '{self.prog} --help')")
+
+
+# ---------------------------------------------------------------------------------------------
+# Shared pieces
+
+
+def _hand_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("hand (defaults: the paper's 5 x 5 hand)")
+    g.add_argument("--fingers", type=int, default=5, help="M, number of fingers (default 5)")
+    g.add_argument("--links", type=int, default=5, help="N, links per finger (default 5)")
+    g.add_argument("--link-length", type=float, default=0.02, help="link length, m (default 0.02)")
+    g.add_argument("--link-radius", type=float, default=0.004, help="link (capsule) radius, m (default 0.004)")
+    g.add_argument("--palm-radius", type=float, default=0.03, help="palm radius, m (default 0.03)")
+    g.add_argument("--palm-thickness", type=float, default=0.01, help="palm thickness, m (default 0.01)")
+
+
+def _planner_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("planner (defaults as hugger.Planner)")
+    g.add_argument("--step", type=float, help="approach step, m (default shortest link / 20)")
+    g.add_argument("--epsilon", type=float, help="tip-to-surface distance epsilon, m (default step / 10)")
+    g.add_argument("--contact-tolerance", type=float, help="sensing distance delta, m (default 1e-4)")
+    g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
+
+
+def _case_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("scene (defaults: T the object's natural target, the palm at a safe distance facing T)")
+    g.add_argument("--target", type=float, nargs=3, metavar=("X", "Y", "Z"), help="T, a point inside the object, m")
+    g.add_argument("--start", type=float, nargs=3, metavar=("X", "Y", "Z"), help="initial palm centre, m")
+    g.add_argument("--normal", type=float, nargs=3, metavar=("NX", "NY", "NZ"),
+                   help="initial palm normal (default: towards T)")
+    g.add_argument("--turn", type=float, default=0.0, metavar="DEG",
+                   help="turn the default start away from T by DEG about the palm's y axis (default 0)")
+    g.add_argument("--scale", type=float, default=1.0, help="multiply mesh coordinates (0.001 for millimetres)")
+
+
+def _hand(args: argparse.Namespace):
+    import hugger
+
+    return hugger.Hand(fingers=args.fingers, links=args.links, link_length=args.link_length,
+                       link_radius=args.link_radius, palm_radius=args.palm_radius, palm_thickness=args.palm_thickness)
+
+
+def _params(args: argparse.Namespace) -> dict[str, Any]:
+    return {k: getattr(args, k) for k in ("step", "epsilon", "contact_tolerance", "max_iterations")}
+
+
+def _load(path: str):
+    import hugger
+
+    if not os.path.isfile(path):
+        raise UsageError(f"no such trajectory file: {path}")
+    return hugger.Trajectory.load(path)
+
+
+def _analysis(traj) -> dict[str, Any]:
+    """The grasp judgement of a trajectory's final configuration (needs the analysis extra)."""
+    from . import analysis
+
+    return analysis.analyze(traj)
+
+
+def _report(traj, plan_time: float | None = None) -> dict[str, Any]:
+    s = traj.summary()
+    out: dict[str, Any] = {"status": s["status"], "configurations": s["configurations"],
+                           "phase1_configurations": s["phase1_configurations"]}
+    if plan_time is not None:
+        out["plan_time_s"] = round(plan_time, 6)
+        out["configurations_per_s"] = round(len(traj) / plan_time, 1) if plan_time > 0 else None
+    a = _analysis(traj)
+    out.update({"palm_contact": a["palm_contact"], "links_in_contact": a["links_in_contact"], "links": a["links"],
+                "contacts": a["contacts"], "force_closure": a["force_closure"], "epsilon": a["epsilon"],
+                "volume": a["volume"], "per_finger_contacts": a["per_finger_contacts"],
+                "wrap_angle_deg": a["wrap_angle_deg"], "mu": a["mu"]})
+    return out
+
+
+def _print_table(d: dict[str, Any], stream=None) -> None:
+    stream = stream or sys.stdout
+    for key, value in d.items():
+        if isinstance(value, float):
+            value = f"{value:.6g}"
+        elif isinstance(value, list):
+            value = " ".join(f"{x:.4g}" if isinstance(x, float) else str(x) for x in value)
+        print(f"{key:22s} {value}", file=stream)
+
+
+def _note(message: str) -> None:
+    print(f"hugger: {message}", file=sys.stderr)
+
+
+def _plan(case, hand, params: dict[str, Any], label: str):
+    import hugger
+
+    planner = hugger.Planner(hand, case.obj, case.target, case.palm_pose, **params)
+    t0 = time.perf_counter()
+    with Progress(f"planning {label}"):
+        traj = planner.plan()
+    return traj, time.perf_counter() - t0
+
+
+# ---------------------------------------------------------------------------------------------
+# Commands
+
+
+def cmd_plan(args: argparse.Namespace) -> int:
+    from .scenarios import default_case
+
+    hand = _hand(args)
+    case = default_case(args.object, hand, scale=args.scale, target=args.target, start=args.start, normal=args.normal,
+                        turn_deg=args.turn)
+    for r in case.repairs:
+        _note(f"repaired {case.name}: {r}")
+    traj, elapsed = _plan(case, hand, _params(args), case.name)
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    traj.save(out)
+    report = {"object": case.name, "out": str(out), **_report(traj, elapsed)}
+    if args.json:
+        print(json.dumps(report))
+    else:
+        _print_table(report)
+    if traj.status != "done":
+        _note(f"the plan ended with status {traj.status!r}, not 'done'")
+    return EXIT_OK
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    """The paper's example: 5 fingers x 5 links on `curvy`, turned away from T so that Phase 1 shows."""
+    import hugger
+
+    from . import viz
+    from .scenarios import default_case
+
+    viz.require()  # fail early, before planning, when the viz extra is missing
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    hand = hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
+    case = default_case("curvy", hand, turn_deg=60.0)
+    traj, elapsed = _plan(case, hand, {}, "curvy")
+    traj.save(out / "plan.npz")
+    summary = {"object": "curvy", "hand": repr(hand), **_report(traj, elapsed)}
+    written = ["plan.npz"]
+    with Progress("drawing figures", total=3) as p:
+        viz.fig4(traj, out / "fig4.png")
+        p.update(1)
+        viz.fig5(traj, out / "fig5.png")
+        p.update(2)
+        viz.tipstate_plot(traj, out / "tipstate.png")
+        p.update(3)
+    written += ["fig4.png", "fig5.png", "tipstate.png"]
+    movies = ["animation.gif"]
+    if viz.ffmpeg_path() is not None:
+        movies.append("animation.mp4")
+    else:
+        _note("ffmpeg not found: writing the GIF only (pip install imageio-ffmpeg for MP4)")
+    for name in movies:
+        with Progress(f"writing {name}", total=1) as p:
+            viz.animate(traj, out / name, max_frames=120, progress=lambda i, n, p=p: (setattr(p, "total", n), p.update(i)))
+        written.append(name)
+    summary["files"] = written
+    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    written.append("summary.json")
+    _print_table(summary)
+    print(f"written to {out}/: {', '.join(written)}")
+    return EXIT_OK if traj.status == "done" else EXIT_INTERNAL
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    from . import viz
+
+    traj = _load(args.file)
+    out = Path(args.out)
+    if out.suffix.lower() not in viz.RENDER_SUFFIXES:
+        raise UsageError(f"--out must end in one of {', '.join(viz.RENDER_SUFFIXES)}, got {out.name!r}")
+    with Progress(f"rendering {out.name}", total=1) as p:
+        viz.render(traj, out, progress=lambda i, n: (setattr(p, "total", n), p.update(i)))
+    print(f"wrote {out}")
+    return EXIT_OK
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    traj = _load(args.file)
+    h, prm = traj.hand, traj.params
+    obj = traj.object()
+    lo, hi = obj.bounds
+    info = {"file": args.file, "hand": f"{h['fingers']} fingers x {h['links']} links, link radius {h['link_radius']} m, "
+                                      f"palm radius {h['palm_radius']} m",
+            "object": f"{len(obj.faces)} triangles, {' x '.join(f'{1000 * e:.0f}' for e in hi - lo)} mm",
+            "target": [float(x) for x in traj.target],
+            "step_m": prm.get("step"), "tip_epsilon_m": prm.get("epsilon"), **_report(traj)}
+    if args.json:
+        print(json.dumps(info))
+    else:
+        _print_table(info)
+    return EXIT_OK
+
+
+def cmd_objects(args: argparse.Namespace) -> int:
+    from .objects import BUILTINS
+
+    for b in BUILTINS.values():
+        print(f"{b.name:10s} {b.size:20s} {b.description}")
+    return EXIT_OK
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    from . import physics
+
+    traj = _load(args.file)
+    with Progress("simulating"):
+        result = physics.validate(traj)
+    if args.json:
+        print(json.dumps(result))
+    else:
+        for d, r in result["directions"].items():
+            print(f"{d:3s} moved {1000 * r['displacement_m']:7.2f} mm  turned {r['rotation_deg']:6.2f} deg  "
+                  f"{'held' if r['held'] else 'LOST'}")
+        print(f"verdict: {'held' if result['held'] else 'not held'}")
+    return EXIT_OK
+
+
+def cmd_export_mjcf(args: argparse.Namespace) -> int:
+    from . import physics
+
+    traj = _load(args.file)
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    physics.export_mjcf(traj, out, k=args.configuration)
+    print(f"wrote {out}")
+    return EXIT_OK
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = _Parser(prog="hugger", description="Hugging grasps for multi-finger hands (Reznik & Lumelsky, ICRA 1994).",
+                 epilog="Exit status: 0 success, 2 bad input or missing optional dependency, 1 internal error.")
+    ap.add_argument("--version", action="version", version=f"hugger {_version()}")
+    sub = ap.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+
+    p = sub.add_parser("plan", help="plan a grasp of a built-in object or a mesh file")
+    p.add_argument("object", help="a built-in object name (see 'hugger objects') or a mesh file (STL, OBJ, PLY, OFF, GLB)")
+    p.add_argument("--out", required=True, help="trajectory file to write (.npz)")
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    _hand_options(p)
+    _planner_options(p)
+    _case_options(p)
+    p.set_defaults(func=cmd_plan)
+
+    p = sub.add_parser("demo", help="the paper's example: plan, Fig. 4, Fig. 5, animation, summary.json")
+    p.add_argument("--out", default="demo-out", help="output folder (default demo-out)")
+    p.set_defaults(func=cmd_demo)
+
+    p = sub.add_parser("render", help="draw a trajectory: PNG/PDF/SVG panel, GIF or MP4 animation")
+    p.add_argument("file", help="trajectory file (.npz)")
+    p.add_argument("--out", required=True, help="output path; its extension picks the kind")
+    p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("info", help="what a trajectory file holds, and the grasp it ends in")
+    p.add_argument("file", help="trajectory file (.npz)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=cmd_info)
+
+    p = sub.add_parser("objects", help="list the built-in objects: name, size, description")
+    p.set_defaults(func=cmd_objects)
+
+    p = sub.add_parser("validate", help="hold test of the final grasp in MuJoCo (needs hugger[physics])")
+    p.add_argument("file", help="trajectory file (.npz)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=cmd_validate)
+
+    p = sub.add_parser("export-mjcf", help="write the hand and object at a configuration as MJCF (hugger[physics])")
+    p.add_argument("file", help="trajectory file (.npz)")
+    p.add_argument("--out", required=True, help="MJCF file to write (.xml)")
+    p.add_argument("--configuration", type=int, default=-1, help="configuration index (default -1, the last)")
+    p.set_defaults(func=cmd_export_mjcf)
+    return ap
+
+
+def _version() -> str:
+    from . import __version__
+
+    return __version__
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"hugger: warning: {message}", file=sys.stderr)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("default")
+        warnings.showwarning = _show_warning
+        return _main(argv)
+
+
+def _main(argv: Sequence[str] | None) -> int:
+    try:
+        args = build_parser().parse_args(argv)
+        return int(args.func(args))
+    except UsageError as exc:
+        print(f"hugger: error: {exc}", file=sys.stderr)
+    except (ValueError, FileNotFoundError, IsADirectoryError, PermissionError) as exc:
+        print(f"hugger: error: {exc}", file=sys.stderr)
+    except ImportError as exc:
+        print(f"hugger: error: {exc}", file=sys.stderr)
+    except KeyboardInterrupt:
+        print("hugger: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # an internal error: keep the traceback for the report
+        import traceback
+
+        traceback.print_exc()
+        print(f"hugger: internal error: {type(exc).__name__}: {exc} (please report it)", file=sys.stderr)
+        return EXIT_INTERNAL
+    return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":
+    sys.exit(main())
