@@ -214,3 +214,19 @@ def test_demo_writes_figures_animation_and_summary(tmp_path, capsys):
     assert summary["palm_contact"] and summary["links_in_contact"] >= 12
     assert "written to" in text
     assert os.path.basename(str(out)) in text
+
+
+def test_export_mjcf_and_validate(sphere_plan, tmp_path, capsys):
+    mujoco = pytest.importorskip("mujoco", reason="needs the physics extra")
+    xml = tmp_path / "hand.xml"
+    code, out, err = run(["export-mjcf", sphere_plan, "--out", xml], capsys)
+    assert code == 0, err
+    model = mujoco.MjModel.from_xml_path(str(xml))
+    assert model.njnt == 25 + 1  # 5 x 5 hinges and the object's free joint
+    code, out, err = run(["validate", sphere_plan, "--json"], capsys)
+    assert code == 0, err
+    result = json.loads(out)
+    assert result["held"] is True and set(result["directions"]) == {"+x", "-x", "+y", "-y", "+z", "-z"}
+    assert "settings" in result
+    code, out, _ = run(["validate", sphere_plan], capsys)
+    assert code == 0 and "verdict: held" in out
