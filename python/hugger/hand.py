@@ -3,11 +3,33 @@ from __future__ import annotations
 
 import json
 import numbers
+import warnings
 from typing import Any
 
 import numpy as np
 
 from . import _core
+
+#: Largest number of fingers M and of links per finger N. The engine checks every pair of
+#: fingers each iteration (O(M^2 N^2)), so a plan with more fingers would be unusably slow; the
+#: limits are checked before anything is allocated, so ``Hand(fingers=10**6)`` fails at once.
+MAX_FINGERS = 64
+MAX_LINKS = 256
+
+#: Hard limits (m) on the hand's lengths (link lengths, palm radius and thickness). Below
+#: ``MIN_LENGTH`` the engine's absolute tolerances (1e-7 m keeps two links apart) are no longer
+#: small against a link; above ``MAX_LENGTH`` the numbers are not metres of any hand.
+MIN_LENGTH = 1e-5
+MAX_LENGTH = 1e6
+
+#: A hand or object whose size (m) falls outside this range is accepted with a ``UserWarning``:
+#: it was most likely given in millimetres (a 2 cm link becomes 20 "m") or centimetres. Objects
+#: are measured by the longest side of their bounding box, hands by the larger of the palm's
+#: diameter and the longest finger.
+PLAUSIBLE_SIZE = (1e-3, 3.0)
+
+#: Tolerance of the rigid-pose check: |R^T R - I| and |det R - 1| (the planner uses the same).
+RIGID_TOLERANCE = 1e-6
 
 
 def _count(name: str, value: Any) -> int:
@@ -17,13 +39,74 @@ def _count(name: str, value: Any) -> int:
 
 
 def _size(name: str, value: Any, allow_zero: bool = False) -> float:
+    if isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be a number, got {value!r}")
     try:
         v = float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name} must be a number, got {value!r}") from None
     if not np.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
         raise ValueError(f"{name} must be a {'non-negative' if allow_zero else 'positive'} finite number, got {value!r}")
+    if v > MAX_LENGTH:
+        raise ValueError(f"{name} = {v:g} m is larger than {MAX_LENGTH:g} m: sizes are in metres")
     return v
+
+
+def _real_array(name: str, value: Any) -> np.ndarray:
+    """``value`` as a float64 array; ``ValueError`` for strings, complex, booleans or objects
+    that are not numbers (numpy would otherwise cast them silently or with a warning)."""
+    if value is None:
+        raise ValueError(f"{name} must be an array of real numbers, got None")
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError, OverflowError, RecursionError):
+        raise ValueError(f"{name} must be an array of real numbers") from None
+    if a.dtype.kind == "O":
+        if any(x is None for x in a.flat):  # numpy would turn None into nan
+            raise ValueError(f"{name} must be an array of real numbers, got None in it")
+        try:
+            a = a.astype(np.float64)
+        except (TypeError, ValueError, OverflowError):
+            raise ValueError(f"{name} must be an array of real numbers, got Python objects") from None
+    if a.dtype.kind not in "iuf":
+        raise ValueError(f"{name} must be an array of real numbers, got dtype {a.dtype}")
+    with np.errstate(over="ignore"):
+        return a.astype(np.float64)
+
+
+def rigid_pose(palm_pose: Any, name: str = "palm_pose") -> np.ndarray:
+    """``palm_pose`` as a (4, 4) float64 rigid transform T_WP (rotation with det +1, metres).
+
+    ``ValueError`` says what is wrong: shape, non-finite entries, last row not (0, 0, 0, 1),
+    or a linear part that scales, shears or reflects (beyond :data:`RIGID_TOLERANCE`).
+    """
+    pose = _real_array(name, palm_pose)
+    if pose.shape != (4, 4):
+        raise ValueError(f"{name} must be a (4, 4) homogeneous transform, got shape {pose.shape}")
+    if not np.all(np.isfinite(pose)):
+        raise ValueError(f"{name} holds non-finite numbers")
+    if not np.array_equal(pose[3], [0.0, 0.0, 0.0, 1.0]):
+        raise ValueError(f"{name} must be a homogeneous transform with last row (0, 0, 0, 1), got {pose[3].tolist()}")
+    r = pose[:3, :3]
+    orth = float(np.abs(r.T @ r - np.eye(3)).max())
+    det = float(np.linalg.det(r))
+    if not (orth <= RIGID_TOLERANCE and abs(det - 1.0) <= RIGID_TOLERANCE):
+        what = "reflects (det < 0)" if det < 0 else "scales or shears"
+        raise ValueError(f"{name} must be a rigid transform (orthonormal rotation with determinant +1), but it {what}: "
+                         f"|R^T R - I| = {orth:.3g}, det R = {det:.6g}")
+    return pose
+
+
+def implausible_size(what: str, size: float) -> str | None:
+    """The warning text when ``size`` (m) is outside :data:`PLAUSIBLE_SIZE`, else None."""
+    lo, hi = PLAUSIBLE_SIZE
+    if size > hi:
+        return (f"{what} is {size:g} m across, implausibly large for a grasp (more than {hi:g} m): hugger works "
+                f"in metres; was it given in millimetres? (scale it by 0.001)")
+    if size < lo:
+        return (f"{what} is {size * 1000:g} mm across, implausibly small for a grasp (less than {lo * 1000:g} mm): "
+                f"hugger works in metres")
+    return None
 
 
 class Hand:
@@ -44,17 +127,31 @@ class Hand:
     def __init__(self, fingers: int = 5, links: int = 5, link_length: Any = 0.02, link_radius: float = 0.004,
                  palm_radius: float = 0.03, palm_thickness: float = 0.01) -> None:
         m, n = _count("fingers", fingers), _count("links", links)
-        if not 1 <= m <= 64:
-            raise ValueError(f"fingers must be between 1 and 64, got {m}")
-        if not 1 <= n <= 256:
-            raise ValueError(f"links must be between 1 and 256, got {n}")
-        lengths = np.asarray(link_length, dtype=np.float64)
+        if not 1 <= m <= MAX_FINGERS:
+            raise ValueError(f"fingers must be between 1 and {MAX_FINGERS}, got {m}")
+        if not 1 <= n <= MAX_LINKS:
+            raise ValueError(f"links must be between 1 and {MAX_LINKS}, got {n}")
+        lengths = _real_array("link_length", link_length)
         if lengths.ndim == 0:
             lengths = np.full((m, n), float(lengths))
         if lengths.shape != (m, n):
             raise ValueError(f"link_length must be a scalar or a (fingers, links) = ({m}, {n}) array, got shape {lengths.shape}")
-        self._core = _core.HandModel(m, n, lengths, _size("link_radius", link_radius, allow_zero=True),
-                                     _size("palm_radius", palm_radius), _size("palm_thickness", palm_thickness))
+        if not np.all(np.isfinite(lengths)) or not np.all(lengths > 0):
+            bad = float(lengths[~(np.isfinite(lengths) & (lengths > 0))][0])
+            raise ValueError(f"link_length must be a positive finite number, got {bad!r}")
+        radius = _size("link_radius", link_radius, allow_zero=True)
+        palm_r, palm_t = _size("palm_radius", palm_radius), _size("palm_thickness", palm_thickness)
+        for name, value in (("link_length", float(lengths.min())), ("palm_radius", palm_r),
+                            ("palm_thickness", palm_t)):
+            if value < MIN_LENGTH:
+                raise ValueError(f"{name} = {value:g} m is smaller than {MIN_LENGTH:g} m, below what the engine "
+                                 f"resolves (its tolerances are absolute, about 1e-7 m)")
+        if lengths.max() > MAX_LENGTH:
+            raise ValueError(f"link_length = {lengths.max():g} m is larger than {MAX_LENGTH:g} m: sizes are in metres")
+        self._core = _core.HandModel(m, n, lengths, radius, palm_r, palm_t)
+        message = implausible_size("the hand", max(2.0 * palm_r, float(lengths.sum(axis=1).max())))
+        if message:
+            warnings.warn(message, UserWarning, stacklevel=2)
 
     fingers = property(lambda self: self._core.fingers, doc="M, the number of fingers")
     links = property(lambda self: self._core.links, doc="N, the number of links per finger")
@@ -70,16 +167,27 @@ class Hand:
         return float(self.link_lengths.sum(axis=1).max())
 
     def forward(self, palm_pose: Any, angles: Any) -> np.ndarray:
-        """Joint positions (M, N+1, 3) in the world from palm pose (4, 4) and angles (M, N)."""
-        return self._core.forward(np.asarray(palm_pose, dtype=np.float64), np.asarray(angles, dtype=np.float64))
+        """Joint positions (M, N+1, 3) in the world (m) from the rigid palm pose T_WP (4, 4) and joint
+        angles (M, N) in radians (DESIGN.md section 2)."""
+        a = _real_array("angles", angles)
+        if a.shape != (self.fingers, self.links):
+            raise ValueError(f"angles must have shape ({self.fingers}, {self.links}), got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError("angles hold non-finite numbers")
+        return self._core.forward(rigid_pose(palm_pose), a)
 
     def angles_from_joints(self, palm_pose: Any, joints: Any) -> np.ndarray:
-        """Joint angles (M, N) from joint positions (M, N+1, 3)."""
-        return self._core.angles_from_joints(np.asarray(palm_pose, dtype=np.float64), np.asarray(joints, dtype=np.float64))
+        """Joint angles (M, N) in radians from joint positions (M, N+1, 3) in the world (m)."""
+        j = _real_array("joints", joints)
+        if j.shape != (self.fingers, self.links + 1, 3):
+            raise ValueError(f"joints must have shape ({self.fingers}, {self.links + 1}, 3), got {j.shape}")
+        if not np.all(np.isfinite(j)):
+            raise ValueError("joints hold non-finite numbers")
+        return self._core.angles_from_joints(rigid_pose(palm_pose), j)
 
     def roots(self, palm_pose: Any) -> np.ndarray:
-        """Finger roots R_m (M, 3) in the world."""
-        return self._core.roots(np.asarray(palm_pose, dtype=np.float64))
+        """Finger roots R_m (M, 3) in the world (m) for the rigid palm pose T_WP (4, 4)."""
+        return self._core.roots(rigid_pose(palm_pose))
 
     def to_dict(self) -> dict:
         """The hand as in the trajectory file's ``hand_json`` (DESIGN.md section 5)."""
@@ -98,9 +206,17 @@ class Hand:
 
     @classmethod
     def from_dict(cls, d: dict) -> Hand:
-        return cls(fingers=int(d["fingers"]), links=int(d["links"]), link_length=np.asarray(d["link_lengths"], dtype=float),
-                   link_radius=float(d["link_radius"]), palm_radius=float(d["palm_radius"]),
-                   palm_thickness=float(d["palm_thickness"]))
+        """The hand of :meth:`to_dict` (or a trajectory file's ``hand_json``); ``ValueError`` if a key is
+        missing or a value is not valid."""
+        if not isinstance(d, dict):
+            raise ValueError(f"a hand description must be a dict, got {type(d).__name__}")
+        keys = ("fingers", "links", "link_lengths", "link_radius", "palm_radius", "palm_thickness")
+        missing = [k for k in keys if k not in d]
+        if missing:
+            raise ValueError(f"the hand description lacks {missing}")
+        whole = lambda x: int(x) if isinstance(x, float) and x.is_integer() else x  # noqa: E731  (JSON may say 5.0)
+        return cls(fingers=whole(d["fingers"]), links=whole(d["links"]), link_length=d["link_lengths"],
+                   link_radius=d["link_radius"], palm_radius=d["palm_radius"], palm_thickness=d["palm_thickness"])
 
     def __repr__(self) -> str:
         ll = self.link_lengths

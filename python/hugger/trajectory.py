@@ -3,13 +3,24 @@ from __future__ import annotations
 
 import json
 import os
+import struct
+import tokenize
 import zipfile
+import zlib
 from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
 
 FORMAT_VERSION = 1
+
+#: Largest hand a trajectory file may describe (the limits of :class:`hugger.Hand`).
+_MAX_FINGERS, _MAX_LINKS = 64, 256
+#: What reading a damaged zip/npy can raise; ``load`` turns each into a ``ValueError``. (numpy
+#: parses a .npy header with ``tokenize`` and ``ast``: a damaged one raises TokenError or SyntaxError.)
+_READ_ERRORS = (OSError, ValueError, TypeError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, KeyError,
+                IndexError, zlib.error, NotImplementedError, struct.error, OverflowError, UnicodeError,
+                RecursionError, MemoryError, tokenize.TokenError, SyntaxError)
 
 # key: (number of dimensions, dtype kind(s))
 _ARRAYS = {
@@ -84,20 +95,33 @@ class Trajectory:
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> Trajectory:
-        """Read and check a trajectory file; ``ValueError`` if it is not a valid format-1 file."""
+        """Read and check a trajectory file (format 1, DESIGN.md section 5).
+
+        ``ValueError`` if it is not a valid format-1 file: not a zip, truncated or corrupt,
+        an array holding pickled Python objects (never unpickled), a declared array size the
+        file does not hold, missing keys, wrong shapes, dtypes or values. Extra keys are ignored.
+        ``FileNotFoundError`` if there is no such file.
+        """
+        source = os.fspath(path)
         try:
-            with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
-                data = {k: z[k] for k in z.files}
+            with open(path, "rb") as fh:
+                if fh.read(6) == b"\x93NUMPY":
+                    raise ValueError(f"{source!r} holds a single array (.npy), not a trajectory file (.npz)")
+                fh.seek(0)
+                with zipfile.ZipFile(fh) as zf:
+                    data = {}
+                    for info in zf.infolist():
+                        if info.filename.endswith(".npy") and not info.is_dir():
+                            data[info.filename[:-4]] = _read_member(zf, info, source)
         except FileNotFoundError:
             raise
-        except AttributeError:  # a plain .npy array has no .files
-            raise ValueError(f"{os.fspath(path)!r} holds a single array, not a trajectory file") from None
-        except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as exc:
-            raise ValueError(f"cannot read trajectory file {os.fspath(path)!r}: {exc}") from None
-        return cls.from_arrays(data, source=os.fspath(path))
+        except _READ_ERRORS as exc:
+            raise ValueError(f"cannot read trajectory file {source!r}: {type(exc).__name__}: {exc}") from None
+        return cls.from_arrays(data, source=source)
 
     @classmethod
     def from_arrays(cls, data: dict[str, Any], source: str = "trajectory") -> Trajectory:
+        """A trajectory from the arrays of a format-1 file; ``ValueError`` naming what is wrong."""
         missing = [k for k in ("format_version", *_STRINGS, *_ARRAYS) if k not in data]
         if missing:
             raise ValueError(f"{source}: missing keys {missing}")
@@ -123,18 +147,42 @@ class Trajectory:
             arrays[key] = a
         try:
             hand = json.loads(strings["hand_json"])
-            json.loads(strings["params_json"])
-            m, n = int(hand["fingers"]), int(hand["links"])
-        except (ValueError, KeyError, TypeError) as exc:
-            raise ValueError(f"{source}: hand_json/params_json are not valid: {exc}") from None
+            params = json.loads(strings["params_json"])
+            stats = json.loads(strings["stats_json"])
+            m, n = hand["fingers"], hand["links"]
+        except (ValueError, KeyError, TypeError, RecursionError) as exc:
+            raise ValueError(f"{source}: hand_json/params_json/stats_json are not valid: "
+                             f"{type(exc).__name__}: {exc}") from None
+        if not isinstance(params, dict) or not isinstance(stats, dict):
+            raise ValueError(f"{source}: params_json and stats_json must be JSON objects")
+        if isinstance(m, float) and m.is_integer():
+            m = int(m)
+        if isinstance(n, float) and n.is_integer():
+            n = int(n)
+        for name, count, limit in (("fingers", m, _MAX_FINGERS), ("links", n, _MAX_LINKS)):
+            if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= limit:
+                raise ValueError(f"{source}: hand_json {name} must be a whole number in 1..{limit}, got {count!r}")
+        _check_hand_sizes(hand, m, n, source)
         k = arrays["palm_pose"].shape[0]
+        if k < 1:
+            raise ValueError(f"{source}: the trajectory holds no configuration (a plan starts with C_init)")
         expect = {"palm_pose": (k, 4, 4), "joints": (k, m, n + 1, 3), "angles": (k, m, n), "tip_state": (k, m),
                   "phase": (k,), "target": (3,)}
         for key, shape in expect.items():
             if arrays[key].shape != shape:
                 raise ValueError(f"{source}: {key} has shape {arrays[key].shape}, expected {shape}")
-        if arrays["object_vertices"].shape[1:] != (3,) or arrays["object_faces"].shape[1:] != (3,):
-            raise ValueError(f"{source}: object_vertices and object_faces must be (V, 3) and (F, 3)")
+        verts, faces = arrays["object_vertices"], arrays["object_faces"]
+        if verts.shape[1:] != (3,) or faces.shape[1:] != (3,) or len(verts) == 0 or len(faces) == 0:
+            raise ValueError(f"{source}: object_vertices and object_faces must be non-empty (V, 3) and (F, 3), "
+                             f"got {verts.shape} and {faces.shape}")
+        if faces.min() < 0 or faces.max() >= len(verts):
+            raise ValueError(f"{source}: object_faces index vertices outside 0..{len(verts) - 1}")
+        for key, allowed in (("tip_state", "0 FROZEN, 1 CONTACT, 2 DONE"), ("phase", "0, 1 or 2")):
+            a = arrays[key]
+            if a.min() < 0 or a.max() > 2:
+                raise ValueError(f"{source}: {key} holds {a.max() if a.max() > 2 else a.min()}; allowed are {allowed}")
+        for key in ("object_vertices", "target", "palm_pose", "joints", "angles"):
+            arrays[key] = arrays[key].astype(np.float64)
         arrays["tip_state"] = arrays["tip_state"].astype(np.int8)
         arrays["phase"] = arrays["phase"].astype(np.int8)
         arrays["object_faces"] = arrays["object_faces"].astype(np.int64)
@@ -153,7 +201,7 @@ class Trajectory:
         """The grasped object as a :class:`hugger.Object`."""
         from .world import Object
 
-        return Object(self.object_vertices, self.object_faces)
+        return Object(self.object_vertices, self.object_faces, warn_size=False)  # warned when it was made
 
     def link_gaps(self, k: int = -1, obj=None) -> np.ndarray:
         """(M, N) gap (m) between each link capsule and the object at configuration k."""
@@ -187,3 +235,40 @@ class Trajectory:
             "fingers_done": int(np.sum(self.tip_state[-1] == 2)),
             "first_contact_iteration": stats.get("first_contact_iteration"),
         }
+
+
+def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, source: str) -> np.ndarray:
+    """One .npy member of the zip, refusing pickled objects and declared sizes the member lacks
+    (a damaged header must not make numpy allocate gigabytes)."""
+    fmt = np.lib.format
+    key = info.filename[:-4]
+    with zf.open(info) as member:
+        version = fmt.read_magic(member)
+        if version == (1, 0):
+            shape, fortran, dtype = fmt.read_array_header_1_0(member)
+        elif version in ((2, 0), (3, 0)):
+            shape, fortran, dtype = fmt.read_array_header_2_0(member)
+        else:
+            raise ValueError(f"{key}: unsupported .npy format version {version}")
+        if dtype.hasobject:
+            raise ValueError(f"{key} holds pickled Python objects ({dtype}); refused, never unpickled")
+        declared = int(np.prod(shape, dtype=object)) * dtype.itemsize
+        if declared > info.file_size - member.tell():
+            raise ValueError(f"{key}: its header declares {declared} bytes of data but the file holds "
+                             f"{info.file_size - member.tell()}")
+    with zf.open(info) as member:
+        return fmt.read_array(member, allow_pickle=False)
+
+
+def _check_hand_sizes(hand: dict, m: int, n: int, source: str) -> None:
+    """The sizes of ``hand_json`` that tools read: finite, non-negative numbers (m), link_lengths (M, N) > 0."""
+    for key in ("link_radius", "palm_radius", "palm_thickness"):
+        x = hand.get(key)
+        if isinstance(x, bool) or not isinstance(x, (int, float)) or not np.isfinite(x) or x < 0:
+            raise ValueError(f"{source}: hand_json {key} must be a finite number >= 0 (m), got {x!r}")
+    try:
+        lengths = np.asarray(hand.get("link_lengths"), dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        lengths = np.zeros(0)
+    if lengths.shape != (m, n) or not np.all(np.isfinite(lengths)) or not np.all(lengths > 0):
+        raise ValueError(f"{source}: hand_json link_lengths must be a ({m}, {n}) list of positive lengths (m)")

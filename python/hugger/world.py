@@ -1,42 +1,145 @@
 """The object O: a closed triangle mesh, validated, with the queries the simulated world uses."""
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
 
 from . import _core
+from .hand import _real_array, implausible_size
+
+#: Vertex coordinates beyond this (m) are refused: no grasp scene spans a thousand kilometres, and
+#: the engine's tolerances are absolute (1e-7 m .. 1e-4 m), which float64 resolves only while
+#: coordinates stay well below 1e6 m (there the spacing of doubles is already 1e-10 m). Move a
+#: georeferenced mesh to a local origin first.
+MAX_COORDINATE = 1e6
+
+#: A triangle is degenerate when twice its area is at most this fraction of its longest edge
+#: squared (a sliver whose height is 1e-12 of its length): its normal is numerical noise.
+DEGENERATE_AREA = 1e-12
+
+
+def _face_indices(faces: Any, nv: int) -> np.ndarray:
+    """Faces as an (F, 3) int64 array of indices into nv vertices, checked before the cast so that
+    no index wraps around (uint64 or float input)."""
+    if faces is None:
+        raise ValueError("faces must be an (F, 3) array of vertex indices, got None")
+    try:
+        a = np.asarray(faces)
+    except (TypeError, ValueError, OverflowError, RecursionError):
+        raise ValueError("faces must be an (F, 3) array of vertex indices") from None
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise ValueError(f"faces must be (F, 3), got shape {a.shape}")
+    if a.dtype.kind == "O":
+        try:
+            a = a.astype(np.float64)
+        except (TypeError, ValueError, OverflowError):
+            raise ValueError("faces must hold whole-number vertex indices, got Python objects") from None
+    if a.dtype.kind == "f":
+        if not np.all(np.isfinite(a)) or np.any(a != np.round(a)):
+            raise ValueError("faces must hold whole-number vertex indices")
+    elif a.dtype.kind not in "iu":
+        raise ValueError(f"faces must hold whole-number vertex indices, got dtype {a.dtype}")
+    if a.size and nv:  # an empty mesh is reported as such by the engine
+        bad = (a < 0) | (a >= nv)
+        if bad.any():
+            i, k = np.argwhere(bad)[0]
+            x = a[i, k].item()
+            raise ValueError(f"object face {i} indexes vertex {int(x) if isinstance(x, float) else x}, "
+                             f"outside 0..{nv - 1}")
+    return a.astype(np.int64)
+
+
+def _check_surface(v: np.ndarray, f: np.ndarray) -> None:
+    """Checks the engine leaves out, on a mesh it accepted (closed, every directed edge once):
+    inside-out far from the origin, degenerate (zero-area) triangles, the same triangle twice
+    over distinct but coincident vertices, and vertices where the surface touches itself
+    (non-manifold vertices)."""
+    nv, nf = len(v), len(f)
+    # Inside-out, measured about the bounding box's centre: far from the origin the triple
+    # products a . (b x c) of raw coordinates cancel catastrophically and their sum's sign is noise.
+    centre = 0.5 * (v.min(axis=0) + v.max(axis=0))
+    a, b, c = v[f[:, 0]] - centre, v[f[:, 1]] - centre, v[f[:, 2]] - centre
+    volume = float(np.einsum("ij,ij->", a, np.cross(b, c))) / 6.0
+    if not volume > 0.0:
+        raise ValueError(f"object mesh encloses a non-positive volume ({volume:g} m^3): its faces point inward "
+                         f"(reverse the winding) or it is flat")
+    ab, bc, ca = b - a, c - b, a - c
+    twice_area = np.sqrt(np.einsum("ij,ij->i", *(np.cross(ab, ca),) * 2))
+    longest = np.maximum(np.maximum(np.einsum("ij,ij->i", ab, ab), np.einsum("ij,ij->i", bc, bc)),
+                         np.einsum("ij,ij->i", ca, ca))
+    flat = np.flatnonzero(twice_area <= DEGENERATE_AREA * longest)
+    if flat.size:
+        i = int(flat[0])
+        raise ValueError(f"object face {i} {f[i].tolist()} is degenerate: zero area (its vertices are coincident "
+                         f"or collinear); {flat.size} such face(s)")
+    # Duplicate triangles: the same three positions, whatever the vertex indices and orientation.
+    p = v + 0.0  # makes -0.0 equal to 0.0
+    by_position = np.lexsort(p.T[::-1])
+    fresh = np.ones(nv, dtype=bool)
+    fresh[1:] = np.any(p[by_position[1:]] != p[by_position[:-1]], axis=1)
+    place = np.empty(nv, dtype=np.int64)
+    place[by_position] = np.cumsum(fresh) - 1
+    key = np.sort(place[f], axis=1)
+    order = np.lexsort(key.T[::-1])
+    same = np.flatnonzero(np.all(key[order[1:]] == key[order[:-1]], axis=1))
+    if same.size:
+        i, j = sorted((int(order[same[0]]), int(order[same[0] + 1])))
+        raise ValueError(f"object faces {i} and {j} are the same triangle (duplicate faces over coincident vertices)")
+    # Non-manifold vertices: around a vertex the corners (v, a, b) chain into cycles (the face
+    # across edge (b, v) holds the directed edge (v, b)); a manifold vertex has exactly one cycle.
+    hub = f.reshape(-1)  # the vertex of each corner
+    ahead = f[:, [1, 2, 0]].reshape(-1)
+    behind = f[:, [2, 0, 1]].reshape(-1)
+    keys = hub * nv + ahead  # every directed edge once (checked by the engine)
+    by_key = np.argsort(keys)
+    nxt = by_key[np.searchsorted(keys[by_key], hub * nv + behind)]
+    corners = np.arange(3 * nf)
+    label, span, valence = corners, 1, int(np.bincount(hub).max())
+    while span < valence:  # pointer doubling: each corner's label becomes the least of its cycle
+        label = np.minimum(label, label[nxt])
+        nxt = nxt[nxt]
+        span *= 2
+    fans = np.bincount(hub[label == corners], minlength=nv)
+    if np.any(fans > 1):
+        i = int(np.argmax(fans > 1))
+        raise ValueError(f"object mesh is not manifold at vertex {i}: {int(fans[i])} separate fans of faces meet "
+                         f"there (the surface touches itself at a point)")
 
 
 class Object:
     """A rigid, closed, consistently oriented (outward normals) triangle mesh in the world frame.
 
-    ``vertices`` is (V, 3) float in metres, ``faces`` (F, 3) int. Raises ``ValueError`` naming
-    what is wrong: empty, non-finite, indices out of range, degenerate faces, not closed, not
-    consistently oriented, or inside-out.
+    ``vertices`` is (V, 3) real numbers in metres (|coordinate| <= :data:`MAX_COORDINATE`),
+    ``faces`` (F, 3) whole-number indices. Raises ``ValueError`` naming what is wrong: empty,
+    non-finite, indices out of range, degenerate (zero-area) or duplicate faces, not closed,
+    not manifold, not consistently oriented, or inside-out. An object whose bounding box is
+    larger than 3 m or smaller than 1 mm (:data:`hugger.hand.PLAUSIBLE_SIZE`) is accepted with
+    a ``UserWarning``: it was most likely given in millimetres (``warn_size=False`` silences it,
+    for an object already accepted once, such as the one a trajectory file holds).
     """
 
-    def __init__(self, vertices: Any, faces: Any) -> None:
-        try:
-            v = np.array(vertices, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError("vertices must be a numeric (V, 3) array") from None
-        f_in = np.asarray(faces)
+    def __init__(self, vertices: Any, faces: Any, *, warn_size: bool = True) -> None:
+        v = np.array(_real_array("vertices", vertices), dtype=np.float64)  # a private copy
         if v.ndim != 2 or v.shape[1] != 3:
             raise ValueError(f"vertices must be (V, 3), got shape {v.shape}")
-        if f_in.ndim != 2 or f_in.shape[1] != 3:
-            raise ValueError(f"faces must be (F, 3), got shape {f_in.shape}")
-        if f_in.size and f_in.dtype.kind not in "iu":
-            if f_in.dtype.kind != "f" or not np.all(np.isfinite(f_in)) or np.any(f_in != np.round(f_in)):
-                raise ValueError("faces must hold whole-number vertex indices")
-        f = f_in.astype(np.int64)
+        f = _face_indices(faces, len(v))
         if not np.all(np.isfinite(v)):
             bad = int(np.argwhere(~np.isfinite(v).all(axis=1))[0, 0])
             raise ValueError(f"object vertex {bad} is not finite: {v[bad].tolist()}")
+        if v.size and np.abs(v).max() > MAX_COORDINATE:
+            bad = int(np.argmax(np.abs(v).max(axis=1)))
+            raise ValueError(f"object vertex {bad} = {v[bad].tolist()} lies beyond {MAX_COORDINATE:g} m of the "
+                             f"origin: coordinates are in metres (move the mesh near the origin)")
         self._core = _core.Object(v, f)
+        _check_surface(v, f)
         v.setflags(write=False)
         f.setflags(write=False)
         self._vertices, self._faces = v, f
+        message = implausible_size("the object", float(np.ptp(self.bounds, axis=0).max())) if warn_size else None
+        if message:
+            warnings.warn(message, UserWarning, stacklevel=2)
 
     @property
     def vertices(self) -> np.ndarray:
