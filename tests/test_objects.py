@@ -65,7 +65,8 @@ def test_mesh_files_round_trip(tmp_path, suffix):
 
 
 def test_scale_turns_millimetres_into_metres(tmp_path):
-    src = objects.box((60.0, 50.0, 40.0))  # a box "in millimetres"
+    with pytest.warns(UserWarning, match="millimetres"):
+        src = objects.box((60.0, 50.0, 40.0))  # a box "in millimetres"
     path = tmp_path / "box_mm.stl"
     trimesh.Trimesh(src.vertices, src.faces, process=False).export(path)
     obj = objects.load(path, scale=0.001)

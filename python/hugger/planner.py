@@ -9,7 +9,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from . import _core
-from .hand import Hand
+from .hand import Hand, _real_array, rigid_pose
 from .trajectory import Trajectory
 from .world import Object
 
@@ -45,21 +45,29 @@ def look_at(position: Any, target: Any, up: Any = None) -> np.ndarray:
     return pose
 
 
+#: Largest ``max_iterations`` accepted (a plan that long would take hours).
+MAX_ITERATIONS = 10**9
+#: Smallest ``contact_tolerance`` relative to the scene's largest coordinate (m / m): below it the
+#: sensing distance drowns in rounding of double-precision positions and the approach never lands.
+MIN_RELATIVE_TOLERANCE = 1e-10
+
+
 def _optional_count(name: str, value: Any) -> int | None:
     if value is None:
         return None
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise ValueError(f"{name} must be a whole number, got {value!r}")
+    if not 1 <= int(value) <= MAX_ITERATIONS:
+        raise ValueError(f"{name} must be between 1 and {MAX_ITERATIONS}, got {value!r}")
     return int(value)
 
 
 def _optional_size(name: str, value: Any) -> float | None:
     if value is None:
         return None
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{name} must be a number, got {value!r}")
+    v = float(value)
     if not np.isfinite(v) or v <= 0:
         raise ValueError(f"{name} must be a positive finite number, got {value!r}")
     return v
@@ -85,16 +93,19 @@ class Planner:
             raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
         if not isinstance(obj, Object):
             raise ValueError(f"obj must be a hugger.Object, got {type(obj).__name__}")
-        t = np.asarray(target, dtype=np.float64)
+        t = _real_array("target", target)
         if t.shape != (3,) or not np.all(np.isfinite(t)):
             raise ValueError(f"target must be a finite 3-vector, got {target!r}")
-        pose = np.asarray(palm_pose, dtype=np.float64)
-        if pose.shape != (4, 4) or not np.all(np.isfinite(pose)):
-            raise ValueError("palm_pose must be a finite (4, 4) homogeneous transform")
+        pose = rigid_pose(palm_pose)
+        delta = _optional_size("contact_tolerance", contact_tolerance)
+        extent = max(1.0, float(np.abs(obj.vertices).max()), float(np.abs(pose[:3, 3]).max()))
+        if delta is not None and delta < MIN_RELATIVE_TOLERANCE * extent:
+            raise ValueError(f"contact_tolerance {delta:g} m is below the resolution this scene allows "
+                             f"({MIN_RELATIVE_TOLERANCE:g} x its largest coordinate, {extent:g} m)")
         self.hand, self.object, self.target = hand, obj, t
         self._core = _core.Planner(hand._core, obj._core, t, pose, _optional_size("step", step),
                                    _optional_size("epsilon", epsilon),
-                                   _optional_size("contact_tolerance", contact_tolerance),
+                                   delta,
                                    _optional_count("max_iterations", max_iterations))
         self._emitted: int | None = 0  # configurations handed out by step(); None after plan()
 
