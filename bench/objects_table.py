@@ -1,0 +1,76 @@
+"""The README's per-object table: `hugger plan OBJECT` with default options on every built-in
+object and every mesh in ../shared/data/objects/, each plan checked by the independent checker.
+
+    python bench/objects_table.py [--out bench/results/objects.md] [--check]
+
+Columns: triangles, status, configurations, links in contact (of 25) and palm contact (gap
+<= 1 mm), Ferrari-Canny epsilon (mu 0.5, torques about T over the object's radius), the whole
+plan time (object loading excluded; planner construction, i.e. setup, included) and, with
+--check, the checker's verdict.
+"""
+from __future__ import annotations
+
+import argparse
+import contextlib
+import importlib.util
+import io
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import hugger
+from hugger import analysis, scenarios
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED = ROOT.parent / "shared"
+
+
+def checker_verdict(path: Path) -> str:
+    spec = importlib.util.spec_from_file_location("check_trajectory", SHARED / "tools" / "check_trajectory.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    with contextlib.redirect_stdout(io.StringIO()):
+        return "pass" if mod.main([str(path)]) == 0 else "FAIL"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, help="also write the markdown table here")
+    ap.add_argument("--check", action="store_true", help="run ../shared/tools/check_trajectory.py on every plan")
+    args = ap.parse_args(argv)
+    specs = list(hugger.objects.names())
+    meshes = sorted((SHARED / "data" / "objects").glob("*.obj"))
+    if not meshes:
+        print("note: ../shared/data/objects is absent; built-in objects only", file=sys.stderr)
+    specs += [str(p) for p in meshes]
+    hand = hugger.Hand()
+    rows = ["| object | triangles | status | configurations | links in contact | palm | ε | plan (ms) |"
+            + (" checker |" if args.check else ""),
+            "|---|---:|---|---:|---:|---|---:|---:|" + ("---|" if args.check else "")]
+    for spec in specs:
+        case = scenarios.default_case(spec, hand)
+        t0 = time.perf_counter()
+        traj = hugger.Planner(hand, case.obj, case.target, case.palm_pose).plan()
+        ms = 1000 * (time.perf_counter() - t0)
+        a = analysis.analyze(traj)
+        row = (f"| {Path(case.name).stem} | {len(case.obj.faces)} | {traj.status} | {len(traj)} | "
+               f"{a['links_in_contact']}/{a['links']} | {'yes' if a['palm_contact'] else 'no'} | {a['epsilon']:.3f} | "
+               f"{ms:.1f} |")
+        if args.check:
+            with tempfile.TemporaryDirectory() as d:
+                path = Path(d) / "plan.npz"
+                traj.save(path)
+                row += f" {checker_verdict(path)} |"
+        rows.append(row)
+        print(row, flush=True)
+    if args.out:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text("\n".join(rows) + "\n")
+    print(json.dumps({"objects": len(specs)}), file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
