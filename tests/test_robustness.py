@@ -768,3 +768,30 @@ def test_gil_is_released_during_phase_1_in_the_constructor(hand, sphere):
     assert elapsed > 0.05
     # the counter sleeps 1 ms a tick; with the GIL held it could not tick at all
     assert during > 0.2 * elapsed / 0.001
+
+
+# --- bounded resources ------------------------------------------------------------------------
+
+def _rss_bytes() -> int:
+    with open("/proc/self/statm") as fh:
+        return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/statm"), reason="needs Linux /proc to read the resident memory")
+def test_repeated_plans_do_not_leak_memory():
+    import gc
+
+    hand = hugger.Hand()
+    obj = hugger.objects.sphere(0.04, subdivisions=5)  # 20480 triangles: a leaked tree would show
+    pose = hugger.look_at([0, 0, 0.2], [0, 0, 0])
+    for _ in range(3):  # warm up allocator pools
+        hugger.plan(hand, hugger.Object(obj.vertices, obj.faces), [0, 0, 0], pose)
+    gc.collect()
+    before = _rss_bytes()
+    for _ in range(25):
+        traj = hugger.plan(hand, hugger.Object(obj.vertices, obj.faces), [0, 0, 0], pose)
+        assert traj.status == "done"
+    del traj
+    gc.collect()
+    grown = _rss_bytes() - before
+    assert grown < 24 * 2**20, f"resident memory grew by {grown / 2**20:.1f} MiB over 25 plans"
