@@ -151,12 +151,23 @@ void bind_planner(py::module_& m) {
           "Advance by one configuration; a dict of arrays, or None when the plan has ended.")
       .def(
           "plan",
-          [](PyPlanner& p) {
+          [](PyPlanner& p, const py::object& timeout) {
+            double limit = kInf;
+            if (!timeout.is_none()) {
+              if (py::isinstance<py::bool_>(timeout) || (!py::isinstance<py::float_>(timeout) && !py::isinstance<py::int_>(timeout)))
+                throw py::value_error("timeout must be a number of seconds or None, got " + py::repr(timeout).cast<std::string>());
+              limit = timeout.cast<double>();
+              if (!std::isfinite(limit) || limit <= 0.0)
+                throw py::value_error("timeout must be a positive finite number of seconds or None, got " +
+                                      py::repr(timeout).cast<std::string>());
+            }
             Busy busy(p);
             py::gil_scoped_release release;
-            return to_string(p.planner->plan());
+            return to_string(p.planner->plan(limit));
           },
-          "Run to the end (GIL released); returns the status.")
+          py::arg("timeout") = py::none(),
+          "Run to the end (GIL released); returns the status. With ``timeout`` (seconds, positive finite) the "
+          "plan stops with status 'timeout' once that much wall-clock time has passed.")
       .def("history", [](PyPlanner& p, std::size_t start, std::size_t stop) {
             Busy busy(p);
             return history_arrays(*p.planner, start, stop);

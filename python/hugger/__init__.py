@@ -15,6 +15,7 @@ this package holds the Python API::
 from __future__ import annotations
 
 from . import objects, scenarios
+from .batch import CaseError, PlanManyError, plan_many
 from .hand import Hand
 from .planner import FROZEN, CONTACT, DONE, Configuration, Planner, look_at, plan
 from .trajectory import FORMAT_VERSION, Trajectory
@@ -36,17 +37,20 @@ def __getattr__(name: str):
 
 __all__ = [
     "CONTACT",
+    "CaseError",
     "DONE",
     "FORMAT_VERSION",
     "FROZEN",
     "Configuration",
     "Hand",
     "Object",
+    "PlanManyError",
     "Planner",
     "Trajectory",
     "look_at",
     "objects",
     "plan",
+    "plan_many",
     "scenarios",
     "__version__",
 ]

@@ -73,6 +73,18 @@ def _optional_size(name: str, value: Any) -> float | None:
     return v
 
 
+def _timeout(value: Any) -> float | None:
+    """A plan timeout in seconds: None, or a positive finite number."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ValueError(f"timeout must be a number of seconds or None, got {value!r}")
+    v = float(value)
+    if not np.isfinite(v) or v <= 0:
+        raise ValueError(f"timeout must be a positive finite number of seconds or None, got {value!r}")
+    return v
+
+
 class Planner:
     """Plans a hugging grasp of ``obj`` by ``hand``, told only the point ``target`` inside it.
 
@@ -111,7 +123,7 @@ class Planner:
 
     @property
     def status(self) -> str:
-        """``running`` until the plan ends, then ``done`` or ``max_iterations``."""
+        """``running`` until the plan ends, then ``done``, ``max_iterations`` or ``timeout``."""
         return self._core.status
 
     @property
@@ -137,9 +149,15 @@ class Planner:
         while (c := self.step()) is not None:
             yield c
 
-    def plan(self) -> Trajectory:
-        """Run to the end and return the whole trajectory, from C_init."""
-        self._core.plan()
+    def plan(self, timeout: float | None = None) -> Trajectory:
+        """Run to the end and return the whole trajectory, from C_init.
+
+        ``timeout`` (seconds, positive finite, or None for no limit) bounds the wall-clock time of
+        this call: past it the plan stops with status ``timeout`` and the trajectory holds every
+        configuration planned so far (a valid, collision-free partial plan). A timed-out plan has
+        ended; Phase 1, done when the planner was made, is not counted.
+        """
+        self._core.plan(_timeout(timeout))
         self._emitted = None
         return self.trajectory()
 
@@ -166,6 +184,8 @@ class Planner:
         )
 
 
-def plan(hand: Hand, obj: Object, target: Any, palm_pose: Any, **params: Any) -> Trajectory:
-    """Plan in one call: ``Planner(hand, obj, target, palm_pose, **params).plan()``."""
-    return Planner(hand, obj, target, palm_pose, **params).plan()
+def plan(hand: Hand, obj: Object, target: Any, palm_pose: Any, timeout: float | None = None,
+         **params: Any) -> Trajectory:
+    """Plan in one call: ``Planner(hand, obj, target, palm_pose, **params).plan(timeout)``."""
+    limit = _timeout(timeout)  # checked before any planning
+    return Planner(hand, obj, target, palm_pose, **params).plan(limit)

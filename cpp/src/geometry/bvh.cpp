@@ -20,9 +20,15 @@ TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int lea
   build(ids, 0, n, centroids, boxes, std::max(1, leaf_size), order);
   tris_.resize(n);
   ids_ = order;
+  planes_.resize(n);
   for (int i = 0; i < n; ++i) {
     const int f = order[i];
     for (int k = 0; k < 3; ++k) tris_[i][k] = vertices.row(faces(f, k)).transpose();
+    const Vec3 nrm = (tris_[i][1] - tris_[i][0]).cross(tris_[i][2] - tris_[i][0]);
+    const double len = nrm.norm();
+    // A degenerate triangle gets no plane (normal 0): the plane test below never rejects it.
+    const Vec3 unit = len > 0.0 ? Vec3(nrm / len) : Vec3::Zero();
+    planes_[i] = Eigen::Vector4d(unit.x(), unit.y(), unit.z(), len > 0.0 ? unit.dot(tris_[i][0]) : 0.0);
   }
 }
 
@@ -60,11 +66,51 @@ namespace {
 /// A lower bound of the squared distance between segment [a, b] (with box sbox) and a box.
 inline double segment_box_lower_bound(const Vec3& a, const Vec3& b, const Aabb& sbox, const Aabb& box) {
   const double d_boxes = box.squared_distance(sbox);
+  // For a point (a == b, sbox a point) the box distance is exact; the centre bound below is weaker.
+  if (sbox.lo == sbox.hi) return d_boxes;
   const Vec3 c = box.centre();
   const double half_diag = 0.5 * box.extent().norm();
   const double dc = (closest_point_on_segment(c, a, b) - c).norm() - half_diag;
   return dc > 0.0 ? std::max(d_boxes, dc * dc) : d_boxes;
 }
+
+/// A separating direction: every point x of the query has nu . x >= low. Anything whose
+/// points all have nu . y <= h lies at least low - h from the query (projection onto a unit
+/// vector never lengthens a distance). The direction of the closest pair of the nearest
+/// triangle found so far is nearly the tangent plane's normal there: on convex stretches of O
+/// it certifies almost every other triangle, and whole subtrees, as farther away at once.
+struct Witness {
+  Vec3 nu = Vec3::Zero();
+  double low = 0.0;
+  double from_sq = kInf;  ///< squared distance of the triangle it came from
+  bool valid = false;
+
+  void offer(const Vec3& a, const Vec3& b, const Vec3& on_query, const Vec3& on_mesh, double d_sq) {
+    if (!(d_sq > 0.0) || d_sq >= from_sq) return;
+    const Vec3 d = on_query - on_mesh;
+    const double len = d.norm();
+    if (!(len > 0.0)) return;
+    nu = d / len;
+    low = std::min(nu.dot(a), nu.dot(b));
+    from_sq = d_sq;
+    valid = true;
+  }
+  /// Lower bound of the distance from the query to anything whose nu-projection is <= high
+  /// (a little rounding slack subtracted); -inf when there is no witness yet.
+  double bound(double high) const {
+    if (!valid) return -kInf;
+    return (low - high) - 1e-14 * (std::abs(low) + std::abs(high));
+  }
+  double box_bound(const Aabb& box) const {
+    if (!valid) return -kInf;
+    const Vec3 c = box.centre(), h = 0.5 * box.extent();
+    return bound(nu.dot(c) + nu.cwiseAbs().dot(h));
+  }
+  double triangle_bound(const std::array<Vec3, 3>& t) const {
+    if (!valid) return -kInf;
+    return bound(std::max(nu.dot(t[0]), std::max(nu.dot(t[1]), nu.dot(t[2]))));
+  }
+};
 
 }  // namespace
 
@@ -76,6 +122,9 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
   sbox.grow(a);
   sbox.grow(b);
   const bool is_point = (a - b).squaredNorm() == 0.0;
+  Witness w;
+  // A node or triangle whose witness bound exceeds the best distance cannot hold the nearest.
+  auto beyond = [&](double wb) { return wb > 0.0 && wb * wb > best_sq; };
   struct Item {
     int node;
     double lb;
@@ -87,9 +136,11 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
     const Item it = stack[--top];
     if (it.lb > best_sq || (best.triangle >= 0 && it.lb == best_sq)) continue;
     const Node& nd = nodes_[it.node];
+    if (beyond(w.box_bound(nd.box))) continue;
     if (nd.count > 0) {
       for (int i = nd.first; i < nd.first + nd.count; ++i) {
         const auto& t = tris_[i];
+        if (beyond(w.triangle_bound(t))) continue;
         Vec3 on_seg, on_tri;
         TriangleFeature f;
         double d;
@@ -111,6 +162,7 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
             best.crosses = true;
             return best;
           }
+          w.offer(a, b, on_seg, on_tri, d);
         }
       }
       continue;
@@ -128,6 +180,60 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
   }
   if (best.triangle >= 0) best.distance = std::sqrt(best_sq);
   return best;
+}
+
+bool TriangleBvh::any_within(const Vec3& a, const Vec3& b, double distance) const {
+  if (tris_.empty() || !(distance >= 0.0)) return false;
+  const double bound_sq = distance * distance;
+  Aabb sbox;
+  sbox.grow(a);
+  sbox.grow(b);
+  const bool is_point = (a - b).squaredNorm() == 0.0;
+  Witness w;
+  // A node can hold such a triangle only if its lower bound is below bound_sq (or 0 for a touch)
+  // and the witness does not put it farther than `distance`.
+  auto may_hold = [&](double lb) { return lb < bound_sq || lb == 0.0; };
+  auto certified_far = [&](double wb) { return wb > distance; };
+  int stack[128];
+  int top = 0;
+  if (!may_hold(segment_box_lower_bound(a, b, sbox, nodes_[0].box))) return false;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& nd = nodes_[stack[--top]];
+    if (certified_far(w.box_bound(nd.box))) continue;
+    if (nd.count > 0) {
+      for (int i = nd.first; i < nd.first + nd.count; ++i) {
+        const auto& t = tris_[i];
+        // Both ends farther than `distance` on one side of the triangle's plane: too far.
+        const Eigen::Vector4d& pl = planes_[i];
+        const double da = pl.x() * a.x() + pl.y() * a.y() + pl.z() * a.z() - pl.w();
+        const double db = pl.x() * b.x() + pl.y() * b.y() + pl.z() * b.z() - pl.w();
+        if ((da > distance && db > distance) || (da < -distance && db < -distance)) continue;
+        if (certified_far(w.triangle_bound(t))) continue;
+        Vec3 on_seg, on_tri;
+        TriangleFeature f;
+        double d;
+        if (is_point) {
+          on_seg = a;
+          on_tri = closest_point_on_triangle(a, t[0], t[1], t[2], &f);
+          d = (on_tri - a).squaredNorm();
+        } else {
+          d = segment_triangle_squared(a, b, t[0], t[1], t[2], &on_seg, &on_tri, &f);
+        }
+        if (d < bound_sq || d == 0.0) return true;
+        w.offer(a, b, on_seg, on_tri, d);
+      }
+      continue;
+    }
+    const double ll = segment_box_lower_bound(a, b, sbox, nodes_[nd.left].box);
+    const double lr = segment_box_lower_bound(a, b, sbox, nodes_[nd.right].box);
+    if (top + 2 > 128) continue;
+    // Nearer child last, so that it is visited first.
+    const bool left_first = ll < lr;
+    if (may_hold(left_first ? lr : ll)) stack[top++] = left_first ? nd.right : nd.left;
+    if (may_hold(left_first ? ll : lr)) stack[top++] = left_first ? nd.left : nd.right;
+  }
+  return false;
 }
 
 int TriangleBvh::ray_crossings(const Vec3& origin, const Vec3& dir) const {

@@ -1,6 +1,7 @@
 #include "hugger/planner/planner.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -15,6 +16,7 @@ std::string to_string(Status s) {
     case Status::kRunning: return "running";
     case Status::kDone: return "done";
     case Status::kMaxIterations: return "max_iterations";
+    case Status::kTimeout: return "timeout";
   }
   return "unknown";
 }
@@ -375,8 +377,30 @@ std::optional<Configuration> Planner::step() {
   return history_[next_++];
 }
 
-Status Planner::plan() {
-  while (status_ == Status::kRunning) phase2_iteration();
+bool Planner::advance() {
+  if (status_ != Status::kRunning) return false;
+  phase2_iteration();
+  return true;
+}
+
+Status Planner::plan(double timeout) {
+  if (!(timeout > 0.0)) invalid("timeout must be a positive number of seconds (or infinite), got " + fmt(timeout));
+  if (std::isinf(timeout)) {
+    while (status_ == Status::kRunning) phase2_iteration();
+  } else {
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    // Past ~292 years the duration overflows; such a timeout is no timeout.
+    const bool bounded = timeout < 9.0e9;
+    const auto deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(bounded ? timeout : 0.0));
+    while (status_ == Status::kRunning) {
+      if (bounded && Clock::now() >= deadline) {
+        status_ = Status::kTimeout;
+        break;
+      }
+      phase2_iteration();
+    }
+  }
   next_ = history_.size();
   return status_;
 }

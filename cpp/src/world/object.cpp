@@ -1,9 +1,7 @@
 #include "hugger/world/object.hpp"
 
-#include <fcl/geometry/bvh/BVH_model.h>
-#include <fcl/math/bv/OBBRSS.h>
-#include <fcl/narrowphase/collision_object.h>
-
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -21,7 +19,12 @@ std::uint64_t edge_key(std::int64_t a, std::int64_t b) {
 
 }  // namespace
 
-Object::Object(const PointsN3& vertices, const FacesN3& faces) : vertices_(vertices), faces_(faces) {
+namespace {
+std::atomic<std::uint64_t> next_serial{1};
+}  // namespace
+
+Object::Object(const PointsN3& vertices, const FacesN3& faces)
+    : vertices_(vertices), faces_(faces), serial_(next_serial.fetch_add(1)) {
   const std::int64_t nv = vertices_.rows(), nf = faces_.rows();
   if (nv == 0 || nf == 0) fail("object mesh is empty: it needs vertices (V,3) and faces (F,3), got V=" +
                                std::to_string(nv) + ", F=" + std::to_string(nf));
@@ -95,16 +98,6 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces) : vertices_(verti
       }
     }
   bvh_ = TriangleBvh(vertices_, faces_);
-
-  auto model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
-  std::vector<fcl::Vector3d> pts(nv);
-  for (std::int64_t i = 0; i < nv; ++i) pts[i] = vertices_.row(i).transpose();
-  std::vector<fcl::Triangle> tris(nf);
-  for (std::int64_t f = 0; f < nf; ++f) tris[f] = fcl::Triangle(faces_(f, 0), faces_(f, 1), faces_(f, 2));
-  model->beginModel(static_cast<int>(nf), static_cast<int>(nv));
-  model->addSubModel(pts, tris);
-  model->endModel();
-  fcl_object_ = std::make_shared<fcl::CollisionObjectd>(model, fcl::Transform3d::Identity());
 }
 
 double Object::sign_at(const Vec3& query, const Vec3& on_mesh, int triangle, TriangleFeature f) const {
@@ -127,7 +120,7 @@ SignedNearest Object::nearest(const Vec3& a, const Vec3& b, double max_distance)
   out.crosses = r.crosses;
   if (r.triangle < 0) {
     // Nothing within the bound: the sign is that of any point of the query.
-    out.signed_distance = inside(a) ? -kInf : kInf;
+    out.signed_distance = (max_distance > 0.0 ? inside_off_surface(a) : inside(a)) ? -kInf : kInf;
     return out;
   }
   out.on_query = r.on_query;
@@ -147,6 +140,40 @@ bool Object::inside(const Vec3& p) const {
   const NearestResult r = bvh_.nearest(p, p);
   if (r.triangle < 0 || r.distance == 0.0) return false;
   return sign_at(p, r.on_mesh, r.triangle, r.feature) < 0.0;
+}
+
+bool Object::inside_off_surface(const Vec3& p) const {
+  // The last answer of this thread, for this object: the planner asks about one pivot many times
+  // in a row while it turns a link about it (a memo of a pure function: same answers).
+  struct Memo {
+    std::uint64_t object = 0;
+    Vec3 point = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+    bool inside = false;
+  };
+  thread_local Memo memo;
+  if (memo.object == serial_ && memo.point == p) return memo.inside;
+  const bool in = inside_by_rays(p);
+  memo.object = serial_;
+  memo.point = p;
+  memo.inside = in;
+  return in;
+}
+
+bool Object::inside_by_rays(const Vec3& p) const {
+  // Three fixed, generic directions: a ray grazing an edge or a vertex can miscount; two rays
+  // cannot both do so at a generic point.
+  static const Vec3 dirs[3] = {Vec3(0.5377, 0.8622, 0.3188).normalized(), Vec3(-0.7269, 0.1423, -0.6718).normalized(),
+                               Vec3(0.2311, -0.6064, 0.7608).normalized()};
+  const bool first = bvh_.ray_crossings(p, dirs[0]) % 2 == 1;
+  const bool second = bvh_.ray_crossings(p, dirs[1]) % 2 == 1;
+  if (first == second) return first;
+  return bvh_.ray_crossings(p, dirs[2]) % 2 == 1;
+}
+
+bool Object::capsule_clear(const Vec3& a, const Vec3& b, double radius) const {
+  if (bvh_.any_within(a, b, radius)) return false;
+  // Nothing within radius (> 0) of the axis, or nothing touching it: wholly inside or outside.
+  return radius > 0.0 ? !inside_off_surface(a) : !inside(a);
 }
 
 Section Object::section(const Vec3& origin, const Vec3& u, const Vec3& v) const {

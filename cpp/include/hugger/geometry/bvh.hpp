@@ -54,8 +54,46 @@ class TriangleBvh {
   /// `max_distance` may be skipped; then `triangle` is -1 and `distance` is infinite.
   NearestResult nearest(const Vec3& a, const Vec3& b, double max_distance = kInf) const;
 
+  /// True when some triangle comes closer than `distance` to segment [a, b] (a == b: a point),
+  /// or touches or crosses it. Stops at the first such triangle: cheaper than nearest().
+  bool any_within(const Vec3& a, const Vec3& b, double distance) const;
+
   /// Number of triangles crossed by the ray origin + t * dir, t > 0.
   int ray_crossings(const Vec3& origin, const Vec3& dir) const;
+
+  /// Best-first traversal for custom queries. Visits every triangle of every node whose
+  /// `node_bound(box)` is at most `bound`; `leaf(triangle, index)` may lower `bound` (for a
+  /// nearest-style search) or set it below 0 to stop.
+  template <class NodeBound, class Leaf>
+  void traverse(NodeBound&& node_bound, Leaf&& leaf, double& bound) const {
+    if (tris_.empty()) return;
+    struct Item {
+      int node;
+      double lb;
+    };
+    Item stack[128];
+    int top = 0;
+    stack[top++] = {0, node_bound(nodes_[0].box)};
+    while (top > 0) {
+      const Item it = stack[--top];
+      if (it.lb > bound) continue;
+      const Node& nd = nodes_[it.node];
+      if (nd.count > 0) {
+        for (int i = nd.first; i < nd.first + nd.count && bound >= 0.0; ++i) leaf(tris_[i], ids_[i]);
+        if (bound < 0.0) return;
+        continue;
+      }
+      const double ll = node_bound(nodes_[nd.left].box), lr = node_bound(nodes_[nd.right].box);
+      if (top + 2 > 128) continue;
+      if (ll < lr) {
+        stack[top++] = {nd.right, lr};
+        stack[top++] = {nd.left, ll};
+      } else {
+        stack[top++] = {nd.left, ll};
+        stack[top++] = {nd.right, lr};
+      }
+    }
+  }
 
   const Aabb& bounds() const { return nodes_.front().box; }
   std::size_t size() const { return tris_.size(); }
@@ -71,6 +109,7 @@ class TriangleBvh {
 
   std::vector<Node> nodes_;
   std::vector<std::array<Vec3, 3>> tris_;  ///< triangles in leaf order
+  std::vector<Eigen::Vector4d> planes_;    ///< per triangle in tris_: unit normal and offset (0 if degenerate)
   std::vector<int> ids_;                   ///< input index of each triangle in tris_
 };
 

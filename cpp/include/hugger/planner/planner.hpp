@@ -15,7 +15,7 @@
 namespace hugger {
 
 enum class TipState : std::int8_t { kFrozen = 0, kContact = 1, kDone = 2 };
-enum class Status : std::int8_t { kRunning = 0, kDone = 1, kMaxIterations = 2 };
+enum class Status : std::int8_t { kRunning = 0, kDone = 1, kMaxIterations = 2, kTimeout = 3 };
 std::string to_string(Status s);
 
 /// Planner parameters. NaN selects the documented default; any other value must be positive.
@@ -56,8 +56,15 @@ class Planner {
 
   /// The next configuration, or nothing when the plan has ended.
   std::optional<Configuration> step();
-  /// Runs to the end; returns the final status.
-  Status plan();
+  /// Runs one Phase 2 iteration and appends its configuration to history() (step() hands it
+  /// out later). Returns false, doing nothing, once the plan has ended.
+  bool advance();
+  /// Runs to the end; returns the final status. With a finite `timeout` (seconds, > 0) the plan
+  /// stops with Status::kTimeout once that much wall-clock time has passed since the call: the
+  /// deadline is checked before every Phase 2 iteration, so the history stays a valid (partial)
+  /// trajectory and the overrun is at most one iteration. A timed-out plan has ended for good.
+  /// Throws std::invalid_argument when `timeout` is NaN or not positive.
+  Status plan(double timeout = kInf);
 
   Status status() const { return status_; }
   bool finished() const { return status_ != Status::kRunning && next_ >= history_.size(); }

@@ -72,8 +72,8 @@ class Sensing {
   Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap = kInf) const {
     return capsule(plane.to_world(a), plane.to_world(b), radius, cap);
   }
-  /// True when the link is collision-free and in front of the palm's front plane.
-  bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front) const;
+  /// True when the link is collision-free (gap >= 0) and in front of the palm's front plane.
+  virtual bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front) const;
 
   /// Slide the fingertip along O's boundary in its plane, counter-clockwise (interior on the
   /// left), to the first point whose chord from the tip is `step`.

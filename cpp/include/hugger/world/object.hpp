@@ -10,11 +10,6 @@
 #include "hugger/geometry/section.hpp"
 #include "hugger/types.hpp"
 
-namespace fcl {
-template <typename S>
-class CollisionObject;
-}
-
 namespace hugger {
 
 /// Signed nearest-feature result: distance < 0 when the query lies inside O.
@@ -41,14 +36,21 @@ class Object {
   /// Signed distance query for segment [a, b] (a == b: a point). Features farther than
   /// `max_distance` may be skipped (then signed_distance is +inf or -inf).
   SignedNearest nearest(const Vec3& a, const Vec3& b, double max_distance = kInf) const;
-  /// True when p is strictly inside O (ray parity, majority of three rays).
+  /// True when p is strictly inside O (the sign of its nearest feature's pseudo-normal).
   bool inside(const Vec3& p) const;
+  /// True when p, known to be at a positive distance from O's surface, is inside O: ray parity,
+  /// majority of three rays. Much cheaper than inside() for points far from the surface.
+  bool inside_off_surface(const Vec3& p) const;
+  /// True when the capsule of axis [a, b] and `radius` neither comes closer than `radius` to O's
+  /// surface (touching counts as clear only at exactly `radius`) nor lies inside O.
+  bool capsule_clear(const Vec3& a, const Vec3& b, double radius) const;
   /// The planar section of O in the plane through `origin` spanned by orthonormal u, v.
   Section section(const Vec3& origin, const Vec3& u, const Vec3& v) const;
-  /// FCL collision object of the mesh (a BVHModel<OBBRSSd>) in the world frame.
-  const fcl::CollisionObject<double>& fcl_object() const { return *fcl_object_; }
+  /// The BVH over O's triangles (world frame), for custom queries.
+  const TriangleBvh& bvh() const { return bvh_; }
 
  private:
+  bool inside_by_rays(const Vec3& p) const;
   double sign_at(const Vec3& query, const Vec3& on_mesh, int triangle, TriangleFeature f) const;
 
   PointsN3 vertices_;
@@ -58,7 +60,7 @@ class Object {
   std::vector<std::array<Vec3, 3>> edge_normals_;  ///< per face, pseudo-normal of edges ab, bc, ca
   std::vector<Vec3> vertex_normals_;          ///< angle-weighted pseudo-normals
   double volume_ = 0.0;
-  std::shared_ptr<fcl::CollisionObject<double>> fcl_object_;
+  std::uint64_t serial_ = 0;  ///< unique per constructed object (keys per-thread memos)
 };
 
 }  // namespace hugger

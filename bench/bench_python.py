@@ -1,0 +1,137 @@
+#!/usr/bin/env python3
+"""Python-side benchmarks of hugger: a plan end to end, the cost of the binding, and plan_many.
+
+    python bench/bench_python.py [--repeat R] [--cases C] [--threads K] [--json]
+
+Figures (medians over R repeats, wall-clock seconds; inputs built before any clock starts):
+
+  plan            Planner(...) + .plan() end to end for the paper's 5x5 hand on ``curvy``
+                  (20480 triangles), the palm 20 cm away along +z, turned 60 degrees about its y axis
+  core_plan       the same with the trajectory left in C++ (_core plan only): the cost of planning
+  step_loop       the same plan driven from Python one configuration at a time (Planner.step()),
+                  i.e. what streaming to a robot costs; step_overhead_us is the per-configuration
+                  difference to core_plan
+  plan_many       C independent cases (the paper's scenario from C start directions) with
+                  hugger.plan_many on 1 thread and on K threads; speedup = t(1) / t(K)
+
+Speed is reported, never asserted. Build Release (the default of ``pip install``). The machine's
+load average is printed: shared machines make figures noisy, so compare medians.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import sys
+import time
+
+import numpy as np
+
+import hugger
+
+
+def curvy() -> hugger.Object:
+    """The paper-like body (the same arrays as hugger_bench's ``curvy`` and hugger.objects.curvy)."""
+    maker = getattr(hugger.objects, "curvy", None)
+    if maker is not None:
+        return maker()
+    v, f = hugger.objects.icosphere(5)
+    x, y, z = v.T
+    rho = (1.0 + 0.20 * np.sin(3.0 * x + 0.7) * np.cos(2.5 * y - 0.3) + 0.12 * np.sin(4.0 * z + 1.2) * np.cos(2.0 * x - 0.5)
+           + 0.10 * np.cos(3.5 * y + 0.9) * np.sin(2.5 * z) - 0.10 * np.exp(-(((x - 0.1) / 0.3) ** 2)))
+    p = v * (rho * 0.04)[:, None]
+    p[:, 0] *= 1.2
+    return hugger.Object(p, f)
+
+
+def start_pose(direction=(0.0, 0.0, 1.0), distance: float = 0.2, turn_deg: float = 60.0) -> np.ndarray:
+    """The palm ``distance`` from T = 0 along ``direction``, facing T, turned about its own y axis."""
+    d = np.asarray(direction, dtype=float)
+    pose = hugger.look_at(distance * d / np.linalg.norm(d), [0.0, 0.0, 0.0])
+    c, s = np.cos(np.radians(turn_deg)), np.sin(np.radians(turn_deg))
+    pose[:3, :3] = pose[:3, :3] @ np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    return pose
+
+
+def timed(fn, repeat: int) -> tuple[float, object]:
+    times, out = [], None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=5, help="repeats per figure (median reported; default 5)")
+    ap.add_argument("--cases", type=int, default=16, help="cases for plan_many (default 16)")
+    ap.add_argument("--threads", type=int, default=2, help="threads for plan_many (default 2)")
+    ap.add_argument("--json", action="store_true", help="print the figures as JSON")
+    args = ap.parse_args(argv)
+    if args.repeat < 1 or args.cases < 1 or args.threads < 1:
+        ap.error("--repeat, --cases and --threads must be at least 1")
+
+    hand = hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
+    obj = curvy()
+    target = np.zeros(3)
+    pose = start_pose()
+    rng = np.random.default_rng(0)
+    dirs = rng.normal(size=(args.cases, 3))
+    cases = [{"hand": hand, "obj": obj, "target": target, "palm_pose": start_pose(d)} for d in dirs]
+
+    t_plan, traj = timed(lambda: hugger.Planner(hand, obj, target, pose).plan(), args.repeat)
+
+    def core_plan():
+        p = hugger.Planner(hand, obj, target, pose)
+        p._core.plan(None)
+        return p
+
+    t_core, planner = timed(core_plan, args.repeat)
+
+    def step_loop():
+        p = hugger.Planner(hand, obj, target, pose)
+        n = 0
+        while p.step() is not None:
+            n += 1
+        return n
+
+    t_step, n_steps = timed(step_loop, args.repeat)
+    t_many1, res1 = timed(lambda: hugger.plan_many(cases, threads=1), max(1, args.repeat // 2))
+    t_manyk, resk = timed(lambda: hugger.plan_many(cases, threads=args.threads), max(1, args.repeat // 2))
+    same = all(np.array_equal(a.joints, b.joints) for a, b in zip(res1, resk))
+    confs = int(sum(len(t) for t in res1))
+    stats = planner.stats
+    figures = {
+        "load_average": os.getloadavg() if hasattr(os, "getloadavg") else None,
+        "repeats": args.repeat,
+        "scenario": "paper: 5x5 hand, curvy (20480 triangles), palm 20 cm along +z turned 60 deg",
+        "status": traj.status,
+        "configurations": len(traj),
+        "phase2_iterations": stats["phase2_iterations"],
+        "plan_s": t_plan,
+        "core_plan_s": t_core,
+        "trajectory_conversion_s": t_plan - t_core,
+        "step_loop_s": t_step,
+        "step_configurations": n_steps,
+        "step_overhead_us": (t_step - t_core) / max(n_steps, 1) * 1e6,
+        "configurations_per_s_plan": len(traj) / t_plan,
+        "plan_many_cases": args.cases,
+        "plan_many_configurations": confs,
+        "plan_many_1_thread_s": t_many1,
+        f"plan_many_{args.threads}_threads_s": t_manyk,
+        "plan_many_speedup": t_many1 / t_manyk,
+        "plan_many_identical_results": same,
+    }
+    if args.json:
+        json.dump(figures, sys.stdout, indent=2)
+        print()
+    else:
+        for k, v in figures.items():
+            print(f"{k:32s} {v:.6g}" if isinstance(v, float) else f"{k:32s} {v}")
+    return 0 if same and traj.status == "done" else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,490 @@
+// hugger_bench: plans fixed scenarios and reports where the time goes.
+//
+//   hugger_bench [--scenario NAME]... [--repeat R] [--json] [--list] [--no-fork]
+//
+// Every scenario runs in a child process of its own (unless --no-fork), so that its peak
+// memory (max RSS) is its own. Inputs (meshes, hands, poses) are generated before any clock
+// starts. Figures are medians over the R repeats; per-iteration percentiles pool the Phase 2
+// iterations of all repeats. Release builds only: a build without NDEBUG refuses to run
+// unless --allow-debug is given, and then marks every figure as such.
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "hugger/planner/planner.hpp"
+#include "hugger/world/object.hpp"
+#include "hugger/world/simulated_world.hpp"
+
+using namespace hugger;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+#ifdef NDEBUG
+constexpr bool kReleaseBuild = true;
+#else
+constexpr bool kReleaseBuild = false;
+#endif
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// --- inputs ------------------------------------------------------------------------------
+
+struct Mesh {
+  PointsN3 vertices;
+  FacesN3 faces;
+};
+
+/// The unit icosphere, built exactly as hugger.objects.icosphere (python/hugger/objects.py):
+/// the same base vertices and faces, the same order of new vertices, normalised the same way
+/// (p / sqrt(p . p)), so a given subdivision level gives the same arrays bit for bit.
+Mesh icosphere(int subdivisions) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  auto unit = [](const Vec3& p) { return Vec3(p / std::sqrt(p.x() * p.x() + p.y() * p.y() + p.z() * p.z())); };
+  for (auto& p : v) p = unit(p);
+  std::vector<std::array<std::int64_t, 3>> f = {
+      {0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+      {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},   {4, 9, 5}, {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (int s = 0; s < subdivisions; ++s) {
+    std::unordered_map<std::uint64_t, std::int64_t> cache;
+    cache.reserve(f.size() * 2);
+    v.reserve(v.size() + f.size() * 3 / 2 + 2);
+    auto mid = [&](std::int64_t a, std::int64_t b) {
+      const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint64_t>(std::max(a, b));
+      auto [it, fresh] = cache.emplace(key, static_cast<std::int64_t>(v.size()));
+      if (fresh) v.push_back(unit(v[a] + v[b]));
+      return it->second;
+    };
+    std::vector<std::array<std::int64_t, 3>> g;
+    g.reserve(f.size() * 4);
+    for (auto [a, b, c] : f) {
+      const std::int64_t ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
+      g.push_back({a, ab, ca});
+      g.push_back({b, bc, ab});
+      g.push_back({c, ca, bc});
+      g.push_back({ab, bc, ca});
+    }
+    f.swap(g);
+  }
+  Mesh m;
+  m.vertices.resize(static_cast<Eigen::Index>(v.size()), 3);
+  for (std::size_t i = 0; i < v.size(); ++i) m.vertices.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
+  m.faces.resize(static_cast<Eigen::Index>(f.size()), 3);
+  for (std::size_t i = 0; i < f.size(); ++i)
+    for (int k = 0; k < 3; ++k) m.faces(static_cast<Eigen::Index>(i), k) = f[i][k];
+  return m;
+}
+
+Mesh sphere(double radius, int subdivisions) {
+  Mesh m = icosphere(subdivisions);
+  m.vertices *= radius;
+  return m;
+}
+
+/// `curvy`: the 5-subdivision unit icosphere, each vertex v = (x, y, z) moved to
+/// p = v * rho(v) * 0.04 with rho = 1 + 0.20 sin(3.0x+0.7) cos(2.5y-0.3) + 0.12 sin(4.0z+1.2)
+/// cos(2.0x-0.5) + 0.10 cos(3.5y+0.9) sin(2.5z) - 0.10 exp(-((x-0.1)/0.3)^2), then p.x *= 1.2.
+Mesh curvy(int subdivisions = 5) {
+  Mesh m = icosphere(subdivisions);
+  for (Eigen::Index i = 0; i < m.vertices.rows(); ++i) {
+    const double x = m.vertices(i, 0), y = m.vertices(i, 1), z = m.vertices(i, 2);
+    const double g = (x - 0.1) / 0.3;
+    const double rho = 1.0 + 0.20 * std::sin(3.0 * x + 0.7) * std::cos(2.5 * y - 0.3) +
+                       0.12 * std::sin(4.0 * z + 1.2) * std::cos(2.0 * x - 0.5) +
+                       0.10 * std::cos(3.5 * y + 0.9) * std::sin(2.5 * z) - 0.10 * std::exp(-(g * g));
+    const double scale = rho * 0.04;
+    m.vertices.row(i) *= scale;
+    m.vertices(i, 0) *= 1.2;
+  }
+  return m;
+}
+
+/// The paper-like start, as hugger.scenarios.start_pose(obj, hand, T, (0, 0, 1), turn_deg=60,
+/// distance=0.2) builds it for the demo: look_at(T + (0, 0, 0.2), T), then turned 60 degrees
+/// about the palm's own y axis (the rotation applied on the right of the palm's rotation).
+Pose paper_start(const Vec3& target) {
+  // look_at: z toward T; up (0, 0, 1) is parallel to z, so up = (1, 0, 0) as in look_at.
+  const Vec3 position = target + Vec3(0.0, 0.0, 0.2);
+  Vec3 z = target - position;
+  z /= z.norm();
+  Vec3 up(0.0, 0.0, 1.0);
+  if (up.cross(z).norm() < 1e-6) up = std::abs(z.x()) < 0.9 ? Vec3(1.0, 0.0, 0.0) : Vec3(0.0, 1.0, 0.0);
+  Vec3 x = up.cross(z);
+  x /= x.norm();
+  Mat3 R;
+  R.col(0) = x;
+  R.col(1) = z.cross(x);
+  R.col(2) = z;
+  const double c = std::cos(60.0 * kPi / 180.0), s = std::sin(60.0 * kPi / 180.0);
+  Mat3 turn;
+  turn << c, 0, s, 0, 1, 0, -s, 0, c;
+  Pose p = Pose::Identity();
+  p.linear() = R * turn;
+  p.translation() = position;
+  return p;
+}
+
+struct Scenario {
+  std::string name, object, hand;
+  std::function<Mesh()> mesh;
+  int fingers = 5, links = 5;
+  double link_length = 0.02, link_radius = 0.004, palm_radius = 0.03, palm_thickness = 0.01;
+};
+
+std::vector<Scenario> scenarios() {
+  std::vector<Scenario> out;
+  auto paper_hand = [](Scenario s) {
+    s.hand = "5x5 paper hand";
+    return s;
+  };
+  out.push_back(paper_hand({"paper", "curvy, 20480 triangles", "", [] { return curvy(5); }}));
+  const char* labels[] = {"1k", "20k", "80k", "320k", "1.3m"};
+  const int subdivisions[] = {3, 5, 6, 7, 8};
+  for (int i = 0; i < 5; ++i) {
+    const int s = subdivisions[i];
+    out.push_back(paper_hand({std::string("sphere-") + labels[i],
+                              "sphere r 4 cm, " + std::to_string(20L << (2 * s)) + " triangles", "",
+                              [s] { return sphere(0.04, s); }}));
+  }
+  // Hands of other sizes on curvy: the finger reach stays 10 cm (the paper hand's), the link
+  // radius shrinks with short links (a link must be longer than 2 radii).
+  for (int n : {2, 4, 8, 16, 32}) {
+    Scenario s{"hand-N" + std::to_string(n), "curvy, 20480 triangles", "", [] { return curvy(5); }};
+    s.links = n;
+    s.link_length = 0.1 / n;
+    s.link_radius = std::min(0.004, 0.2 * s.link_length);
+    out.push_back(s);
+  }
+  for (int m : {2, 5, 8, 16}) {
+    Scenario s{"hand-M" + std::to_string(m), "curvy, 20480 triangles", "", [] { return curvy(5); }};
+    s.fingers = m;
+    out.push_back(s);
+  }
+  for (auto& s : out) {
+    std::ostringstream os;
+    os << s.fingers << "x" << s.links << " L " << s.link_length * 1000 << " mm r " << s.link_radius * 1000 << " mm";
+    s.hand = os.str();
+  }
+  return out;
+}
+
+// --- running -------------------------------------------------------------------------------
+
+/// One scenario's figures, as plain data: a child process sends it through a pipe.
+struct Result {
+  char name[32] = {};
+  char status[24] = {};
+  int repeats = 0;
+  long triangles = 0, fingers = 0, links = 0;
+  long configurations = 0, phase1_configurations = 0, phase2_iterations = 0;
+  double object_s = 0, planner_s = 0, phase2_s = 0, total_s = 0;  // medians
+  double configurations_per_s = 0;                                // Phase 2 iterations / Phase 2 time
+  double p50_us = 0, p90_us = 0, p99_us = 0, max_us = 0;           // per Phase 2 iteration, pooled
+  double max_rss_mib = 0;
+  bool deterministic = true;
+  bool ok = false;
+  char error[160] = {};
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+double percentile(const std::vector<double>& sorted, double q) {
+  if (sorted.empty()) return 0.0;
+  const double at = q * static_cast<double>(sorted.size() - 1);
+  const std::size_t i = static_cast<std::size_t>(at);
+  const double f = at - static_cast<double>(i);
+  return i + 1 < sorted.size() ? sorted[i] * (1 - f) + sorted[i + 1] * f : sorted[i];
+}
+
+/// FNV-1a over the bits of every emitted configuration: equal digests mean bit-identical plans.
+std::uint64_t digest(const Planner& p) {
+  std::uint64_t h = 1469598103934665603ULL;
+  auto mix = [&h](const void* data, std::size_t n) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ULL;
+  };
+  for (const Configuration& c : p.history()) {
+    mix(c.palm.matrix().data(), sizeof(double) * 16);
+    for (const Vec3& j : c.joints) mix(j.data(), sizeof(double) * 3);
+    mix(c.tip_state.data(), c.tip_state.size());
+  }
+  return h;
+}
+
+double max_rss_mib() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
+}
+
+Result run(const Scenario& sc, int repeats) {
+  Result r;
+  std::snprintf(r.name, sizeof r.name, "%s", sc.name.c_str());
+  r.repeats = repeats;
+  r.fingers = sc.fingers;
+  r.links = sc.links;
+  try {
+    const Mesh mesh = sc.mesh();  // inputs before any clock
+    const HandModel hand = HandModel::uniform(sc.fingers, sc.links, sc.link_length, sc.link_radius, sc.palm_radius,
+                                              sc.palm_thickness);
+    const Vec3 target = Vec3::Zero();
+    const Pose start = paper_start(target);
+    r.triangles = mesh.faces.rows();
+    std::vector<double> object_s, planner_s, phase2_s, total_s, per_iteration;
+    std::uint64_t first_digest = 0;
+    for (int k = 0; k < repeats; ++k) {
+      const auto t0 = Clock::now();
+      auto object = std::make_shared<const Object>(mesh.vertices, mesh.faces);
+      const double t_object = seconds_since(t0);
+      const auto t1 = Clock::now();
+      Planner planner(hand, std::make_shared<SimulatedWorld>(object), target, start);
+      const double t_planner = seconds_since(t1);
+      const auto t2 = Clock::now();
+      per_iteration.reserve(per_iteration.size() + 4096);
+      for (;;) {
+        const auto ti = Clock::now();
+        if (!planner.advance()) break;
+        per_iteration.push_back(seconds_since(ti) * 1e6);
+      }
+      const double t_phase2 = seconds_since(t2);
+      object_s.push_back(t_object);
+      planner_s.push_back(t_planner);
+      phase2_s.push_back(t_phase2);
+      total_s.push_back(t_object + t_planner + t_phase2);
+      const std::uint64_t d = digest(planner);
+      if (k == 0) {
+        first_digest = d;
+        std::snprintf(r.status, sizeof r.status, "%s", to_string(planner.status()).c_str());
+        r.configurations = static_cast<long>(planner.history().size());
+        r.phase1_configurations = planner.stats().phase1_configurations;
+        r.phase2_iterations = planner.stats().phase2_iterations;
+      } else if (d != first_digest) {
+        r.deterministic = false;
+      }
+    }
+    r.object_s = median(object_s);
+    r.planner_s = median(planner_s);
+    r.phase2_s = median(phase2_s);
+    r.total_s = median(total_s);
+    r.configurations_per_s = r.phase2_s > 0 ? static_cast<double>(r.phase2_iterations) / r.phase2_s : 0.0;
+    std::sort(per_iteration.begin(), per_iteration.end());
+    r.p50_us = percentile(per_iteration, 0.50);
+    r.p90_us = percentile(per_iteration, 0.90);
+    r.p99_us = percentile(per_iteration, 0.99);
+    r.max_us = per_iteration.empty() ? 0.0 : per_iteration.back();
+    r.ok = true;
+  } catch (const std::exception& e) {
+    std::snprintf(r.error, sizeof r.error, "%s", e.what());
+  }
+  r.max_rss_mib = max_rss_mib();
+  return r;
+}
+
+/// Runs a scenario in a child process (its own peak memory); falls back to in-process on error.
+Result run_isolated(const Scenario& sc, int repeats) {
+  int fd[2];
+  if (pipe(fd) != 0) return run(sc, repeats);
+  const pid_t pid = fork();
+  if (pid < 0) {
+    close(fd[0]);
+    close(fd[1]);
+    return run(sc, repeats);
+  }
+  if (pid == 0) {
+    close(fd[0]);
+    const Result r = run(sc, repeats);
+    const char* p = reinterpret_cast<const char*>(&r);
+    std::size_t left = sizeof r;
+    while (left > 0) {
+      const ssize_t w = write(fd[1], p, left);
+      if (w <= 0) _exit(2);
+      p += w;
+      left -= static_cast<std::size_t>(w);
+    }
+    close(fd[1]);
+    _exit(0);
+  }
+  close(fd[1]);
+  Result r;
+  char* p = reinterpret_cast<char*>(&r);
+  std::size_t got = 0;
+  while (got < sizeof r) {
+    const ssize_t n = read(fd[0], p + got, sizeof r - got);
+    if (n <= 0) break;
+    got += static_cast<std::size_t>(n);
+  }
+  close(fd[0]);
+  int wstatus = 0;
+  waitpid(pid, &wstatus, 0);
+  if (got != sizeof r) {
+    r = Result();
+    std::snprintf(r.name, sizeof r.name, "%s", sc.name.c_str());
+    std::snprintf(r.error, sizeof r.error, "the benchmark process died (wait status %d)", wstatus);
+  }
+  return r;
+}
+
+std::string json_string(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\', o += c;
+    else if (static_cast<unsigned char>(c) < 0x20) o += ' ';
+    else o += c;
+  }
+  return o + "\"";
+}
+
+std::string load_average() {
+  std::ifstream f("/proc/loadavg");
+  std::string a, b, c;
+  if (!(f >> a >> b >> c)) return "unknown";
+  return a + " " + b + " " + c;
+}
+
+void usage(const std::vector<Scenario>& all) {
+  std::printf("usage: hugger_bench [--scenario NAME]... [--repeat R] [--json] [--list] [--no-fork] [--allow-debug]\n"
+              "       hugger_bench --dump-obj SCENARIO FILE   (write the scenario's object as OBJ)\n"
+              "scenarios:");
+  for (const auto& s : all) std::printf(" %s", s.name.c_str());
+  std::printf("\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const auto all = scenarios();
+  std::vector<std::string> chosen;
+  int repeats = 5;
+  bool json = false, fork_each = true, allow_debug = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--scenario" && i + 1 < argc) chosen.push_back(argv[++i]);
+    else if (a == "--repeat" && i + 1 < argc) repeats = std::atoi(argv[++i]);
+    else if (a == "--json") json = true;
+    else if (a == "--no-fork") fork_each = false;
+    else if (a == "--allow-debug") allow_debug = true;
+    else if (a == "--dump-obj" && i + 2 < argc) {
+      // The scenario's object as Wavefront OBJ, every coordinate to 17 significant digits
+      // (round-trips exactly): lets bench/check_curvy.py compare it with the Python built-in.
+      const std::string name = argv[++i], path = argv[++i];
+      auto it = std::find_if(all.begin(), all.end(), [&](const Scenario& s) { return s.name == name; });
+      if (it == all.end()) {
+        std::fprintf(stderr, "unknown scenario '%s'\n", name.c_str());
+        return 2;
+      }
+      const Mesh m = it->mesh();
+      FILE* f = std::fopen(path.c_str(), "w");
+      if (!f) {
+        std::fprintf(stderr, "cannot write %s\n", path.c_str());
+        return 2;
+      }
+      for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
+        std::fprintf(f, "v %.17g %.17g %.17g\n", m.vertices(v, 0), m.vertices(v, 1), m.vertices(v, 2));
+      for (Eigen::Index t = 0; t < m.faces.rows(); ++t)
+        std::fprintf(f, "f %lld %lld %lld\n", static_cast<long long>(m.faces(t, 0) + 1),
+                     static_cast<long long>(m.faces(t, 1) + 1), static_cast<long long>(m.faces(t, 2) + 1));
+      std::fclose(f);
+      return 0;
+    }
+    else if (a == "--list") {
+      for (const auto& s : all) std::printf("%-12s %-26s %s\n", s.name.c_str(), s.object.c_str(), s.hand.c_str());
+      return 0;
+    } else {
+      usage(all);
+      return a == "--help" || a == "-h" ? 0 : 2;
+    }
+  }
+  if (repeats < 1) {
+    std::fprintf(stderr, "--repeat must be at least 1\n");
+    return 2;
+  }
+  if (!kReleaseBuild) {
+    std::fprintf(stderr,
+                 "\n*** hugger_bench was built WITHOUT NDEBUG (a debug build): its timings mean nothing. ***\n"
+                 "*** Configure with -DCMAKE_BUILD_TYPE=Release.                                        ***\n\n");
+    if (!allow_debug) return 3;
+  }
+  std::vector<const Scenario*> todo;
+  for (const auto& name : chosen) {
+    auto it = std::find_if(all.begin(), all.end(), [&](const Scenario& s) { return s.name == name; });
+    if (it == all.end()) {
+      std::fprintf(stderr, "unknown scenario '%s'\n", name.c_str());
+      usage(all);
+      return 2;
+    }
+    todo.push_back(&*it);
+  }
+  if (todo.empty())
+    for (const auto& s : all) todo.push_back(&s);
+
+  FILE* table = json ? stderr : stdout;
+  std::fprintf(table, "hugger_bench: %s build, %d repeat(s), medians; load average %s\n",
+               kReleaseBuild ? "Release" : "DEBUG", repeats, load_average().c_str());
+  std::fprintf(table, "%-11s %8s %5s %6s %6s %8s %8s %8s %8s %9s %7s %7s %7s %7s %7s %-14s\n", "scenario", "tris",
+               "MxN", "confs", "iters", "obj ms", "plan1 ms", "phase2ms", "total ms", "conf/s", "p50 us", "p90 us",
+               "p99 us", "max us", "RSS MiB", "status");
+  std::vector<Result> results;
+  for (const Scenario* sc : todo) {
+    const Result r = fork_each ? run_isolated(*sc, repeats) : run(*sc, repeats);
+    results.push_back(r);
+    if (!r.ok) {
+      std::fprintf(table, "%-11s FAILED: %s\n", r.name, r.error);
+      continue;
+    }
+    char mxn[16];
+    std::snprintf(mxn, sizeof mxn, "%ldx%ld", r.fingers, r.links);
+    std::fprintf(table, "%-11s %8ld %5s %6ld %6ld %8.2f %8.2f %8.2f %8.2f %9.0f %7.1f %7.1f %7.1f %7.1f %7.1f %-14s%s\n",
+                 r.name, r.triangles, mxn, r.configurations, r.phase2_iterations, r.object_s * 1e3, r.planner_s * 1e3,
+                 r.phase2_s * 1e3, r.total_s * 1e3, r.configurations_per_s, r.p50_us, r.p90_us, r.p99_us, r.max_us,
+                 r.max_rss_mib, r.status, r.deterministic ? "" : " NOT DETERMINISTIC");
+    std::fflush(table);
+  }
+  if (json) {
+    std::ostringstream os;
+    os.precision(6);
+    os << "{\n  \"build\": " << json_string(kReleaseBuild ? "Release" : "Debug") << ",\n  \"repeats\": " << repeats
+       << ",\n  \"load_average\": " << json_string(load_average()) << ",\n  \"scenarios\": [";
+    for (std::size_t i = 0; i < results.size(); ++i) {
+      const Result& r = results[i];
+      os << (i ? "," : "") << "\n    {\"name\": " << json_string(r.name) << ", \"ok\": " << (r.ok ? "true" : "false");
+      if (!r.ok) {
+        os << ", \"error\": " << json_string(r.error) << "}";
+        continue;
+      }
+      os << ", \"triangles\": " << r.triangles << ", \"fingers\": " << r.fingers << ", \"links\": " << r.links
+         << ", \"status\": " << json_string(r.status) << ", \"configurations\": " << r.configurations
+         << ", \"phase1_configurations\": " << r.phase1_configurations
+         << ", \"phase2_iterations\": " << r.phase2_iterations << ", \"object_setup_s\": " << r.object_s
+         << ", \"planner_setup_and_phase1_s\": " << r.planner_s << ", \"phase2_s\": " << r.phase2_s
+         << ", \"total_s\": " << r.total_s << ", \"phase2_configurations_per_s\": " << r.configurations_per_s
+         << ", \"iteration_us\": {\"p50\": " << r.p50_us << ", \"p90\": " << r.p90_us << ", \"p99\": " << r.p99_us
+         << ", \"max\": " << r.max_us << "}, \"max_rss_mib\": " << r.max_rss_mib
+         << ", \"deterministic\": " << (r.deterministic ? "true" : "false") << "}";
+    }
+    os << "\n  ]\n}\n";
+    std::fputs(os.str().c_str(), stdout);
+  }
+  const bool all_ok = std::all_of(results.begin(), results.end(), [](const Result& r) { return r.ok && r.deterministic; });
+  return all_ok ? 0 : 1;
+}

@@ -1,0 +1,189 @@
+"""Many independent plans on a thread pool: :func:`plan_many`.
+
+The engine releases the GIL while it plans, so plans of different cases run in parallel on
+separate cores. Results come back in input order; a case that fails does not stop the others,
+and its exception is reported with the case's index, never lost.
+"""
+from __future__ import annotations
+
+import numbers
+import os
+from dataclasses import dataclass
+from typing import Any, Callable, Iterable, Mapping
+
+from .hand import Hand
+from .planner import Planner, _timeout
+from .trajectory import Trajectory
+from .world import Object
+
+_PARAMS = ("step", "epsilon", "contact_tolerance", "max_iterations")
+
+
+@dataclass(frozen=True)
+class CaseError:
+    """What went wrong with one case of :func:`plan_many` (``errors="return"``)."""
+
+    index: int  #: position of the case in the input
+    exception: BaseException  #: the exception the case raised
+
+    def __str__(self) -> str:
+        return f"case {self.index}: {type(self.exception).__name__}: {self.exception}"
+
+
+class PlanManyError(RuntimeError):
+    """One or more cases of :func:`plan_many` failed (``errors="raise"``, the default).
+
+    ``errors`` maps each failed case's index to its exception; ``results`` holds every case's
+    outcome in input order (a :class:`Trajectory`, or None where the case failed).
+    """
+
+    def __init__(self, errors: dict[int, BaseException], results: list[Trajectory | None]) -> None:
+        self.errors = errors
+        self.results = results
+        lines = [str(CaseError(i, e)) for i, e in sorted(errors.items())]
+        shown = lines[:10] + ([f"... and {len(lines) - 10} more"] if len(lines) > 10 else [])
+        super().__init__(f"{len(errors)} of {len(results)} cases failed:\n  " + "\n  ".join(shown))
+
+
+@dataclass(frozen=True)
+class _Job:
+    hand: Hand
+    obj: Object
+    target: Any
+    palm_pose: Any
+    params: dict
+    timeout: float | None
+
+
+def _job(index: int, case: Any, hand: Hand | None, params: dict, timeout: float | None) -> _Job:
+    """Normalise one case: a mapping, a (hand, obj, target, palm_pose[, params]) tuple, or an
+    object with ``obj``, ``target`` and ``palm_pose`` attributes (like ``hugger.scenarios.Case``)."""
+    own: dict = {}
+    if isinstance(case, Mapping):
+        unknown = set(case) - {"hand", "obj", "object", "target", "palm_pose", "timeout", *_PARAMS}
+        if unknown:
+            raise ValueError(f"case {index}: unknown keys {sorted(unknown)}")
+        if "obj" in case and "object" in case:
+            raise ValueError(f"case {index}: give 'obj' or 'object', not both")
+        c_hand, obj = case.get("hand", hand), case.get("obj", case.get("object"))
+        target, pose = case.get("target"), case.get("palm_pose")
+        own = {k: case[k] for k in _PARAMS if k in case}
+        if "timeout" in case:
+            timeout = _timeout(case["timeout"])
+    elif isinstance(case, tuple):
+        if len(case) == 5 and isinstance(case[4], Mapping):
+            c_hand, obj, target, pose = case[:4]
+            own = dict(case[4])
+            bad = set(own) - set(_PARAMS)
+            if bad:
+                raise ValueError(f"case {index}: unknown parameters {sorted(bad)}")
+        elif len(case) == 4:
+            c_hand, obj, target, pose = case
+        else:
+            raise ValueError(f"case {index}: a tuple case must be (hand, obj, target, palm_pose[, params]), "
+                             f"got {len(case)} items")
+    elif all(hasattr(case, a) for a in ("obj", "target", "palm_pose")):
+        c_hand, obj, target, pose = getattr(case, "hand", hand), case.obj, case.target, case.palm_pose
+    else:
+        raise ValueError(f"case {index}: expected a mapping, a (hand, obj, target, palm_pose) tuple or an object "
+                         f"with obj, target and palm_pose; got {type(case).__name__}")
+    if c_hand is None:
+        raise ValueError(f"case {index}: no hand (give one in the case or plan_many(..., hand=...))")
+    if obj is None or target is None or pose is None:
+        raise ValueError(f"case {index}: obj, target and palm_pose are all required")
+    return _Job(c_hand, obj, target, pose, {**params, **own}, timeout)
+
+
+def _run(job: _Job) -> Trajectory:
+    return Planner(job.hand, job.obj, job.target, job.palm_pose, **job.params).plan(job.timeout)
+
+
+def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | None = None,
+              progress: Callable[[int, int], Any] | None = None, timeout: float | None = None,
+              errors: str = "raise", **params: Any) -> list[Trajectory] | list[Trajectory | CaseError]:
+    """Plan many independent cases on ``threads`` threads; trajectories in input order.
+
+    Each case is a mapping with ``hand`` (or the ``hand`` argument), ``obj`` (or ``object``),
+    ``target``, ``palm_pose`` and optionally ``step``, ``epsilon``, ``contact_tolerance``,
+    ``max_iterations`` and ``timeout``; or a tuple ``(hand, obj, target, palm_pose[, params])``;
+    or an object with ``obj``, ``target`` and ``palm_pose`` attributes such as
+    ``hugger.scenarios.Case``. ``**params`` and ``timeout`` (seconds per plan, see
+    :meth:`Planner.plan`) apply to every case unless the case gives its own.
+
+    ``threads``: worker threads (default: the CPUs this process may use; 1 plans in the calling
+    thread). The engine plans with the GIL released, so threads run in parallel; cases may share
+    a :class:`Hand` and an :class:`Object`.
+
+    ``progress(done, total)`` is called in the calling thread after each case finishes.
+
+    ``errors``: ``"raise"`` (default) plans every case, then raises :class:`PlanManyError`
+    naming each failed case (its index, exception type and message; ``.errors`` and
+    ``.results`` hold the details) if any failed; ``"return"`` puts a :class:`CaseError` in
+    place of each failed case's trajectory. Malformed cases and bad arguments raise
+    ``ValueError`` before anything is planned.
+    """
+    if errors not in ("raise", "return"):
+        raise ValueError(f"errors must be 'raise' or 'return', got {errors!r}")
+    if threads is None:
+        try:
+            threads = len(os.sched_getaffinity(0))
+        except AttributeError:  # not on Linux
+            threads = os.cpu_count() or 1
+    elif isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1:
+        raise ValueError(f"threads must be a whole number >= 1 or None, got {threads!r}")
+    if progress is not None and not callable(progress):
+        raise ValueError("progress must be callable as progress(done, total), or None")
+    if hand is not None and not isinstance(hand, Hand):
+        raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
+    bad = set(params) - set(_PARAMS)
+    if bad:
+        raise ValueError(f"unknown planner parameters {sorted(bad)}; expected some of {list(_PARAMS)}")
+    if isinstance(cases, (str, bytes)) or not isinstance(cases, Iterable):
+        raise ValueError(f"cases must be an iterable of cases, got {type(cases).__name__}")
+    limit = _timeout(timeout)
+    jobs = [_job(i, c, hand, params, limit) for i, c in enumerate(cases)]
+    total = len(jobs)
+    results: list[Trajectory | None] = [None] * total
+    failed: dict[int, BaseException] = {}
+
+    def finish(i: int, outcome: Trajectory | BaseException, done: int) -> None:
+        if isinstance(outcome, BaseException):
+            failed[i] = outcome
+        else:
+            results[i] = outcome
+        if progress is not None:
+            progress(done, total)
+
+    if threads == 1 or total <= 1:
+        for i, job in enumerate(jobs):
+            try:
+                outcome: Trajectory | BaseException = _run(job)
+            except Exception as exc:  # reported per case below
+                outcome = exc
+            finish(i, outcome, i + 1)
+    else:
+        from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
+
+        with ThreadPoolExecutor(max_workers=min(int(threads), total), thread_name_prefix="hugger") as pool:
+            index_of: dict[Future, int] = {pool.submit(_run, job): i for i, job in enumerate(jobs)}
+            pending = set(index_of)
+            done = 0
+            try:
+                while pending:
+                    finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    for fut in sorted(finished, key=index_of.__getitem__):
+                        exc = fut.exception()
+                        done += 1
+                        finish(index_of[fut], exc if exc is not None else fut.result(), done)
+            except BaseException:
+                for fut in pending:  # e.g. the progress callback raised: drop what has not started
+                    fut.cancel()
+                raise
+    if failed and errors == "raise":
+        err = PlanManyError(failed, results)
+        raise err from failed[min(failed)]
+    out: list[Trajectory | CaseError] = [r if r is not None else CaseError(i, failed[i]) for i, r in enumerate(results)]
+    return out
+
+
+__all__ = ["CaseError", "PlanManyError", "plan_many"]

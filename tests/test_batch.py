@@ -1,0 +1,165 @@
+"""hugger.plan_many: many independent plans on a thread pool, in input order, errors per case."""
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+import helpers
+import hugger
+
+
+@pytest.fixture(scope="module")
+def hand():
+    return hugger.Hand(fingers=3, links=3, link_length=0.02, link_radius=0.003, palm_radius=0.025, palm_thickness=0.01)
+
+
+@pytest.fixture(scope="module")
+def cases(hand):
+    """Six different cases: three objects, two start directions each."""
+    objs = [hugger.objects.sphere(0.035, subdivisions=3), hugger.objects.ellipsoid((0.04, 0.035, 0.03), subdivisions=3),
+            hugger.objects.box((0.05, 0.045, 0.04), divisions=3)]
+    out = []
+    for obj in objs:
+        for d in ([0.0, 0.0, 1.0], [0.6, 0.0, 0.8]):
+            out.append({"hand": hand, "obj": obj, "target": [0.0, 0.0, 0.0],
+                        "palm_pose": hugger.look_at(0.17 * np.asarray(d), [0, 0, 0])})
+    return out
+
+
+def same(a: hugger.Trajectory, b: hugger.Trajectory) -> bool:
+    return (a.status == b.status and np.array_equal(a.joints, b.joints) and np.array_equal(a.palm_pose, b.palm_pose)
+            and np.array_equal(a.tip_state, b.tip_state) and np.array_equal(a.angles, b.angles))
+
+
+@pytest.fixture(scope="module")
+def sequential(cases):
+    return [hugger.plan(c["hand"], c["obj"], c["target"], c["palm_pose"]) for c in cases]
+
+
+@pytest.mark.parametrize("threads", [1, 2, 3])
+def test_results_in_input_order_and_identical_to_sequential(cases, sequential, threads):
+    out = hugger.plan_many(cases, threads=threads)
+    assert len(out) == len(cases)
+    assert all(isinstance(t, hugger.Trajectory) for t in out)
+    for t, ref in zip(out, sequential):
+        assert same(t, ref)
+    assert len({len(t) for t in out}) > 1  # the cases really differ, so order matters
+
+
+def test_plans_pass_the_checker(cases, checker, tmp_path):
+    for i, t in enumerate(hugger.plan_many(cases[:2], threads=2)):
+        path = tmp_path / f"plan{i}.npz"
+        t.save(path)
+        ok, failures, _ = helpers.check_file(checker, path, every=max(1, len(t) // 30))
+        assert ok, failures
+
+
+def test_case_forms_and_shared_hand(cases, sequential, hand):
+    c0, c1, c2 = cases[0], cases[1], cases[2]
+
+    @dataclass(frozen=True)
+    class Case:  # like hugger.scenarios.Case: no hand of its own
+        obj: hugger.Object
+        target: np.ndarray
+        palm_pose: np.ndarray
+
+    forms = [
+        (hand, c0["obj"], c0["target"], c0["palm_pose"]),
+        {"object": c1["obj"], "target": c1["target"], "palm_pose": c1["palm_pose"]},
+        Case(c2["obj"], np.zeros(3), c2["palm_pose"]),
+    ]
+    out = hugger.plan_many(forms, hand=hand, threads=2)
+    for t, ref in zip(out, sequential[:3]):
+        assert same(t, ref)
+
+
+def test_parameters_global_and_per_case(cases, hand):
+    c = cases[0]
+    a, b = hugger.plan_many([(hand, c["obj"], c["target"], c["palm_pose"], {"step": 5e-4}),
+                             dict(c)], threads=2, step=8e-4)
+    assert a.params["step"] == 5e-4 and b.params["step"] == 8e-4
+    ref = hugger.plan(hand, c["obj"], c["target"], c["palm_pose"], step=5e-4)
+    assert same(a, ref)
+
+
+def test_progress_reports_every_case_in_the_calling_thread(cases):
+    seen = []
+    caller = threading.get_ident()
+
+    def progress(done, total):
+        seen.append((done, total, threading.get_ident()))
+
+    hugger.plan_many(cases, threads=2, progress=progress)
+    assert [(d, t) for d, t, _ in seen] == [(k, len(cases)) for k in range(1, len(cases) + 1)]
+    assert all(ident == caller for _, _, ident in seen)
+
+
+def test_a_failing_case_is_reported_with_its_index(cases, sequential, hand):
+    bad = dict(cases[1], target=[1.0, 1.0, 1.0])  # T outside the object
+    batch = [cases[0], bad, cases[2]]
+    with pytest.raises(hugger.PlanManyError, match=r"1 of 3 cases failed:\n  case 1: ValueError: .*not inside") as info:
+        hugger.plan_many(batch, threads=2)
+    err = info.value
+    assert set(err.errors) == {1} and isinstance(err.errors[1], ValueError)
+    assert isinstance(err.__cause__, ValueError)
+    assert err.results[1] is None and same(err.results[0], sequential[0]) and same(err.results[2], sequential[2])
+    out = hugger.plan_many(batch, threads=2, errors="return")
+    assert isinstance(out[1], hugger.CaseError) and out[1].index == 1 and isinstance(out[1].exception, ValueError)
+    assert "case 1: ValueError" in str(out[1])
+    assert same(out[0], sequential[0]) and same(out[2], sequential[2])
+    # sequential mode reports the same way
+    with pytest.raises(hugger.PlanManyError, match="case 1"):
+        hugger.plan_many(batch, threads=1)
+
+
+def test_timeout_applies_to_each_case(cases):
+    slow = dict(cases[0], step=5e-5, contact_tolerance=1e-5, max_iterations=100000)
+    out = hugger.plan_many([slow, cases[1]], threads=2, timeout=1e-3)
+    assert out[0].status == "timeout"
+    out = hugger.plan_many([dict(slow, timeout=1e-3), cases[1]], threads=2)
+    assert out[0].status == "timeout" and out[1].status == "done"
+
+
+def test_progress_exception_propagates(cases):
+    def progress(done, total):
+        raise KeyError("stop")
+
+    with pytest.raises(KeyError, match="stop"):
+        hugger.plan_many(cases, threads=2, progress=progress)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"threads": 0}, "threads"),
+    ({"threads": 1.5}, "threads"),
+    ({"threads": True}, "threads"),
+    ({"errors": "ignore"}, "errors"),
+    ({"progress": 3}, "progress"),
+    ({"timeout": -1.0}, "timeout"),
+    ({"timeout": float("nan")}, "timeout"),
+    ({"stepp": 1e-3}, "unknown planner parameters"),
+    ({"hand": "hand"}, "hand"),
+])
+def test_bad_arguments(cases, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        hugger.plan_many(cases[:1], **kwargs)
+
+
+@pytest.mark.parametrize("case, match", [
+    ({"obj": None, "target": [0, 0, 0], "palm_pose": np.eye(4)}, "case 0: obj, target and palm_pose"),
+    ({"hand": None, "target": [0, 0, 0]}, "case 0: no hand"),
+    ({"wat": 1}, "case 0: unknown keys"),
+    ((1, 2, 3), "case 0: a tuple case"),
+    (42, "case 0: expected a mapping"),
+])
+def test_malformed_cases_are_refused_before_planning(hand, case, match):
+    with pytest.raises(ValueError, match=match):
+        hugger.plan_many([case], threads=2, hand=hand)
+
+
+def test_empty_and_not_iterable():
+    assert hugger.plan_many([], threads=2) == []
+    with pytest.raises(ValueError, match="iterable"):
+        hugger.plan_many(5)
