@@ -162,9 +162,10 @@ class Object:
     @property
     def centroid(self) -> np.ndarray:
         """Centre of the enclosed volume (uniform density)."""
-        tri = self._vertices[self._faces]
+        ref = self._vertices.min(axis=0) / 2 + self._vertices.max(axis=0) / 2  # about the box centre: no cancellation
+        tri = self._vertices[self._faces] - ref
         vol = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6.0
-        return (vol[:, None] * tri.sum(axis=1) / 4.0).sum(axis=0) / vol.sum()
+        return ref + (vol[:, None] * tri.sum(axis=1) / 4.0).sum(axis=0) / vol.sum()
 
     def inside(self, points: Any) -> np.ndarray:
         """Bool (n,): strictly inside O, for points (n, 3) or one point (3,)."""

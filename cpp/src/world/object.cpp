@@ -60,10 +60,13 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
     }
   edge_normals_.resize(nf);
   face_normals_.resize(nf);
+  // Volume as a sum of tetrahedra on a reference point inside the bounding box: taken about the
+  // origin, the terms of an object far from it are huge and cancel to rounding noise.
+  const Vec3 ref = 0.5 * (vertices_.colwise().minCoeff() + vertices_.colwise().maxCoeff()).transpose();
   for (std::int64_t f = 0; f < nf; ++f) {
     const Vec3 a = vertices_.row(faces_(f, 0)), b = vertices_.row(faces_(f, 1)), c = vertices_.row(faces_(f, 2));
     const Vec3 n = (b - a).cross(c - a);
-    volume_ += a.dot(b.cross(c)) / 6.0;
+    volume_ += (a - ref).dot((b - ref).cross(c - ref)) / 6.0;
     const double len = n.norm();
     face_normals_[f] = len > 0.0 ? Vec3(n / len) : Vec3::Zero();
   }
