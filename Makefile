@@ -6,12 +6,13 @@ BIN    := $(CURDIR)/$(VENV)/bin
 APT_PACKAGES := libeigen3-dev libfcl-dev libgtest-dev
 export PATH := $(BIN):$(PATH)
 
-.PHONY: help deps venv install demo test test-cpp test-py test-sanitize fuzz clean
+.PHONY: help deps venv install demo test test-cpp test-py test-sanitize fuzz bench clean
 
 help:
 	@echo "make demo           set up and run 'hugger demo': the paper's example, figures and animation in demo-out/"
 	@echo "make test           set up and run the C++ (ctest) and Python (pytest) suites"
 	@echo "make test-sanitize  C++ tests under AddressSanitizer + UndefinedBehaviorSanitizer"
+	@echo "make bench          Release build of hugger_bench and the Python benchmarks"
 	@echo "make fuzz           the long hypothesis fuzzing run (HUGGER_FUZZ_PROFILE=long)"
 	@echo "make install        system packages, .venv, and the package with its test extras"
 
@@ -61,6 +62,12 @@ test-sanitize: install
 	  -DHUGGER_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 	$(BIN)/cmake --build build/sanitize -j 2
 	cd build/sanitize && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 $(BIN)/ctest --output-on-failure -j 2
+
+bench: install
+	$(BIN)/cmake -S . -B build/bench -G Ninja -DHUGGER_BUILD_BENCH=ON -DHUGGER_BUILD_PYTHON=OFF -DCMAKE_BUILD_TYPE=Release >/dev/null
+	$(BIN)/cmake --build build/bench -j 2
+	build/bench/hugger_bench --repeat 3
+	$(BIN)/python bench/bench_python.py --repeat 3
 
 fuzz: install
 	HUGGER_FUZZ_PROFILE=long $(BIN)/python -m pytest -q tests/test_fuzz.py

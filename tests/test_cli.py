@@ -230,3 +230,14 @@ def test_export_mjcf_and_validate(sphere_plan, tmp_path, capsys):
     assert "settings" in result
     code, out, _ = run(["validate", sphere_plan], capsys)
     assert code == 0 and "verdict: held" in out
+
+
+def test_plan_timeout_gives_a_partial_plan(tmp_path, capsys, checker):
+    out = tmp_path / "t.npz"
+    code, text, err = run(["plan", "curvy", "--out", out, "--json", "--timeout", "1e-6"], capsys)
+    assert code == 0 and json.loads(text)["status"] == "timeout"
+    assert "status 'timeout'" in err
+    ok, failures, _ = check_file(checker, out)
+    assert ok, failures
+    code, _, err = run(["plan", "curvy", "--out", out, "--timeout", "-1"], capsys)
+    assert code == 2 and "timeout" in err

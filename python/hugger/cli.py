@@ -55,6 +55,8 @@ def _planner_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--epsilon", type=float, help="tip-to-surface distance epsilon, m (default step / 10)")
     g.add_argument("--contact-tolerance", type=float, help="sensing distance delta, m (default 1e-4)")
     g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
+    g.add_argument("--timeout", type=float, metavar="SECONDS",
+                   help="stop planning after this long, with status 'timeout' and a valid partial plan")
 
 
 def _case_options(p: argparse.ArgumentParser) -> None:
@@ -123,13 +125,13 @@ def _note(message: str) -> None:
     print(f"hugger: {message}", file=sys.stderr)
 
 
-def _plan(case, hand, params: dict[str, Any], label: str):
+def _plan(case, hand, params: dict[str, Any], label: str, timeout: float | None = None):
     import hugger
 
-    planner = hugger.Planner(hand, case.obj, case.target, case.palm_pose, **params)
     t0 = time.perf_counter()
+    planner = hugger.Planner(hand, case.obj, case.target, case.palm_pose, **params)
     with Progress(f"planning {label}"):
-        traj = planner.plan()
+        traj = planner.plan(timeout=timeout)
     return traj, time.perf_counter() - t0
 
 
@@ -145,7 +147,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
                         turn_deg=args.turn)
     for r in case.repairs:
         _note(f"repaired {case.name}: {r}")
-    traj, elapsed = _plan(case, hand, _params(args), case.name)
+    traj, elapsed = _plan(case, hand, _params(args), case.name, args.timeout)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     traj.save(out)
