@@ -604,6 +604,14 @@ def _fig4_axes(fig, traj: Trajectory, scene: _Scene, grid, cells: Sequence[tuple
     return axes
 
 
+def _still(traj: Any, path: Any, dpi: Any, max_faces: Any):
+    """Checked arguments of a still figure: (pyplot, trajectory, dpi, scene)."""
+    plt = _pyplot()
+    traj = _check_traj(traj)
+    _check_still(path)
+    return plt, traj, _check_dpi(dpi), _Scene(traj, _check_faces(max_faces))
+
+
 def fig4(traj: Trajectory, path: str | os.PathLike | None = None, *, dpi: float = 120,
          max_faces: int = 20000):
     """The paper's Fig. 4: the plan in six panels, (a) C_init, (b) after Phase 1 (reorientation),
@@ -615,11 +623,7 @@ def fig4(traj: Trajectory, path: str | os.PathLike | None = None, *, dpi: float 
     than six. Each panel's title gives its letter, what it shows, the configuration index k and
     the phase. Saves to ``path`` (PNG, PDF or SVG) and closes the figure when ``path`` is given;
     returns the Figure."""
-    plt = _pyplot()
-    traj = _check_traj(traj)
-    _check_still(path)
-    dpi = _check_dpi(dpi)
-    scene = _Scene(traj, _check_faces(max_faces))
+    plt, traj, dpi, scene = _still(traj, path, dpi, max_faces)
     fig = plt.figure(figsize=FIG4_SIZE)
     grid = fig.add_gridspec(2, 3, left=0.0, right=1.0, top=0.9, bottom=0.06, wspace=0.0, hspace=0.12)
     _fig4_axes(fig, traj, scene, grid, [(0, 0), (0, 1), (0, 2), (1, 0), (1, 1), (1, 2)])
@@ -656,11 +660,7 @@ def fig5(traj: Trajectory, path: str | os.PathLike | None = None, *, dpi: float 
     normal) and along the palm normal, seen from beyond the object looking back at the palm, so
     the fingers are seen closing round O. The title counts the links and palm within 1 mm of O.
     Saves to ``path`` (PNG, PDF or SVG) and closes the figure when given; returns the Figure."""
-    plt = _pyplot()
-    traj = _check_traj(traj)
-    _check_still(path)
-    dpi = _check_dpi(dpi)
-    scene = _Scene(traj, _check_faces(max_faces))
+    plt, traj, dpi, scene = _still(traj, path, dpi, max_faces)
     fig = plt.figure(figsize=FIG5_SIZE)
     grid = fig.add_gridspec(1, 2, left=0.0, right=1.0, top=0.86, bottom=0.08, wspace=0.0)
     _fig5_axes(fig, traj, scene, [grid[0, 0], grid[0, 1]])
@@ -683,11 +683,7 @@ def overview(traj: Trajectory, path: str | os.PathLike | None = None, *, dpi: fl
              max_faces: int = 20000):
     """One sheet: Fig. 4's panels (2 x 3, left) and Fig. 5's two views of the final grasp (right
     column). This is what :func:`render` writes for PNG, PDF and SVG."""
-    plt = _pyplot()
-    traj = _check_traj(traj)
-    _check_still(path)
-    dpi = _check_dpi(dpi)
-    scene = _Scene(traj, _check_faces(max_faces))
+    plt, traj, dpi, scene = _still(traj, path, dpi, max_faces)
     fig = plt.figure(figsize=OVERVIEW_SIZE)
     grid = fig.add_gridspec(2, 4, left=0.0, right=1.0, top=0.92, bottom=0.06, wspace=0.0, hspace=0.1)
     _fig4_axes(fig, traj, scene, grid, [(0, 0), (0, 1), (0, 2), (1, 0), (1, 1), (1, 2)])
