@@ -21,11 +21,6 @@ DIST = 1e-3  # contact distance (m) used throughout, as in Trajectory.summary()
 # --- fixtures and helpers ----------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def hand():
-    return hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
-
-
-@pytest.fixture(scope="module")
 def sphere_plan(hand):
     """The reference plan: the 5x5 hand around the 4 cm sphere, approaching from +z."""
     obj = hugger.objects.sphere(radius=0.04)

@@ -15,11 +15,6 @@ def sphere():
     return hugger.objects.sphere(radius=0.04, subdivisions=4)
 
 
-@pytest.fixture(scope="module")
-def hand():
-    return hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
-
-
 def start(height=0.2):
     return hugger.look_at([0.0, 0.0, height], [0, 0, 0])
 

@@ -32,11 +32,6 @@ def _bench_module(name: str):
 
 
 @pytest.fixture(scope="module")
-def hand() -> hugger.Hand:
-    return hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
-
-
-@pytest.fixture(scope="module")
 def sphere_plan(hand) -> hugger.Trajectory:
     """Hugger's grasp of a 4 cm sphere from 20 cm above: palm and many links touch, a cage."""
     obj = hugger.objects.sphere(0.04, subdivisions=3)

@@ -31,16 +31,6 @@ from hugger.world import MAX_COORDINATE
 HERE = Path(__file__).resolve()
 
 
-@pytest.fixture(scope="module")
-def hand():
-    return hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
-
-
-@pytest.fixture(scope="module")
-def sphere():
-    return hugger.objects.sphere(radius=0.04, subdivisions=3)
-
-
 def start(height=0.2):
     return hugger.look_at([0.0, 0.0, height], [0, 0, 0])
 

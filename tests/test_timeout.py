@@ -13,16 +13,6 @@ import hugger
 START = hugger.look_at([0.0, 0.0, 0.2], [0, 0, 0])
 
 
-@pytest.fixture(scope="module")
-def sphere():
-    return hugger.objects.sphere(radius=0.04, subdivisions=3)
-
-
-@pytest.fixture(scope="module")
-def hand():
-    return hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
-
-
 def slow_planner(hand, sphere):
     """A plan of thousands of iterations (a step 1/400 of a link): far longer than a millisecond."""
     return hugger.Planner(hand, sphere, [0, 0, 0], START, step=5e-5, contact_tolerance=1e-5, max_iterations=100000)

@@ -30,16 +30,6 @@ def _turned(pose: np.ndarray, degrees: float) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def hand():
-    return hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
-
-
-@pytest.fixture(scope="module")
-def sphere():
-    return hugger.objects.sphere(radius=0.04, subdivisions=3)
-
-
-@pytest.fixture(scope="module")
 def turned_plan(hand, sphere):
     """5x5 hand around a 4 cm sphere, starting turned 60 degrees away from T: Phase 1 has work."""
     traj = hugger.plan(hand, sphere, [0, 0, 0], _turned(hugger.look_at([0, 0, 0.2], [0, 0, 0]), 60.0))

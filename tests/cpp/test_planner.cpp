@@ -3,23 +3,15 @@
 
 #include "hugger/planner/planner.hpp"
 #include "hugger/world/simulated_world.hpp"
-#include "meshes.hpp"
+#include "scenes.hpp"
 
 using namespace hugger;
 
 namespace {
 
-std::shared_ptr<SimulatedWorld> sphere_world(double R) {
-  const auto mesh = test::icosphere(4, Vec3::Constant(R));
-  return std::make_shared<SimulatedWorld>(std::make_shared<Object>(mesh.vertices, mesh.faces));
-}
+std::shared_ptr<SimulatedWorld> sphere_world(double R) { return test::sphere_world(R, 4); }
 
-Pose facing_down(double height) {
-  Pose p = Pose::Identity();
-  p.linear() = Eigen::AngleAxisd(kPi, Vec3::UnitX()).toRotationMatrix();  // z axis -> -z
-  p.translation() = Vec3(0, 0, height);
-  return p;
-}
+using test::facing_down;
 
 }  // namespace
 

@@ -112,6 +112,16 @@ struct Witness {
   }
 };
 
+// Squared distance between the query (the point a when is_point, else the segment ab) and
+// triangle t, with the closest points and the triangle feature that holds its point.
+double closest_pair(const Vec3& a, const Vec3& b, bool is_point, const std::array<Vec3, 3>& t, Vec3* on_seg,
+                    Vec3* on_tri, TriangleFeature* f) {
+  if (!is_point) return segment_triangle_squared(a, b, t[0], t[1], t[2], on_seg, on_tri, f);
+  *on_seg = a;
+  *on_tri = closest_point_on_triangle(a, t[0], t[1], t[2], f);
+  return (*on_tri - a).squaredNorm();
+}
+
 }  // namespace
 
 NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_distance) const {
@@ -143,14 +153,7 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
         if (beyond(w.triangle_bound(t))) continue;
         Vec3 on_seg, on_tri;
         TriangleFeature f;
-        double d;
-        if (is_point) {
-          on_seg = a;
-          on_tri = closest_point_on_triangle(a, t[0], t[1], t[2], &f);
-          d = (on_tri - a).squaredNorm();
-        } else {
-          d = segment_triangle_squared(a, b, t[0], t[1], t[2], &on_seg, &on_tri, &f);
-        }
+        const double d = closest_pair(a, b, is_point, t, &on_seg, &on_tri, &f);
         if (d < best_sq || (best.triangle < 0 && d <= best_sq)) {
           best_sq = d;
           best.on_query = on_seg;
@@ -212,14 +215,7 @@ bool TriangleBvh::any_within(const Vec3& a, const Vec3& b, double distance) cons
         if (certified_far(w.triangle_bound(t))) continue;
         Vec3 on_seg, on_tri;
         TriangleFeature f;
-        double d;
-        if (is_point) {
-          on_seg = a;
-          on_tri = closest_point_on_triangle(a, t[0], t[1], t[2], &f);
-          d = (on_tri - a).squaredNorm();
-        } else {
-          d = segment_triangle_squared(a, b, t[0], t[1], t[2], &on_seg, &on_tri, &f);
-        }
+        const double d = closest_pair(a, b, is_point, t, &on_seg, &on_tri, &f);
         if (d < bound_sq || d == 0.0) return true;
         w.offer(a, b, on_seg, on_tri, d);
       }
