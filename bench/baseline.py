@@ -33,9 +33,7 @@ from typing import Any
 import numpy as np
 
 import hugger
-from hugger import physics
-
-FROZEN, CONTACT, DONE = 0, 1, 2
+from hugger import CONTACT, DONE, FROZEN, physics
 
 
 def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:

@@ -31,27 +31,9 @@ import numpy as np
 import hugger
 
 
-def curvy() -> hugger.Object:
-    """The paper-like body (the same arrays as hugger_bench's ``curvy`` and hugger.objects.curvy)."""
-    maker = getattr(hugger.objects, "curvy", None)
-    if maker is not None:
-        return maker()
-    v, f = hugger.objects.icosphere(5)
-    x, y, z = v.T
-    rho = (1.0 + 0.20 * np.sin(3.0 * x + 0.7) * np.cos(2.5 * y - 0.3) + 0.12 * np.sin(4.0 * z + 1.2) * np.cos(2.0 * x - 0.5)
-           + 0.10 * np.cos(3.5 * y + 0.9) * np.sin(2.5 * z) - 0.10 * np.exp(-(((x - 0.1) / 0.3) ** 2)))
-    p = v * (rho * 0.04)[:, None]
-    p[:, 0] *= 1.2
-    return hugger.Object(p, f)
-
-
-def start_pose(direction=(0.0, 0.0, 1.0), distance: float = 0.2, turn_deg: float = 60.0) -> np.ndarray:
-    """The palm ``distance`` from T = 0 along ``direction``, facing T, turned about its own y axis."""
-    d = np.asarray(direction, dtype=float)
-    pose = hugger.look_at(distance * d / np.linalg.norm(d), [0.0, 0.0, 0.0])
-    c, s = np.cos(np.radians(turn_deg)), np.sin(np.radians(turn_deg))
-    pose[:3, :3] = pose[:3, :3] @ np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-    return pose
+def start_pose(obj, hand, direction=(0.0, 0.0, 1.0)) -> np.ndarray:
+    """The palm 20 cm from T = 0 along ``direction``, facing T, turned 60 degrees about its y axis."""
+    return hugger.scenarios.start_pose(obj, hand, np.zeros(3), direction, turn_deg=60.0, distance=0.2)
 
 
 def timed(fn, repeat: int) -> tuple[float, object]:
@@ -74,12 +56,12 @@ def main(argv: list[str] | None = None) -> int:
         ap.error("--repeat, --cases and --threads must be at least 1")
 
     hand = hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
-    obj = curvy()
+    obj = hugger.objects.curvy()
     target = np.zeros(3)
-    pose = start_pose()
+    pose = start_pose(obj, hand)
     rng = np.random.default_rng(0)
     dirs = rng.normal(size=(args.cases, 3))
-    cases = [{"hand": hand, "obj": obj, "target": target, "palm_pose": start_pose(d)} for d in dirs]
+    cases = [{"hand": hand, "obj": obj, "target": target, "palm_pose": start_pose(obj, hand, d)} for d in dirs]
 
     t_plan, traj = timed(lambda: hugger.Planner(hand, obj, target, pose).plan(), args.repeat)
 

@@ -89,7 +89,7 @@ def run_one(name: str, spec: str, hand: hugger.Hand, max_extent: float, do_valid
             continue
         r["status"] = traj.status
         r["configurations"] = len(traj)
-        a = analysis.analyze(traj)
+        a = analysis.analyze(traj, obj=case.obj)
         for key in ("links_in_contact", "links", "palm_contact", "epsilon", "volume", "force_closure"):
             r[key] = a[key]
         if do_validate:

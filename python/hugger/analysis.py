@@ -23,6 +23,8 @@ from typing import Any
 
 import numpy as np
 
+from .trajectory import CONTACT_DISTANCE
+
 __all__ = [
     "Contacts",
     "Quality",
@@ -272,7 +274,7 @@ def _palm_contacts(obj: Any, palm_pose: np.ndarray, radius: float, thickness: fl
     return world[touching[extreme]]
 
 
-def contacts_of(hand: dict, obj: Any, palm_pose: Any, joints: Any, distance: float = 1e-3) -> Contacts:
+def contacts_of(hand: dict, obj: Any, palm_pose: Any, joints: Any, distance: float = CONTACT_DISTANCE) -> Contacts:
     """All contacts of a hand configuration with ``obj`` (a :class:`hugger.Object`).
 
     ``hand`` is the hand as a dict (``Hand.to_dict()`` or ``Trajectory.hand``) or a
@@ -344,7 +346,7 @@ def contacts_of(hand: dict, obj: Any, palm_pose: Any, joints: Any, distance: flo
                     num_fingers=m, num_links=n)
 
 
-def contacts(traj: Any, k: int = -1, distance: float = 1e-3, obj: Any = None) -> Contacts:
+def contacts(traj: Any, k: int = -1, distance: float = CONTACT_DISTANCE, obj: Any = None) -> Contacts:
     """All contacts (palm and every link) of configuration ``k`` of a :class:`hugger.Trajectory`.
 
     ``distance`` (m) is the contact distance: a link or the palm is in contact when its surface
@@ -366,7 +368,7 @@ def _finger_angles(hand: dict) -> np.ndarray:
     return np.asarray(phi, dtype=np.float64) if phi is not None else 2 * np.pi * np.arange(m) / m
 
 
-def wrap_angle(traj: Any, k: int = -1, distance: float = 1e-3, obj: Any = None,
+def wrap_angle(traj: Any, k: int = -1, distance: float = CONTACT_DISTANCE, obj: Any = None,
                found: Contacts | None = None) -> np.ndarray:
     """(M,) degrees: how far each finger's contacts wrap around the target T in its finger plane.
 
@@ -551,7 +553,8 @@ def grasp_quality(contacts: Contacts, center: Any, mu: float = 0.5, cone_edges: 
 # Everything at once
 # --------------------------------------------------------------------------------------------
 
-def analyze(traj: Any, k: int = -1, mu: float = 0.5, distance: float = 1e-3, cone_edges: int = 8) -> dict:
+def analyze(traj: Any, k: int = -1, mu: float = 0.5, distance: float = CONTACT_DISTANCE, cone_edges: int = 8,
+            obj: Any = None) -> dict:
     """The grasp of configuration ``k`` of ``traj`` judged over all its contacts, as plain JSON types.
 
     Keys: ``contacts`` (number of contact points), ``links_in_contact``, ``links`` (M * N),
@@ -562,7 +565,7 @@ def analyze(traj: Any, k: int = -1, mu: float = 0.5, distance: float = 1e-3, con
     """
     k = _trajectory_index(traj, k)
     _scipy_hull()  # fail early, before the geometry, when scipy is missing
-    obj = traj.object()
+    obj = obj if obj is not None else traj.object()
     found = contacts(traj, k, distance, obj)
     target = np.asarray(traj.target, dtype=np.float64)
     q = grasp_quality(found, target, mu=mu, cone_edges=cone_edges, obj=obj)

@@ -66,7 +66,8 @@ def _case_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--normal", type=float, nargs=3, metavar=("NX", "NY", "NZ"),
                    help="initial palm normal (default: towards T)")
     g.add_argument("--turn", type=float, default=0.0, metavar="DEG",
-                   help="turn the default start away from T by DEG about the palm's y axis (default 0)")
+                   help="turn the default start away from T by DEG about the palm's y axis (default 0; "
+                        "not with --start or --normal)")
     g.add_argument("--scale", type=float, default=1.0, help="multiply mesh coordinates (0.001 for millimetres)")
 
 
@@ -89,25 +90,22 @@ def _load(path: str):
     return hugger.Trajectory.load(path)
 
 
-def _analysis(traj) -> dict[str, Any]:
-    """The grasp judgement of a trajectory's final configuration (needs the analysis extra)."""
+_ANALYSIS_KEYS = ("palm_contact", "links_in_contact", "links", "contacts", "force_closure", "epsilon", "volume",
+                  "per_finger_contacts", "wrap_angle_deg", "mu")
+
+
+def _report(traj, plan_time: float | None = None, obj=None) -> dict[str, Any]:
+    """Status, sizes, timing and the grasp judgement of the final configuration (``obj``: the
+    trajectory's object when already built)."""
     from . import analysis
 
-    return analysis.analyze(traj)
-
-
-def _report(traj, plan_time: float | None = None) -> dict[str, Any]:
-    s = traj.summary()
-    out: dict[str, Any] = {"status": s["status"], "configurations": s["configurations"],
-                           "phase1_configurations": s["phase1_configurations"]}
+    out: dict[str, Any] = {"status": traj.status, "configurations": len(traj),
+                           "phase1_configurations": int((traj.phase == 1).sum())}
     if plan_time is not None:
         out["plan_time_s"] = round(plan_time, 6)
         out["configurations_per_s"] = round(len(traj) / plan_time, 1) if plan_time > 0 else None
-    a = _analysis(traj)
-    out.update({"palm_contact": a["palm_contact"], "links_in_contact": a["links_in_contact"], "links": a["links"],
-                "contacts": a["contacts"], "force_closure": a["force_closure"], "epsilon": a["epsilon"],
-                "volume": a["volume"], "per_finger_contacts": a["per_finger_contacts"],
-                "wrap_angle_deg": a["wrap_angle_deg"], "mu": a["mu"]})
+    a = analysis.analyze(traj, obj=obj)
+    out.update({key: a[key] for key in _ANALYSIS_KEYS})
     return out
 
 
@@ -151,7 +149,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     traj.save(out)
-    report = {"object": case.name, "out": str(out), **_report(traj, elapsed)}
+    report = {"object": case.name, "out": str(out), **_report(traj, elapsed, case.obj)}
     if args.json:
         print(json.dumps(report))
     else:
@@ -176,7 +174,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     case = default_case("curvy", hand, turn_deg=60.0)
     traj, elapsed = _plan(case, hand, {}, "curvy")
     traj.save(out / "plan.npz")
-    summary = {"object": "curvy", "hand": repr(hand), **_report(traj, elapsed)}
+    summary = {"object": "curvy", "hand": repr(hand), **_report(traj, elapsed, case.obj)}
     written = ["plan.npz"]
     with Progress("drawing figures", total=3) as p:
         viz.fig4(traj, out / "fig4.png")
@@ -200,7 +198,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
     written.append("summary.json")
     _print_table(summary)
     print(f"written to {out}/: {', '.join(written)}")
-    return EXIT_OK if traj.status == "done" else EXIT_INTERNAL
+    if traj.status != "done":
+        _note(f"the plan ended with status {traj.status!r}, not 'done'")
+    return EXIT_OK
 
 
 def cmd_render(args: argparse.Namespace) -> int:
@@ -225,7 +225,7 @@ def cmd_info(args: argparse.Namespace) -> int:
                                       f"palm radius {h['palm_radius']} m",
             "object": f"{len(obj.faces)} triangles, {' x '.join(f'{1000 * e:.0f}' for e in hi - lo)} mm",
             "target": [float(x) for x in traj.target],
-            "step_m": prm.get("step"), "tip_epsilon_m": prm.get("epsilon"), **_report(traj)}
+            "step_m": prm.get("step"), "tip_epsilon_m": prm.get("epsilon"), **_report(traj, obj=obj)}
     if args.json:
         print(json.dumps(info))
     else:
@@ -337,11 +337,7 @@ def _main(argv: Sequence[str] | None) -> int:
     try:
         args = build_parser().parse_args(argv)
         return int(args.func(args))
-    except UsageError as exc:
-        print(f"hugger: error: {exc}", file=sys.stderr)
-    except (ValueError, FileNotFoundError, IsADirectoryError, PermissionError) as exc:
-        print(f"hugger: error: {exc}", file=sys.stderr)
-    except ImportError as exc:
+    except (UsageError, ValueError, FileNotFoundError, IsADirectoryError, PermissionError, ImportError) as exc:
         print(f"hugger: error: {exc}", file=sys.stderr)
     except KeyboardInterrupt:
         print("hugger: interrupted", file=sys.stderr)

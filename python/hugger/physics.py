@@ -69,6 +69,8 @@ from typing import Any
 
 import numpy as np
 
+from .trajectory import CONTACT_DISTANCE
+
 #: Hinge servo stiffness (N·m/rad).
 KP = 5.0
 #: Servo damping ratio (1 = critically damped, MuJoCo's ``dampratio``).
@@ -99,7 +101,7 @@ COACD_SETTINGS = {"threshold": 0.1, "max_convex_hull": 16, "preprocess_mode": "o
 #: Default squeeze (rad) added in flexion to every joint of a touching finger before the test.
 SQUEEZE = 0.05
 #: A finger "touches" when one of its links is within this gap (m) of the object.
-TOUCH_DISTANCE = 1e-3
+TOUCH_DISTANCE = CONTACT_DISTANCE
 #: Squeeze ramp and settle times (s).
 SQUEEZE_RAMP = 0.1
 SETTLE = 0.4

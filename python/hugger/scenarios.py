@@ -103,6 +103,8 @@ def default_case(spec: str | os.PathLike, hand: Hand | None = None, scale: float
         t = interior_target(obj)
     if not bool(obj.inside(t[None])[0]):
         raise ValueError(f"target T {t.tolist()} is not inside {name}")
+    if turn_deg and (start is not None or normal is not None):
+        raise ValueError("turn_deg (--turn) applies to the default start only, not with start or normal")
     if start is None and normal is None:
         approach = builtin.approach if builtin is not None else (0.0, 0.0, 1.0)
         pose = start_pose(obj, hand, t, approach, turn_deg)

@@ -12,10 +12,14 @@ from typing import Any
 
 import numpy as np
 
+from .hand import MAX_FINGERS, MAX_LINKS
+
 FORMAT_VERSION = 1
+#: Gap (m) at or below which a link or the palm counts as touching O, in summaries, analysis,
+#: figures and the physics squeeze.
+CONTACT_DISTANCE = 1e-3
 
 #: Largest hand a trajectory file may describe (the limits of :class:`hugger.Hand`).
-_MAX_FINGERS, _MAX_LINKS = 64, 256
 #: What reading a damaged zip/npy can raise; ``load`` turns each into a ``ValueError``. (numpy
 #: parses a .npy header with ``tokenize`` and ``ast``: a damaged one raises TokenError or SyntaxError.)
 _READ_ERRORS = (OSError, ValueError, TypeError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, KeyError,
@@ -159,7 +163,7 @@ class Trajectory:
             m = int(m)
         if isinstance(n, float) and n.is_integer():
             n = int(n)
-        for name, count, limit in (("fingers", m, _MAX_FINGERS), ("links", n, _MAX_LINKS)):
+        for name, count, limit in (("fingers", m, MAX_FINGERS), ("links", n, MAX_LINKS)):
             if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= limit:
                 raise ValueError(f"{source}: hand_json {name} must be a whole number in 1..{limit}, got {count!r}")
         _check_hand_sizes(hand, m, n, source)
@@ -217,9 +221,9 @@ class Trajectory:
         return float(obj._core.palm_gap(np.asarray(self.palm_pose[k], dtype=np.float64), float(h["palm_radius"]),
                                         float(h["palm_thickness"])))
 
-    def summary(self, contact_distance: float = 1e-3) -> dict:
+    def summary(self, contact_distance: float = CONTACT_DISTANCE, obj=None) -> dict:
         """Figures of the final grasp: status, sizes, palm contact, links within ``contact_distance``."""
-        obj = self.object()
+        obj = obj if obj is not None else self.object()
         gaps = self.link_gaps(-1, obj)
         palm = self.palm_gap(-1, obj)
         stats = self.stats

@@ -16,10 +16,7 @@ drawn as thin tubes (4% of the mean link length) with dark beads at the joints: 
 that is still depth-sorted with the object and the palm. Fingers are coloured by their TipState
 at that configuration: FROZEN blue, CONTACT orange, DONE green.
 
-Contacts come from :func:`hugger.analysis.contacts` when that module is available; otherwise each
-link whose gap to O (``Trajectory.link_gaps``) is at most 1 mm gets one mark, at the surface point
-nearest its axis (sampled at 9 points), and the palm, when its gap is at most 1 mm, one at the
-surface point nearest its front face.
+Contacts are those of :func:`hugger.analysis.contacts` (gap at most ``CONTACT_DISTANCE``, 1 mm).
 
 The camera is fixed to the *final* palm pose, not to the world: every 3D view is drawn in a
 "display frame" centred on T, in which the final palm normal p-hat points down the screen (the
@@ -30,7 +27,6 @@ Configuration indices ``k`` count from 0 (C_init) to K-1, as in the trajectory f
 """
 from __future__ import annotations
 
-import inspect
 import math
 import os
 import shutil
@@ -40,13 +36,11 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .trajectory import Trajectory
+from .trajectory import CONTACT_DISTANCE, Trajectory
 
 __all__ = ["CONTACT_DISTANCE", "RENDER_SUFFIXES", "STATE_COLORS", "animate", "draw_configuration", "ffmpeg_path",
            "fig4", "fig5", "overview", "render", "require", "tipstate_plot"]
 
-#: Gap (m) at or below which a link or the palm counts as touching O (for marks and counts).
-CONTACT_DISTANCE = 1e-3
 #: Colours of the TipStates FROZEN, CONTACT, DONE.
 STATE_COLORS = ("#3b6fb6", "#e8842c", "#2e9e4f")
 _STATE_NAMES = ("FROZEN", "CONTACT", "DONE")
@@ -406,36 +400,10 @@ class _Box:
 
 
 def _contact_points(traj: Trajectory, k: int, obj) -> np.ndarray:
-    """Contact points (C, 3) at configuration k: hugger.analysis when present, else link gaps."""
-    try:
-        from . import analysis
-    except ImportError:
-        analysis = None
-    if analysis is not None and hasattr(analysis, "contacts"):
-        try:
-            takes_obj = "obj" in inspect.signature(analysis.contacts).parameters
-        except (TypeError, ValueError):
-            takes_obj = False
-        c = analysis.contacts(traj, k, obj=obj) if takes_obj else analysis.contacts(traj, k)
-        return np.asarray(c.points, dtype=float).reshape(-1, 3)
-    gaps = traj.link_gaps(k, obj)
-    joints = traj.joints[k]
-    pts = []
-    t = np.linspace(0.0, 1.0, 9)
-    for m, n in zip(*np.nonzero(gaps <= CONTACT_DISTANCE)):
-        pts.append(_nearest_surface_point(obj, joints[m, n] + t[:, None] * (joints[m, n + 1] - joints[m, n])))
-    if traj.palm_gap(k, obj) <= CONTACT_DISTANCE:
-        pose, radius = traj.palm_pose[k], float(traj.hand["palm_radius"])
-        rr, aa = np.meshgrid(np.linspace(0.0, radius, 5), np.linspace(0.0, 2 * np.pi, 12, endpoint=False))
-        disc = np.column_stack([(rr * np.cos(aa)).ravel(), (rr * np.sin(aa)).ravel()])
-        pts.append(_nearest_surface_point(obj, pose[:3, 3] + disc @ pose[:3, :2].T))
-    return np.vstack(pts) if pts else np.zeros((0, 3))
+    """Contact points (C, 3) at configuration k, from :func:`hugger.analysis.contacts`."""
+    from . import analysis
 
-
-def _nearest_surface_point(obj, samples: np.ndarray) -> np.ndarray:
-    """The point of O's surface nearest to any of ``samples`` (P, 3)."""
-    c = obj.closest(samples)
-    return np.asarray(c["point"])[int(np.argmin(c["distance"]))]
+    return np.asarray(analysis.contacts(traj, k, obj=obj).points, dtype=float).reshape(-1, 3)
 
 
 def _hand_polys(scene: _Scene, k: int, light: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -672,10 +640,9 @@ def fig5(traj: Trajectory, path: str | os.PathLike | None = None, *, dpi: float 
 
 
 def _contact_caption(traj: Trajectory, scene: _Scene) -> str:
-    gaps = traj.link_gaps(-1, scene.object)
-    palm = traj.palm_gap(-1, scene.object)
-    return (f"final configuration k = {len(traj) - 1}: {int(np.sum(gaps <= CONTACT_DISTANCE))} of {gaps.size} "
-            f"links and {'the' if palm <= CONTACT_DISTANCE else 'not the'} palm within "
+    s = traj.summary(CONTACT_DISTANCE, obj=scene.object)
+    return (f"final configuration k = {len(traj) - 1}: {s['links_in_contact']} of {s['links']} "
+            f"links and {'the' if s['palm_contact'] else 'not the'} palm within "
             f"{CONTACT_DISTANCE * 1000:g} mm of O, status {traj.status}")
 
 
