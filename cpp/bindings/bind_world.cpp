@@ -65,14 +65,11 @@ void bind_world(py::module_& m) {
             auto wp = on.mutable_unchecked<2>();
             auto wn = normal.mutable_unchecked<2>();
             auto wt = tri.mutable_unchecked<1>();
-            const auto& F = o.faces();
-            const auto& V = o.vertices();
             for (py::ssize_t i = 0; i < n; ++i) {
               const Vec3 p(r(i, 0), r(i, 1), r(i, 2));
               const SignedNearest sn = o.nearest(p, p);
               const int t = sn.triangle;
-              const Vec3 a = V.row(F(t, 0)), b = V.row(F(t, 1)), c = V.row(F(t, 2));
-              const Vec3 fn = (b - a).cross(c - a).normalized();
+              const Vec3& fn = o.face_normal(t);
               wd(i) = sn.signed_distance;
               wt(i) = t;
               for (int k = 0; k < 3; ++k) wp(i, k) = sn.on_object[k], wn(i, k) = fn[k];

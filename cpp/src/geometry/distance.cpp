@@ -146,21 +146,4 @@ double segment_triangle_squared(const Vec3& p, const Vec3& q, const Vec3& a, con
   return best;
 }
 
-bool segment_triangle_closer(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c,
-                             double bound_sq) {
-  if (segment_intersects_triangle(p, q, a, b, c)) return true;
-  auto closer = [bound_sq](double d) { return d < bound_sq || d == 0.0; };
-  // The same candidates as segment_triangle_squared: both ends against the triangle, the
-  // segment against each edge (re-projected onto the triangle, as there).
-  for (const Vec3* s : {&p, &q})
-    if (closer((closest_point_on_triangle(*s, a, b, c) - *s).squaredNorm())) return true;
-  const Vec3* v[3] = {&a, &b, &c};
-  for (int i = 0; i < 3; ++i) {
-    Vec3 cs, ct;
-    const double d = segment_segment_squared(p, q, *v[i], *v[(i + 1) % 3], &cs, &ct);
-    if (closer(d) || closer((closest_point_on_triangle(cs, a, b, c) - cs).squaredNorm())) return true;
-  }
-  return false;
-}
-
 }  // namespace hugger

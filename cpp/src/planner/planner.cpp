@@ -385,21 +385,17 @@ bool Planner::advance() {
 
 Status Planner::plan(double timeout) {
   if (!(timeout > 0.0)) invalid("timeout must be a positive number of seconds (or infinite), got " + fmt(timeout));
-  if (std::isinf(timeout)) {
-    while (status_ == Status::kRunning) phase2_iteration();
-  } else {
-    using Clock = std::chrono::steady_clock;
-    const auto start = Clock::now();
-    // Past ~292 years the duration overflows; such a timeout is no timeout.
-    const bool bounded = timeout < 9.0e9;
-    const auto deadline = start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(bounded ? timeout : 0.0));
-    while (status_ == Status::kRunning) {
-      if (bounded && Clock::now() >= deadline) {
-        status_ = Status::kTimeout;
-        break;
-      }
-      phase2_iteration();
+  using Clock = std::chrono::steady_clock;
+  // Past ~292 years (or infinite) the duration would overflow; such a timeout is no timeout.
+  const bool bounded = timeout < 9.0e9;
+  const auto deadline =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(bounded ? timeout : 0.0));
+  while (status_ == Status::kRunning) {
+    if (bounded && Clock::now() >= deadline) {
+      status_ = Status::kTimeout;
+      break;
     }
+    phase2_iteration();
   }
   next_ = history_.size();
   return status_;

@@ -16,7 +16,7 @@ Vec2 rotate(const Vec2& v, double angle) {
 bool Sensing::link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front) const {
   constexpr double kSlack = 1e-12;
   if (a.y() < front - kSlack || b.y() < front - kSlack) return false;
-  return link(plane, a, b, radius, 0.0).gap >= 0.0;
+  return capsule_clear(plane.to_world(a), plane.to_world(b), radius);
 }
 
 FollowResult Sensing::follow_boundary(const FollowRequest& req) const {

@@ -24,20 +24,10 @@ Touch SimulatedWorld::capsule(const Vec3& a, const Vec3& b, double radius, doubl
     if (len > 1e-12 && !sn.crosses) {
       t.normal = (sn.signed_distance < 0.0 ? -d : d) / len;
     } else {
-      const auto& f = object_->faces();
-      const auto& v = object_->vertices();
-      const Vec3 p0 = v.row(f(sn.triangle, 0)), p1 = v.row(f(sn.triangle, 1)), p2 = v.row(f(sn.triangle, 2));
-      t.normal = (p1 - p0).cross(p2 - p0).normalized();
+      t.normal = object_->face_normal(sn.triangle);
     }
   }
   return t;
-}
-
-bool SimulatedWorld::link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
-                               double front) const {
-  constexpr double kSlack = 1e-12;
-  if (a.y() < front - kSlack || b.y() < front - kSlack) return false;
-  return object_->capsule_clear(plane.to_world(a), plane.to_world(b), radius);
 }
 
 double SimulatedWorld::palm(const Pose& palm, double radius, double thickness, double cap) const {

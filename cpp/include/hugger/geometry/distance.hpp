@@ -39,9 +39,4 @@ bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, co
 double segment_triangle_squared(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c,
                                 Vec3* on_seg, Vec3* on_tri, TriangleFeature* feature);
 
-/// True when segment [p, q] crosses or touches triangle (a, b, c), or comes closer than
-/// sqrt(bound_sq) to it: segment_triangle_squared(...) < bound_sq (or == 0), with early exits.
-bool segment_triangle_closer(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c,
-                             double bound_sq);
-
 }  // namespace hugger

@@ -72,8 +72,13 @@ class Sensing {
   Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap = kInf) const {
     return capsule(plane.to_world(a), plane.to_world(b), radius, cap);
   }
+  /// True when the capsule does not penetrate O (gap >= 0). Override with a test that can stop
+  /// early; the default asks `capsule`.
+  virtual bool capsule_clear(const Vec3& a, const Vec3& b, double radius) const {
+    return capsule(a, b, radius, 0.0).gap >= 0.0;
+  }
   /// True when the link is collision-free (gap >= 0) and in front of the palm's front plane.
-  virtual bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front) const;
+  bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front) const;
 
   /// Slide the fingertip along O's boundary in its plane, counter-clockwise (interior on the
   /// left), to the first point whose chord from the tip is `step`.

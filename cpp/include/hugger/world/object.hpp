@@ -29,6 +29,8 @@ class Object {
   Object(const PointsN3& vertices, const FacesN3& faces);
 
   const PointsN3& vertices() const { return vertices_; }
+  /// Unit outward normal of face f (zero for a degenerate face).
+  const Vec3& face_normal(std::int64_t f) const { return face_normals_[static_cast<std::size_t>(f)]; }
   const FacesN3& faces() const { return faces_; }
   const Aabb& bounds() const { return bvh_.bounds(); }
   double volume() const { return volume_; }

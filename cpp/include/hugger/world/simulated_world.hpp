@@ -15,8 +15,10 @@ class SimulatedWorld final : public Sensing {
 
   Touch capsule(const Vec3& a, const Vec3& b, double radius, double cap = kInf) const override;
   double palm(const Pose& palm, double radius, double thickness, double cap = kInf) const override;
-  /// As Sensing::link_free, answered by a clearance test that stops at the first nearby triangle.
-  bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front) const override;
+  /// Answered by a clearance test that stops at the first triangle within the radius.
+  bool capsule_clear(const Vec3& a, const Vec3& b, double radius) const override {
+    return object_->capsule_clear(a, b, radius);
+  }
 
   const Object& object() const { return *object_; }
 
