@@ -44,20 +44,40 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
     if (faces_(f, 0) == faces_(f, 1) || faces_(f, 1) == faces_(f, 2) || faces_(f, 2) == faces_(f, 0))
       fail("object face " + std::to_string(f) + " repeats a vertex (degenerate triangle)");
   }
-  // Closed and consistently oriented: every directed edge once, and its reverse once.
-  std::unordered_map<std::uint64_t, std::int64_t> directed;
-  directed.reserve(static_cast<std::size_t>(3 * nf));
+  // Closed and consistently oriented: every directed edge once, and its reverse once. The
+  // directed edges leaving each vertex, sorted by their other end (compressed rows: linear in
+  // the mesh, no hash table).
+  std::vector<std::int64_t> row(static_cast<std::size_t>(nv) + 1, 0);
   for (std::int64_t f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) {
-      const std::int64_t a = faces_(f, k), b = faces_(f, (k + 1) % 3);
-      auto [it, fresh] = directed.emplace(edge_key(a, b), f);
-      if (!fresh) {
+    for (int k = 0; k < 3; ++k) ++row[static_cast<std::size_t>(faces_(f, k)) + 1];
+  for (std::int64_t i = 0; i < nv; ++i) row[i + 1] += row[i];
+  struct Out {
+    std::int64_t to, face;
+  };
+  std::vector<Out> out(static_cast<std::size_t>(3 * nf));
+  {
+    std::vector<std::int64_t> fill(row.begin(), row.end() - 1);
+    for (std::int64_t f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) out[fill[faces_(f, k)]++] = {faces_(f, (k + 1) % 3), f};
+  }
+  const auto by_end = [](const Out& x, const Out& y) { return x.to < y.to || (x.to == y.to && x.face < y.face); };
+  for (std::int64_t a = 0; a < nv; ++a) {
+    const auto first = out.begin() + row[a], last = out.begin() + row[a + 1];
+    std::sort(first, last, by_end);
+    for (auto it = first; it + 1 < last; ++it)
+      if (it->to == (it + 1)->to) {
         std::ostringstream os;
-        os << "object mesh is not consistently oriented or not manifold: edge (" << a << ", " << b
-           << ") is used in the same direction by faces " << it->second << " and " << f;
+        os << "object mesh is not consistently oriented or not manifold: edge (" << a << ", " << it->to
+           << ") is used in the same direction by faces " << it->face << " and " << (it + 1)->face;
         fail(os.str());
       }
-    }
+  }
+  // The face across directed edge (a, b): the one holding (b, a); -1 when there is none.
+  const auto across = [&](std::int64_t a, std::int64_t b) -> std::int64_t {
+    const auto first = out.begin() + row[b], last = out.begin() + row[b + 1];
+    const auto it = std::lower_bound(first, last, Out{a, -1}, by_end);
+    return it != last && it->to == a ? it->face : -1;
+  };
   edge_normals_.resize(nf);
   face_normals_.resize(nf);
   // Volume as a sum of tetrahedra on a reference point inside the bounding box: taken about the
@@ -73,14 +93,14 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
   for (std::int64_t f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) {
       const std::int64_t a = faces_(f, k), b = faces_(f, (k + 1) % 3);
-      auto it = directed.find(edge_key(b, a));
-      if (it == directed.end()) {
+      const std::int64_t g = across(a, b);
+      if (g < 0) {
         std::ostringstream os;
         os << "object mesh is not closed: edge (" << a << ", " << b << ") of face " << f
            << " has no neighbouring face (a hole or a boundary)";
         fail(os.str());
       }
-      edge_normals_[f][k] = face_normals_[f] + face_normals_[it->second];
+      edge_normals_[f][k] = face_normals_[f] + face_normals_[g];
     }
   if (!(volume_ > 0.0)) {
     std::ostringstream os;
