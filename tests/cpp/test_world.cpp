@@ -38,6 +38,35 @@ TEST(Object, NearestMatchesLinearScan) {
   }
 }
 
+TEST(Object, ClearanceQueriesMatchLinearScan) {
+  // any_within and capsule_clear against brute force, on segments placed near the surface (the
+  // planner's case: distances within a few radii), both with and without a known-outside start.
+  const auto mesh = test::icosphere(3, Vec3(0.05, 0.04, 0.03));
+  const Object obj(mesh.vertices, mesh.faces);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> U(-1.0, 1.0), R(0.0, 0.006);
+  int near = 0, outside = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    const Vec3 dir = Vec3(U(rng), U(rng), U(rng)).normalized();
+    const Vec3 a = obj.nearest(dir, dir).on_object + (0.004 * U(rng)) * dir;  // about the surface
+    const Vec3 b = trial % 4 == 0 ? a : Vec3(a + 0.02 * Vec3(U(rng), U(rng), U(rng)).normalized());
+    const double radius = R(rng);
+    const double brute = brute_segment_mesh(mesh, a, b);
+    if (std::abs(brute - radius) < 1e-9) continue;  // too close to call in floating point
+    near += brute < 2.0 * radius;
+    EXPECT_EQ(obj.bvh().any_within(a, b, radius), brute < radius) << trial;
+    const bool a_in = obj.inside(a);
+    const bool clear = brute > radius && !a_in;
+    EXPECT_EQ(obj.capsule_clear(a, b, radius), clear) << trial;
+    if (!a_in) {
+      ++outside;
+      EXPECT_EQ(obj.capsule_clear(a, b, radius, /*a_outside=*/true), clear) << trial;
+    }
+  }
+  EXPECT_GT(near, 100);
+  EXPECT_GT(outside, 200);
+}
+
 TEST(Object, SignAgreesWithRayParityAndAnalyticEllipsoid) {
   const Vec3 radii(0.05, 0.04, 0.03);
   const auto mesh = test::icosphere(4, radii);

@@ -1,6 +1,8 @@
 #include "hugger/sensing/sensing.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace hugger {
 
@@ -13,73 +15,68 @@ Vec2 rotate(const Vec2& v, double angle) {
 
 }  // namespace
 
-bool Sensing::link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front) const {
+bool Sensing::link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
+                        bool a_outside) const {
   constexpr double kSlack = 1e-12;
   if (a.y() < front - kSlack || b.y() < front - kSlack) return false;
-  return capsule_clear(plane.to_world(a), plane.to_world(b), radius);
+  return capsule_clear(plane.to_world(a), plane.to_world(b), radius, a_outside);
 }
 
 FollowResult Sensing::follow_boundary(const FollowRequest& req) const {
   FollowResult out;
   out.head = req.tip;
   const double h = req.step / 3.0;
-  // f(x) = gap of the tip sphere at x minus the level; grad from the sensed normal.
-  auto eval = [&](const Vec2& x, double* f, Vec2* g) {
-    const Touch t = link(req.plane, x, x, req.radius, kInf);
-    *f = t.gap - req.level;
-    *g = Vec2(t.normal.dot(req.plane.u), t.normal.dot(req.plane.p));
-    return g->norm() > 1e-3;  // the surface must not be (nearly) parallel to the plane
+  // A point of the level curve gap = level, sensed: f = gap - level, g = its gradient in the plane.
+  struct Level {
+    Vec2 x = Vec2::Zero();
+    double f = kInf;
+    Vec2 g = Vec2::Zero();
   };
-  auto project = [&](Vec2 x, Vec2* out_x, double* out_f) {
+  auto eval = [&](const Vec2& x, Level* at) {
+    const Touch t = link(req.plane, x, x, req.radius, kInf);
+    at->x = x;
+    at->f = t.gap - req.level;
+    at->g = Vec2(t.normal.dot(req.plane.u), t.normal.dot(req.plane.p));
+    return at->g.norm() > 1e-3;  // the surface must not be (nearly) parallel to the plane
+  };
+  // Newton steps along the gradient back onto the level curve (each at most h long).
+  auto project = [&](Vec2 x, Level* at) {
     for (int it = 0; it < 12; ++it) {
-      double f;
-      Vec2 g;
-      if (!eval(x, &f, &g)) return false;
-      *out_x = x;
-      *out_f = f;
-      if (std::abs(f) <= 0.1 * req.level) return true;
-      Vec2 dx = -f * g / g.squaredNorm();
+      if (!eval(x, at)) return false;
+      if (std::abs(at->f) <= 0.1 * req.level) return true;
+      Vec2 dx = -at->f * at->g / at->g.squaredNorm();
       if (dx.norm() > h) dx *= h / dx.norm();
       x += dx;
     }
-    return *out_f >= -0.5 * req.level && *out_f <= req.level;
+    return at->f >= -0.5 * req.level && at->f <= req.level;
   };
   auto acceptable = [&](const Vec2& x) {
     return (x - req.root).norm() <= req.reach && x.y() >= req.front + req.radius;
   };
-  Vec2 x;
-  double fx;
-  if (!project(req.tip, &x, &fx) || !acceptable(x)) return out;
+  Level x;
+  if (!project(req.tip, &x) || !acceptable(x.x)) return out;
   for (int i = 0; i < 48; ++i) {
-    double f;
-    Vec2 g;
-    if (!eval(x, &f, &g)) break;
-    const Vec2 t = Vec2(-g.y(), g.x()).normalized();
-    Vec2 y;
-    double fy;
-    if (!project(x + h * t, &y, &fy) || !acceptable(y)) break;
+    const Vec2 t = Vec2(-x.g.y(), x.g.x()).normalized();
+    Level y;
+    if (!project(x.x + h * t, &y) || !acceptable(y.x)) break;
     ++out.steps;
-    if ((y - req.tip).norm() >= req.step) {
-      // Bisect between x (chord < step) and y (chord >= step) for the chord == step point.
-      Vec2 lo = x, hi = y;
-      for (int k = 0; k < 30; ++k) {
-        const Vec2 mid = 0.5 * (lo + hi);
-        Vec2 pm;
-        double fm;
-        if (!project(mid, &pm, &fm)) break;
-        if ((pm - req.tip).norm() >= req.step) hi = pm; else lo = pm;
-        if ((hi - lo).norm() < 1e-3 * req.step) break;
-      }
-      x = hi;
+    if ((y.x - req.tip).norm() >= req.step) {
+      // The chord reaches `step` between x and y: take the point of [x, y] at chord `step`
+      // (|x + t (y - x) - tip| = step) and put it back on the level curve.
+      const Vec2 d = y.x - x.x, w = x.x - req.tip;
+      const double a = d.squaredNorm(), b = w.dot(d), c = w.squaredNorm() - req.step * req.step;
+      const double s = a > 0.0 ? std::clamp((-b + std::sqrt(std::max(0.0, b * b - a * c))) / a, 0.0, 1.0) : 1.0;
+      Level z;
+      x = project(x.x + s * d, &z) && acceptable(z.x) ? z : y;
       break;
     }
-    if ((y - x).norm() < 1e-3 * h) break;  // stuck (a cusp): stop here
+    if ((y.x - x.x).norm() < 1e-3 * h) break;  // stuck (a cusp): stop here
     x = y;
   }
-  const Touch t = link(req.plane, x, x, req.radius, kInf);
-  if (t.gap < 0.0) return out;  // never hand back a penetrating head
-  out.head = x;
-  out.gap = t.gap;
+  const double gap = x.f + req.level;
+  if (!(gap >= 0.0)) return out;  // never hand back a penetrating head
+  out.head = x.x;
+  out.gap = gap;
   return out;
 }
 
@@ -115,39 +112,101 @@ RotateResult Sensing::rotate_until_free(const RotateRequest& req) const {
   RotateResult out;
   const Vec2 arm = req.end - req.pivot;
   const double len = arm.norm();
+  // Gaps are resolved exactly up to this cap; a free position with a larger gap is free enough.
+  const double cap = std::max(req.radius, 4.0 * req.tolerance);
+  struct Probe {
+    double angle = 0.0;
+    bool free = false;
+    double gap = -kInf;      ///< gap of the link (>= cap: at least cap)
+    double slope = 0.0;      ///< d gap / d angle at this angle
+    bool measured = false;   ///< gap and slope are exact (the axis is outside O, within cap)
+  };
   auto end_at = [&](double a) { return Vec2(req.pivot + rotate(arm, a)); };
-  auto free_at = [&](double a) { return link_free(req.plane, req.pivot, end_at(a), req.radius, req.front); };
-  if (free_at(0.0)) {
+  auto probe = [&](double a) {
+    Probe pr;
+    pr.angle = a;
+    const Vec2 e = end_at(a);
+    constexpr double kSlack = 1e-12;
+    if (req.pivot.y() < req.front - kSlack || e.y() < req.front - kSlack) return pr;  // behind the palm
+    const Touch t = link(req.plane, req.pivot, e, req.radius, cap);
+    pr.gap = t.gap;
+    pr.free = t.gap >= 0.0;
+    // The nearest axis point q turns about the pivot: d gap / d angle = grad . perp(q - pivot).
+    const Vec2 q = req.plane.to_plane(t.on_hand) - req.pivot;
+    const Vec2 grad(t.normal.dot(req.plane.u), t.normal.dot(req.plane.p));
+    pr.slope = grad.dot(Vec2(-q.y(), q.x()));
+    pr.measured = t.gap > -req.radius && t.gap < cap && t.gap != -std::numeric_limits<double>::min();
+    return pr;
+  };
+  auto finish = [&](const Probe& good) {
     out.ok = true;
-    out.end = req.end;
-    out.gap = link(req.plane, req.pivot, req.end, req.radius).gap;
+    out.angle = good.angle;
+    out.end = end_at(good.angle);
+    out.gap = good.gap;
     return out;
-  }
-  const double da = std::max(req.sample_angle, 1e-6);
-  const int samples = static_cast<int>(std::ceil(req.max_angle / da));
-  auto refine = [&](double bad, double good) {
-    while (len * std::abs(good - bad) > req.tolerance) {
-      const double mid = 0.5 * (bad + good);
-      if (free_at(mid)) good = mid; else bad = mid;
+  };
+  const Probe start = probe(0.0);
+  if (start.free) return finish(start);
+  // Between a colliding and a free angle, the free one nearest to the boundary: false position
+  // on the measured gap (Illinois), bisection where it is not measured; done once the free end
+  // rests within `tolerance` of O or the bracket is that narrow.
+  auto refine = [&](Probe bad, Probe good) {
+    const double target = 0.5 * req.tolerance;
+    double f_bad = bad.gap - target, f_good = good.gap - target;
+    int last = 0;  // which end the last probe replaced: +1 the free one, -1 the colliding one
+    while (len * std::abs(good.angle - bad.angle) > req.tolerance && good.gap > req.tolerance) {
+      double a = 0.5 * (bad.angle + good.angle);
+      if (bad.measured && good.gap < cap) {
+        const double x = bad.angle - f_bad * (good.angle - bad.angle) / (f_good - f_bad);
+        const double lo = std::min(bad.angle, good.angle), hi = std::max(bad.angle, good.angle), w = hi - lo;
+        if (x > lo + 1e-3 * w && x < hi - 1e-3 * w) a = x;
+      }
+      const Probe m = probe(a);
+      if (m.free) {
+        good = m;
+        f_good = m.gap - target;
+        if (last == 1) f_bad *= 0.5;  // Illinois: the colliding end kept twice
+        last = 1;
+      } else {
+        bad = m;
+        f_bad = m.gap - target;
+        if (last == -1) f_good *= 0.5;
+        last = -1;
+      }
     }
     return good;
   };
+  // Newton steps on the measured gap, toward the side that opens it: a link resting a little
+  // inside a smooth surface is freed in two or three probes.
+  Probe bad = start;
+  int dir = 0;
+  for (int it = 0; it < 4 && bad.measured && std::abs(bad.slope) > 1e-12; ++it) {
+    const double a = bad.angle + (0.5 * req.tolerance - bad.gap) / bad.slope;
+    const int d = a > bad.angle ? 1 : -1;
+    if ((dir != 0 && d != dir) || !(std::abs(a) <= req.max_angle)) break;  // turned back, or out of range
+    dir = d;
+    const Probe m = probe(a);
+    if (m.free) return finish(refine(bad, m));
+    bad = m;
+  }
+  // The coarse two-way search: the first sample angle at which either way is free.
+  const double da = std::max(req.sample_angle, 1e-6);
+  const int samples = static_cast<int>(std::ceil(req.max_angle / da));
+  Probe prev_plus = start, prev_minus = start;
   for (int k = 1; k <= samples; ++k) {
-    const double a = std::min(k * da, req.max_angle), prev = std::min((k - 1) * da, req.max_angle);
-    const bool plus = free_at(a), minus = free_at(-a);
-    if (!plus && !minus) continue;
-    double best = 0.0;
-    bool have = false;
-    if (plus) best = refine(prev, a), have = true;
-    if (minus) {
-      const double m = refine(-prev, -a);
-      if (!have || std::abs(m) < std::abs(best)) best = m;
+    const double a = std::min(k * da, req.max_angle);
+    const Probe plus = probe(a), minus = probe(-a);
+    if (plus.free || minus.free) {
+      Probe best;
+      if (plus.free) best = refine(prev_plus, plus);
+      if (minus.free) {
+        const Probe m = refine(prev_minus, minus);
+        if (!plus.free || std::abs(m.angle) < std::abs(best.angle)) best = m;
+      }
+      return finish(best);
     }
-    out.ok = true;
-    out.angle = best;
-    out.end = end_at(best);
-    out.gap = link(req.plane, req.pivot, out.end, req.radius).gap;
-    return out;
+    prev_plus = plus;
+    prev_minus = minus;
   }
   return out;
 }

@@ -193,8 +193,9 @@ bool Object::inside_by_rays(const Vec3& p) const {
   return bvh_.ray_crossings(p, dirs[2]) % 2 == 1;
 }
 
-bool Object::capsule_clear(const Vec3& a, const Vec3& b, double radius) const {
+bool Object::capsule_clear(const Vec3& a, const Vec3& b, double radius, bool a_outside) const {
   if (bvh_.any_within(a, b, radius)) return false;
+  if (a_outside) return true;
   // Nothing within radius (> 0) of the axis, or nothing touching it: wholly inside or outside.
   return radius > 0.0 ? !inside_off_surface(a) : !inside(a);
 }

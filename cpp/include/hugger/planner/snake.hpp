@@ -20,6 +20,9 @@ struct SnakeRequest {
   double front = -kInf;             ///< no joint may pass behind this eta (the palm's front plane)
   double tolerance = 1e-5;          ///< clinging resolution: metres of link-end motion
   double sample_angle = 0.05;       ///< coarse angular search increment for clinging (rad)
+  /// The chain's first pivot (the head for Head2Tail, the root for Tail2Head) is known to lie
+  /// outside O. Every later pivot is the end of a link just placed free, so outside as well.
+  bool start_outside = false;
 };
 
 /// Head2Tail (DESIGN.md decision 6): tip to `head`, then each joint on the ray toward its old

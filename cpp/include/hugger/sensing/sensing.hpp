@@ -72,13 +72,17 @@ class Sensing {
   Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap = kInf) const {
     return capsule(plane.to_world(a), plane.to_world(b), radius, cap);
   }
-  /// True when the capsule does not penetrate O (gap >= 0). Override with a test that can stop
-  /// early; the default asks `capsule`.
-  virtual bool capsule_clear(const Vec3& a, const Vec3& b, double radius) const {
+  /// True when the capsule does not penetrate O (gap >= 0). `a_outside`: the caller knows that
+  /// the point a lies outside O (the end of a link just found free, say), so a capsule that
+  /// comes no closer than `radius` to O's surface is clear without an inside test. Override
+  /// with a test that can stop early; the default asks `capsule`.
+  virtual bool capsule_clear(const Vec3& a, const Vec3& b, double radius, bool a_outside) const {
+    (void)a_outside;
     return capsule(a, b, radius, 0.0).gap >= 0.0;
   }
   /// True when the link is collision-free (gap >= 0) and in front of the palm's front plane.
-  bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front) const;
+  bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
+                 bool a_outside = false) const;
 
   /// Slide the fingertip along O's boundary in its plane, counter-clockwise (interior on the
   /// left), to the first point whose chord from the tip is `step`.

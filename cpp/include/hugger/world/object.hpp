@@ -45,7 +45,8 @@ class Object {
   bool inside_off_surface(const Vec3& p) const;
   /// True when the capsule of axis [a, b] and `radius` neither comes closer than `radius` to O's
   /// surface (touching counts as clear only at exactly `radius`) nor lies inside O.
-  bool capsule_clear(const Vec3& a, const Vec3& b, double radius) const;
+  /// `a_outside`: a is known to lie outside O, and the inside test is skipped.
+  bool capsule_clear(const Vec3& a, const Vec3& b, double radius, bool a_outside = false) const;
   /// The planar section of O in the plane through `origin` spanned by orthonormal u, v.
   Section section(const Vec3& origin, const Vec3& u, const Vec3& v) const;
   /// The BVH over O's triangles (world frame), for custom queries.

@@ -16,8 +16,8 @@ class SimulatedWorld final : public Sensing {
   Touch capsule(const Vec3& a, const Vec3& b, double radius, double cap = kInf) const override;
   double palm(const Pose& palm, double radius, double thickness, double cap = kInf) const override;
   /// Answered by a clearance test that stops at the first triangle within the radius.
-  bool capsule_clear(const Vec3& a, const Vec3& b, double radius) const override {
-    return object_->capsule_clear(a, b, radius);
+  bool capsule_clear(const Vec3& a, const Vec3& b, double radius, bool a_outside) const override {
+    return object_->capsule_clear(a, b, radius, a_outside);
   }
 
   const Object& object() const { return *object_; }
