@@ -63,15 +63,20 @@ int TriangleBvh::build(std::vector<int>& ids, int begin, int end, const std::vec
 
 namespace {
 
-/// A lower bound of the squared distance between segment [a, b] (with box sbox) and a box.
-inline double segment_box_lower_bound(const Vec3& a, const Vec3& b, const Aabb& sbox, const Aabb& box) {
+/// A lower bound of the squared distance between segment [a, b] (with box sbox) and a box: the
+/// boxes' distance, and where that is below `useful` (a bound that would not prune the box), the
+/// gap between the projections of the segment and the box onto the direction d from the
+/// segment's point nearest the box centre to that centre (gap = num / |d|, no square root).
+inline double segment_box_lower_bound(const Vec3& a, const Vec3& b, const Aabb& sbox, const Aabb& box,
+                                      double useful) {
   const double d_boxes = box.squared_distance(sbox);
-  // For a point (a == b, sbox a point) the box distance is exact; the centre bound below is weaker.
-  if (sbox.lo == sbox.hi) return d_boxes;
-  const Vec3 c = box.centre();
-  const double half_diag = 0.5 * box.extent().norm();
-  const double dc = (closest_point_on_segment(c, a, b) - c).norm() - half_diag;
-  return dc > 0.0 ? std::max(d_boxes, dc * dc) : d_boxes;
+  // For a point (a == b, sbox a point) the box distance is exact.
+  if (d_boxes >= useful || sbox.lo == sbox.hi) return d_boxes;
+  const Vec3 c = box.centre(), h = 0.5 * box.extent();
+  const Vec3 d = c - closest_point_on_segment(c, a, b);
+  const double num = (d.dot(c) - d.cwiseAbs().dot(h)) - std::max(d.dot(a), d.dot(b));
+  if (!(num > 0.0)) return d_boxes;
+  return std::max(d_boxes, num * num / d.squaredNorm());
 }
 
 /// A separating direction: every point x of the query has nu . x >= low. Anything whose
@@ -141,7 +146,7 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
   };
   Item stack[128];
   int top = 0;
-  stack[top++] = {0, segment_box_lower_bound(a, b, sbox, nodes_[0].box)};
+  stack[top++] = {0, segment_box_lower_bound(a, b, sbox, nodes_[0].box, best_sq)};
   while (top > 0) {
     const Item it = stack[--top];
     if (it.lb > best_sq || (best.triangle >= 0 && it.lb == best_sq)) continue;
@@ -170,8 +175,8 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
       }
       continue;
     }
-    const double ll = segment_box_lower_bound(a, b, sbox, nodes_[nd.left].box);
-    const double lr = segment_box_lower_bound(a, b, sbox, nodes_[nd.right].box);
+    const double ll = segment_box_lower_bound(a, b, sbox, nodes_[nd.left].box, best_sq);
+    const double lr = segment_box_lower_bound(a, b, sbox, nodes_[nd.right].box, best_sq);
     if (top + 2 > 128) continue;  // cannot happen for a median-split tree of < 2^60 triangles
     if (ll < lr) {
       stack[top++] = {nd.right, lr};
@@ -199,7 +204,7 @@ bool TriangleBvh::any_within(const Vec3& a, const Vec3& b, double distance) cons
   auto certified_far = [&](double wb) { return wb > distance; };
   int stack[128];
   int top = 0;
-  if (!may_hold(segment_box_lower_bound(a, b, sbox, nodes_[0].box))) return false;
+  if (!may_hold(segment_box_lower_bound(a, b, sbox, nodes_[0].box, bound_sq))) return false;
   stack[top++] = 0;
   while (top > 0) {
     const Node& nd = nodes_[stack[--top]];
@@ -221,8 +226,8 @@ bool TriangleBvh::any_within(const Vec3& a, const Vec3& b, double distance) cons
       }
       continue;
     }
-    const double ll = segment_box_lower_bound(a, b, sbox, nodes_[nd.left].box);
-    const double lr = segment_box_lower_bound(a, b, sbox, nodes_[nd.right].box);
+    const double ll = segment_box_lower_bound(a, b, sbox, nodes_[nd.left].box, bound_sq);
+    const double lr = segment_box_lower_bound(a, b, sbox, nodes_[nd.right].box, bound_sq);
     if (top + 2 > 128) continue;
     // Nearer child last, so that it is visited first.
     const bool left_first = ll < lr;

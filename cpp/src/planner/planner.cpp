@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "hugger/geometry/bvh.hpp"
 #include "hugger/geometry/distance.hpp"
 #include "hugger/planner/snake.hpp"
 
@@ -171,6 +172,10 @@ SnakeRequest Planner::snake_request(int m, double front) const {
   double shortest = kInf;
   for (int n = 0; n < hand_.links(); ++n) shortest = std::min(shortest, hand_.link_length(m, n));
   req.sample_angle = std::min(0.1, params_.step / (2.0 * shortest));
+  // Both chains start outside O: the head is a point whose gap was sensed (follow_boundary,
+  // rotate_until_touch) or the old tip; the root is the old root or one moved by sigma, which
+  // is clipped to the root's sensed free distance.
+  req.start_outside = true;
   return req;
 }
 
@@ -179,15 +184,21 @@ bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>&
   const double r = hand_.link_radius();
   const double sep = std::max(2.0 * r, 1e-7);
   const double sep2 = sep * sep;
-  std::vector<Vec3> mine(N + 1);
-  for (int n = 0; n <= N; ++n) mine[n] = planes_[m].to_world(chain[n]);
+  auto to_world = [&](int k, const Chain& c, std::vector<Vec3>& out, Aabb& box) {
+    out.resize(N + 1);
+    box = Aabb();
+    for (int n = 0; n <= N; ++n) box.grow(out[n] = planes_[k].to_world(c[n]));
+  };
+  std::vector<Vec3> mine, theirs;
+  Aabb my_box, their_box;
+  to_world(m, chain, mine, my_box);
   for (int a = 0; a < N; ++a)
     for (int b = a + 2; b < N; ++b)
       if (segment_segment_squared(mine[a], mine[a + 1], mine[b], mine[b + 1]) < sep2) return false;
-  std::vector<Vec3> theirs(N + 1);
   for (int k = 0; k < hand_.fingers(); ++k) {
     if (k == m) continue;
-    for (int n = 0; n <= N; ++n) theirs[n] = planes_[k].to_world(others[k][n]);
+    to_world(k, others[k], theirs, their_box);
+    if (my_box.squared_distance(their_box) >= sep2) continue;  // the fingers' boxes are apart
     for (int a = 0; a < N; ++a)
       for (int b = 0; b < N; ++b)
         if (segment_segment_squared(mine[a], mine[a + 1], theirs[b], theirs[b + 1]) < sep2) return false;
