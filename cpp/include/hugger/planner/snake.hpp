@@ -27,7 +27,8 @@ struct SnakeRequest {
 
 /// Head2Tail (DESIGN.md decision 6): tip to `head`, then each joint on the ray toward its old
 /// position at the link's length; a link that would hit O is rotated about its distal joint by
-/// the smallest angle that frees it. Returns false (chain partly updated) if none frees it.
+/// a small angle that frees it (Sensing::rotate_until_free). Returns false (chain partly
+/// updated) if none frees it.
 bool head_to_tail(const Sensing& sensing, const SnakeRequest& req, const Vec2& head, Chain& chain);
 
 /// Tail2Head (decision 7): tail to `root`, then each joint toward its old position, rotating

@@ -46,7 +46,7 @@ struct RotateRequest {
   double radius = 0.0;
   double front = -kInf;          ///< neither end may pass behind this eta
   double max_angle = kPi;        ///< search range (radians)
-  double tolerance = 1e-5;       ///< metres of end motion to which the result is resolved
+  double tolerance = 1e-5;       ///< rotate_until_free: the result's gap (or end motion) resolution, metres
   double touch_gap = 1e-4;       ///< rotate_until_touch: stop when the gap is at most this
   double level = 5e-5;           ///< rotate_until_touch: never come closer than this
   double sample_angle = 0.05;    ///< rotate_until_free: coarse search increment (radians)
@@ -89,8 +89,11 @@ class Sensing {
   virtual FollowResult follow_boundary(const FollowRequest& req) const;
   /// Flex the link about its pivot (counter-clockwise) until it touches O, up to max_angle.
   virtual RotateResult rotate_until_touch(const RotateRequest& req) const;
-  /// Rotate a colliding link about its pivot by the smallest angle (either way) that frees it,
-  /// leaving it tangent to O.
+  /// Rotate a colliding link about its pivot by a small angle that frees it, leaving it resting
+  /// on O (gap at most `tolerance`, or the end within `tolerance` of the boundary angle). Newton
+  /// steps on the sensed gap turn it the way that opens the gap; where the gap is not measured
+  /// (the axis crosses O, or the front plane blocks) both ways are searched in steps of
+  /// `sample_angle` and the nearer free side is taken; false position then refines.
   virtual RotateResult rotate_until_free(const RotateRequest& req) const;
 };
 
