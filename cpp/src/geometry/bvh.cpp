@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace hugger {
 
@@ -17,7 +18,8 @@ TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int lea
   for (int i = 0; i < n; ++i) ids[i] = i;
   order.reserve(n);
   nodes_.reserve(2 * std::max(1, n / std::max(1, leaf_size)) + 1);
-  build(ids, 0, n, centroids, boxes, std::max(1, leaf_size), order);
+  build(ids, 0, n, centroids, boxes, std::max(1, leaf_size), order, 0);
+  if (depth_ + 2 > kStackSize) throw std::length_error("TriangleBvh: tree too deep for the traversal stack");
   tris_.resize(n);
   ids_ = order;
   planes_.resize(n);
@@ -33,7 +35,8 @@ TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int lea
 }
 
 int TriangleBvh::build(std::vector<int>& ids, int begin, int end, const std::vector<Vec3>& centroids,
-                       const std::vector<Aabb>& boxes, int leaf_size, std::vector<int>& order) {
+                       const std::vector<Aabb>& boxes, int leaf_size, std::vector<int>& order, int depth) {
+  depth_ = std::max(depth_, depth);
   const int index = static_cast<int>(nodes_.size());
   nodes_.emplace_back();
   Aabb box, cbox;
@@ -54,8 +57,8 @@ int TriangleBvh::build(std::vector<int>& ids, int begin, int end, const std::vec
   std::nth_element(ids.begin() + begin, ids.begin() + mid, ids.begin() + end, [&](int x, int y) {
     return centroids[x][axis] < centroids[y][axis] || (centroids[x][axis] == centroids[y][axis] && x < y);
   });
-  const int left = build(ids, begin, mid, centroids, boxes, leaf_size, order);
-  const int right = build(ids, mid, end, centroids, boxes, leaf_size, order);
+  const int left = build(ids, begin, mid, centroids, boxes, leaf_size, order, depth + 1);
+  const int right = build(ids, mid, end, centroids, boxes, leaf_size, order, depth + 1);
   nodes_[index].left = left;
   nodes_[index].right = right;
   return index;
@@ -63,21 +66,34 @@ int TriangleBvh::build(std::vector<int>& ids, int begin, int end, const std::vec
 
 namespace {
 
-/// A lower bound of the squared distance between segment [a, b] (with box sbox) and a box: the
-/// boxes' distance, and where that is below `useful` (a bound that would not prune the box), the
-/// gap between the projections of the segment and the box onto the direction d from the
-/// segment's point nearest the box centre to that centre (gap = num / |d|, no square root).
-inline double segment_box_lower_bound(const Vec3& a, const Vec3& b, const Aabb& sbox, const Aabb& box,
-                                      double useful) {
-  const double d_boxes = box.squared_distance(sbox);
-  // For a point (a == b, sbox a point) the box distance is exact.
-  if (d_boxes >= useful || sbox.lo == sbox.hi) return d_boxes;
-  const Vec3 c = box.centre(), h = 0.5 * box.extent();
-  const Vec3 d = c - closest_point_on_segment(c, a, b);
-  const double num = (d.dot(c) - d.cwiseAbs().dot(h)) - std::max(d.dot(a), d.dot(b));
-  if (!(num > 0.0)) return d_boxes;
-  return std::max(d_boxes, num * num / d.squaredNorm());
-}
+/// Lower bounds of the squared distance between segment [a, b] (a == b: a point) and boxes:
+/// the distance to the segment's box, and where that is below `useful` (a bound that would not
+/// prune the box), the gap between the projections of the segment and the box onto the
+/// direction d from the segment's point nearest the box centre to that centre (any direction
+/// gives a bound; this one is nearly the best; gap = num / |d|, no square root).
+struct SegmentBound {
+  Vec3 a, b, ab;
+  double inv_len2 = 0.0;
+  Aabb sbox;
+  bool is_point;
+
+  SegmentBound(const Vec3& a_, const Vec3& b_) : a(a_), b(b_), ab(b_ - a_), is_point(a_ == b_) {
+    sbox.grow(a);
+    sbox.grow(b);
+    if (!is_point) inv_len2 = 1.0 / ab.squaredNorm();
+  }
+  double operator()(const Aabb& box, double useful) const {
+    const double d_boxes = box.squared_distance(sbox);
+    if (d_boxes >= useful || is_point) return d_boxes;  // for a point the box distance is exact
+    const Vec3 c = box.centre(), h = 0.5 * box.extent();
+    const double t = std::clamp((c - a).dot(ab) * inv_len2, 0.0, 1.0);
+    const Vec3 d = c - (a + t * ab);
+    const double da = d.dot(a), dab = d.dot(ab);
+    const double num = (d.dot(c) - d.cwiseAbs().dot(h)) - (dab > 0.0 ? da + dab : da);
+    if (!(num > 0.0)) return d_boxes;
+    return std::max(d_boxes, num * num / d.squaredNorm());
+  }
+};
 
 /// A separating direction: every point x of the query has nu . x >= low. Anything whose
 /// points all have nu . y <= h lies at least low - h from the query (projection onto a unit
@@ -133,10 +149,8 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
   NearestResult best;
   if (tris_.empty()) return best;
   double best_sq = std::isfinite(max_distance) ? max_distance * max_distance : kInf;
-  Aabb sbox;
-  sbox.grow(a);
-  sbox.grow(b);
-  const bool is_point = (a - b).squaredNorm() == 0.0;
+  const SegmentBound node_bound(a, b);
+  const bool is_point = node_bound.is_point;
   Witness w;
   // A node or triangle whose witness bound exceeds the best distance cannot hold the nearest.
   auto beyond = [&](double wb) { return wb > 0.0 && wb * wb > best_sq; };
@@ -144,9 +158,9 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
     int node;
     double lb;
   };
-  Item stack[128];
+  Item stack[kStackSize];
   int top = 0;
-  stack[top++] = {0, segment_box_lower_bound(a, b, sbox, nodes_[0].box, best_sq)};
+  stack[top++] = {0, node_bound(nodes_[0].box, best_sq)};
   while (top > 0) {
     const Item it = stack[--top];
     if (it.lb > best_sq || (best.triangle >= 0 && it.lb == best_sq)) continue;
@@ -175,9 +189,9 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
       }
       continue;
     }
-    const double ll = segment_box_lower_bound(a, b, sbox, nodes_[nd.left].box, best_sq);
-    const double lr = segment_box_lower_bound(a, b, sbox, nodes_[nd.right].box, best_sq);
-    if (top + 2 > 128) continue;  // cannot happen for a median-split tree of < 2^60 triangles
+    const double ll = node_bound(nodes_[nd.left].box, best_sq);
+    const double lr = node_bound(nodes_[nd.right].box, best_sq);
+    if (top + 2 > kStackSize) continue;  // unreachable: the depth is checked when built
     if (ll < lr) {
       stack[top++] = {nd.right, lr};
       stack[top++] = {nd.left, ll};
@@ -193,18 +207,16 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
 bool TriangleBvh::any_within(const Vec3& a, const Vec3& b, double distance) const {
   if (tris_.empty() || !(distance >= 0.0)) return false;
   const double bound_sq = distance * distance;
-  Aabb sbox;
-  sbox.grow(a);
-  sbox.grow(b);
-  const bool is_point = (a - b).squaredNorm() == 0.0;
+  const SegmentBound node_bound(a, b);
+  const bool is_point = node_bound.is_point;
   Witness w;
   // A node can hold such a triangle only if its lower bound is below bound_sq (or 0 for a touch)
   // and the witness does not put it farther than `distance`.
   auto may_hold = [&](double lb) { return lb < bound_sq || lb == 0.0; };
   auto certified_far = [&](double wb) { return wb > distance; };
-  int stack[128];
+  int stack[kStackSize];
   int top = 0;
-  if (!may_hold(segment_box_lower_bound(a, b, sbox, nodes_[0].box, bound_sq))) return false;
+  if (!may_hold(node_bound(nodes_[0].box, bound_sq))) return false;
   stack[top++] = 0;
   while (top > 0) {
     const Node& nd = nodes_[stack[--top]];
@@ -226,9 +238,9 @@ bool TriangleBvh::any_within(const Vec3& a, const Vec3& b, double distance) cons
       }
       continue;
     }
-    const double ll = segment_box_lower_bound(a, b, sbox, nodes_[nd.left].box, bound_sq);
-    const double lr = segment_box_lower_bound(a, b, sbox, nodes_[nd.right].box, bound_sq);
-    if (top + 2 > 128) continue;
+    const double ll = node_bound(nodes_[nd.left].box, bound_sq);
+    const double lr = node_bound(nodes_[nd.right].box, bound_sq);
+    if (top + 2 > kStackSize) continue;  // unreachable: the depth is checked when built
     // Nearer child last, so that it is visited first.
     const bool left_first = ll < lr;
     if (may_hold(left_first ? lr : ll)) stack[top++] = left_first ? nd.right : nd.left;
@@ -241,7 +253,7 @@ int TriangleBvh::ray_crossings(const Vec3& origin, const Vec3& dir) const {
   if (tris_.empty()) return 0;
   const Vec3 inv = dir.cwiseInverse();
   int crossings = 0;
-  int stack[128];
+  int stack[kStackSize];
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
@@ -280,7 +292,7 @@ int TriangleBvh::ray_crossings(const Vec3& origin, const Vec3& dir) const {
       }
       continue;
     }
-    if (top + 2 <= 128) {
+    if (top + 2 <= kStackSize) {
       stack[top++] = nd.left;
       stack[top++] = nd.right;
     }
