@@ -139,6 +139,7 @@ void Planner::plan_phase1(const Pose& start) {
   states_.assign(hand_.fingers(), TipState::kFrozen);
   anchors_.assign(hand_.fingers(), Vec2(kInf, kInf));
   stalled_.assign(hand_.fingers(), 0);
+  frozen_lb_.assign(static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1), -kInf);
 }
 
 Configuration Planner::make_configuration(int phase) const {
@@ -160,6 +161,17 @@ Configuration Planner::make_configuration(int phase) const {
 
 double Planner::link_gap(int m, const Vec2& a, const Vec2& b, double cap) const {
   return sensing_->link(planes_[m], a, b, hand_.link_radius(), cap).gap;
+}
+
+double Planner::frozen_gap(int m, int n, double need) {
+  double& lb = frozen_lb_[static_cast<std::size_t>(m) * (hand_.links() + 1) + n];
+  if (lb > need) return lb;
+  // Ask with a wider cap than needed, so that the bound lasts several palm steps.
+  const double cap = std::max(need, 4.0 * params_.step);
+  const Chain& c = chains_[m];
+  const double g = n < hand_.links() ? link_gap(m, c[n], c[n + 1], cap) : link_gap(m, c[0], c[0], cap);
+  lb = std::min(g, cap);  // beyond the cap the answer is only known to be at least the cap
+  return lb;
 }
 
 SnakeRequest Planner::snake_request(int m, double front) const {
@@ -218,7 +230,7 @@ void Planner::phase2_iteration() {
   for (int m = 0; m < M; ++m) {
     if (states_[m] != TipState::kFrozen) continue;
     for (int n = 0; n < N; ++n)
-      if (link_gap(m, chains_[m][n], chains_[m][n + 1], delta) <= delta) {
+      if (frozen_gap(m, n, delta) <= delta) {
         states_[m] = TipState::kContact;
         break;
       }
@@ -299,9 +311,12 @@ void Planner::phase2_iteration() {
       double free = palm_gap;
       const double cap = s + delta;
       for (int m = 0; m < M; ++m) {
-        free = std::min(free, link_gap(m, root, root, cap));
-        if (states_[m] == TipState::kFrozen)
-          for (int n = 0; n < N; ++n) free = std::min(free, link_gap(m, old[m][n], old[m][n + 1], cap));
+        if (states_[m] == TipState::kFrozen) {
+          // Bounds above the cap change nothing: sigma <= s < cap - level.
+          for (int n = 0; n <= N; ++n) free = std::min(free, frozen_gap(m, n, cap));
+        } else {
+          free = std::min(free, link_gap(m, root, root, cap));
+        }
       }
       sigma = std::min(sigma, std::max(0.0, free - level));
     }
@@ -373,6 +388,7 @@ void Planner::phase2_iteration() {
   chains_ = std::move(next);
   states_ = std::move(next_states);
   eta_ += sigma;
+  for (double& lb : frozen_lb_) lb -= sigma;
   ++stats_.phase2_iterations;
   history_.push_back(make_configuration(2));
   if (std::all_of(states_.begin(), states_.end(), [](TipState t) { return t == TipState::kDone; }))
