@@ -198,6 +198,7 @@ struct Result {
   double p50_us = 0, p90_us = 0, p99_us = 0, max_us = 0;           // per Phase 2 iteration, pooled
   double max_rss_mib = 0;
   bool deterministic = true;
+  std::uint64_t digest = 0;  // of the first repeat's plan: compare it across builds
   bool ok = false;
   char error[160] = {};
 };
@@ -275,6 +276,7 @@ Result run(const Scenario& sc, int repeats) {
       const std::uint64_t d = digest(planner);
       if (k == 0) {
         first_digest = d;
+        r.digest = d;
         std::snprintf(r.status, sizeof r.status, "%s", to_string(planner.status()).c_str());
         r.configurations = static_cast<long>(planner.history().size());
         r.phase1_configurations = planner.stats().phase1_configurations;
@@ -480,7 +482,8 @@ int main(int argc, char** argv) {
          << ", \"total_s\": " << r.total_s << ", \"phase2_configurations_per_s\": " << r.configurations_per_s
          << ", \"iteration_us\": {\"p50\": " << r.p50_us << ", \"p90\": " << r.p90_us << ", \"p99\": " << r.p99_us
          << ", \"max\": " << r.max_us << "}, \"max_rss_mib\": " << r.max_rss_mib
-         << ", \"deterministic\": " << (r.deterministic ? "true" : "false") << "}";
+         << ", \"deterministic\": " << (r.deterministic ? "true" : "false") << ", \"digest\": \""
+         << std::hex << r.digest << std::dec << "\"}";
     }
     os << "\n  ]\n}\n";
     std::fputs(os.str().c_str(), stdout);
