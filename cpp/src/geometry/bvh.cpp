@@ -88,8 +88,10 @@ struct SegmentBound {
     const Vec3 c = box.centre(), h = 0.5 * box.extent();
     const double t = std::clamp((c - a).dot(ab) * inv_len2, 0.0, 1.0);
     const Vec3 d = c - (a + t * ab);
-    const double da = d.dot(a), dab = d.dot(ab);
-    const double num = (d.dot(c) - d.cwiseAbs().dot(h)) - (dab > 0.0 ? da + dab : da);
+    const double dc = d.dot(c), dh = d.cwiseAbs().dot(h), da = d.dot(a), dab = d.dot(ab);
+    // Less a rounding margin: the bound must never exceed the true distance.
+    const double slack = 1e-14 * (std::abs(dc) + dh + std::abs(da) + std::abs(dab));
+    const double num = (dc - dh) - (dab > 0.0 ? da + dab : da) - slack;
     if (!(num > 0.0)) return d_boxes;
     return std::max(d_boxes, num * num / d.squaredNorm());
   }
@@ -163,7 +165,7 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
   stack[top++] = {0, node_bound(nodes_[0].box, best_sq)};
   while (top > 0) {
     const Item it = stack[--top];
-    if (it.lb > best_sq || (best.triangle >= 0 && it.lb == best_sq)) continue;
+    if (it.lb > best_sq) continue;
     const Node& nd = nodes_[it.node];
     if (beyond(w.box_bound(nd.box))) continue;
     if (nd.count > 0) {
@@ -173,7 +175,8 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
         Vec3 on_seg, on_tri;
         TriangleFeature f;
         const double d = closest_pair(a, b, is_point, t, &on_seg, &on_tri, &f);
-        if (d < best_sq || (best.triangle < 0 && d <= best_sq)) {
+        // Exact ties go to the lowest input index: the answer does not depend on the tree's order.
+        if (d < best_sq || (d == best_sq && (best.triangle < 0 || ids_[i] < best.triangle))) {
           best_sq = d;
           best.on_query = on_seg;
           best.on_mesh = on_tri;

@@ -388,7 +388,7 @@ void Planner::phase2_iteration() {
   chains_ = std::move(next);
   states_ = std::move(next_states);
   eta_ += sigma;
-  for (double& lb : frozen_lb_) lb -= sigma;
+  for (double& lb : frozen_lb_) lb -= sigma + 1e-12;  // a picometre for rounding
   ++stats_.phase2_iterations;
   history_.push_back(make_configuration(2));
   if (std::all_of(states_.begin(), states_.end(), [](TipState t) { return t == TipState::kDone; }))

@@ -154,7 +154,9 @@ RotateResult Sensing::rotate_until_free(const RotateRequest& req) const {
     const double target = 0.5 * req.tolerance;
     double f_bad = bad.gap - target, f_good = good.gap - target;
     int last = 0;  // which end the last probe replaced: +1 the free one, -1 the colliding one
-    while (len * std::abs(good.angle - bad.angle) > req.tolerance && good.gap > req.tolerance) {
+    for (int guard = 0; guard < 200 && len * std::abs(good.angle - bad.angle) > req.tolerance &&
+                        good.gap > req.tolerance;
+         ++guard) {
       double a = 0.5 * (bad.angle + good.angle);
       if (bad.measured && good.gap < cap) {
         const double x = bad.angle - f_bad * (good.angle - bad.angle) / (f_good - f_bad);
@@ -177,20 +179,22 @@ RotateResult Sensing::rotate_until_free(const RotateRequest& req) const {
     return good;
   };
   // Newton steps on the measured gap, toward the side that opens it: a link resting a little
-  // inside a smooth surface is freed in two or three probes.
+  // inside a smooth surface is freed in two or three probes. A step longer than a few sample
+  // angles could pass over a thin part of O or the first free side: the sampled search decides.
+  const double da = std::max(req.sample_angle, 1e-6);
   Probe bad = start;
   int dir = 0;
   for (int it = 0; it < 4 && bad.measured && std::abs(bad.slope) > 1e-12; ++it) {
     const double a = bad.angle + (0.5 * req.tolerance - bad.gap) / bad.slope;
     const int d = a > bad.angle ? 1 : -1;
-    if ((dir != 0 && d != dir) || !(std::abs(a) <= req.max_angle)) break;  // turned back, or out of range
+    if ((dir != 0 && d != dir) || !(std::abs(a) <= req.max_angle) || std::abs(a - bad.angle) > 4.0 * da)
+      break;  // turned back, out of range, or too long a step
     dir = d;
     const Probe m = probe(a);
     if (m.free) return finish(refine(bad, m));
     bad = m;
   }
   // The coarse two-way search: the first sample angle at which either way is free.
-  const double da = std::max(req.sample_angle, 1e-6);
   const int samples = static_cast<int>(std::ceil(req.max_angle / da));
   Probe prev_plus = start, prev_minus = start;
   for (int k = 1; k <= samples; ++k) {
