@@ -149,61 +149,37 @@ double closest_pair(const Vec3& a, const Vec3& b, bool is_point, const std::arra
 
 NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_distance) const {
   NearestResult best;
-  if (tris_.empty()) return best;
+  // The squared distance of the nearest triangle so far (the search bound); -1 once touching.
   double best_sq = std::isfinite(max_distance) ? max_distance * max_distance : kInf;
   const SegmentBound node_bound(a, b);
-  const bool is_point = node_bound.is_point;
   Witness w;
   // A node or triangle whose witness bound exceeds the best distance cannot hold the nearest.
   auto beyond = [&](double wb) { return wb > 0.0 && wb * wb > best_sq; };
-  struct Item {
-    int node;
-    double lb;
-  };
-  Item stack[kStackSize];
-  int top = 0;
-  stack[top++] = {0, node_bound(nodes_[0].box, best_sq)};
-  while (top > 0) {
-    const Item it = stack[--top];
-    if (it.lb > best_sq) continue;
-    const Node& nd = nodes_[it.node];
-    if (beyond(w.box_bound(nd.box))) continue;
-    if (nd.count > 0) {
-      for (int i = nd.first; i < nd.first + nd.count; ++i) {
-        const auto& t = tris_[i];
-        if (beyond(w.triangle_bound(t))) continue;
-        Vec3 on_seg, on_tri;
-        TriangleFeature f;
-        const double d = closest_pair(a, b, is_point, t, &on_seg, &on_tri, &f);
-        // Exact ties go to the lowest input index: the answer does not depend on the tree's order.
-        if (d < best_sq || (d == best_sq && (best.triangle < 0 || ids_[i] < best.triangle))) {
-          best_sq = d;
-          best.on_query = on_seg;
-          best.on_mesh = on_tri;
-          best.triangle = ids_[i];
-          best.feature = f;
-          if (d == 0.0) {
-            best.distance = 0.0;
-            best.crosses = true;
-            return best;
-          }
-          w.offer(a, b, on_seg, on_tri, d);
-        }
-      }
-      continue;
-    }
-    const double ll = node_bound(nodes_[nd.left].box, best_sq);
-    const double lr = node_bound(nodes_[nd.right].box, best_sq);
-    if (top + 2 > kStackSize) continue;  // unreachable: the depth is checked when built
-    if (ll < lr) {
-      stack[top++] = {nd.right, lr};
-      stack[top++] = {nd.left, ll};
-    } else {
-      stack[top++] = {nd.left, ll};
-      stack[top++] = {nd.right, lr};
-    }
-  }
-  if (best.triangle >= 0) best.distance = std::sqrt(best_sq);
+  walk([&](const Aabb& box) { return node_bound(box, best_sq); },
+       [&](const Aabb& box) { return beyond(w.box_bound(box)); },
+       [&](int i) {
+         const auto& t = tris_[i];
+         if (beyond(w.triangle_bound(t))) return;
+         Vec3 on_seg, on_tri;
+         TriangleFeature f;
+         const double d = closest_pair(a, b, node_bound.is_point, t, &on_seg, &on_tri, &f);
+         // Exact ties go to the lowest input index: the answer does not depend on the tree's order.
+         if (!(d < best_sq || (d == best_sq && (best.triangle < 0 || ids_[i] < best.triangle)))) return;
+         best.on_query = on_seg;
+         best.on_mesh = on_tri;
+         best.triangle = ids_[i];
+         best.feature = f;
+         if (d == 0.0) {
+           best.crosses = true;
+           best_sq = -1.0;  // touching: nothing can be nearer; stop
+           return;
+         }
+         best_sq = d;
+         w.offer(a, b, on_seg, on_tri, d);
+       },
+       best_sq);
+  if (best.crosses) best.distance = 0.0;
+  else if (best.triangle >= 0) best.distance = std::sqrt(best_sq);
   return best;
 }
 
@@ -211,45 +187,37 @@ bool TriangleBvh::any_within(const Vec3& a, const Vec3& b, double distance) cons
   if (tris_.empty() || !(distance >= 0.0)) return false;
   const double bound_sq = distance * distance;
   const SegmentBound node_bound(a, b);
-  const bool is_point = node_bound.is_point;
   Witness w;
   // A node can hold such a triangle only if its lower bound is below bound_sq (or 0 for a touch)
-  // and the witness does not put it farther than `distance`.
-  auto may_hold = [&](double lb) { return lb < bound_sq || lb == 0.0; };
-  auto certified_far = [&](double wb) { return wb > distance; };
-  int stack[kStackSize];
-  int top = 0;
-  if (!may_hold(node_bound(nodes_[0].box, bound_sq))) return false;
-  stack[top++] = 0;
-  while (top > 0) {
-    const Node& nd = nodes_[stack[--top]];
-    if (certified_far(w.box_bound(nd.box))) continue;
-    if (nd.count > 0) {
-      for (int i = nd.first; i < nd.first + nd.count; ++i) {
+  // and the witness does not put it farther than `distance`; one that cannot gets bound +inf.
+  double bound = bound_sq;  // set below 0 to stop once one is found
+  bool found = false;
+  walk(
+      [&](const Aabb& box) {
+        const double lb = node_bound(box, bound_sq);
+        return lb < bound_sq || lb == 0.0 ? lb : kInf;
+      },
+      [&](const Aabb& box) { return w.box_bound(box) > distance; },
+      [&](int i) {
         const auto& t = tris_[i];
         // Both ends farther than `distance` on one side of the triangle's plane: too far.
         const Eigen::Vector4d& pl = planes_[i];
         const double da = pl.x() * a.x() + pl.y() * a.y() + pl.z() * a.z() - pl.w();
         const double db = pl.x() * b.x() + pl.y() * b.y() + pl.z() * b.z() - pl.w();
-        if ((da > distance && db > distance) || (da < -distance && db < -distance)) continue;
-        if (certified_far(w.triangle_bound(t))) continue;
+        if ((da > distance && db > distance) || (da < -distance && db < -distance)) return;
+        if (w.triangle_bound(t) > distance) return;
         Vec3 on_seg, on_tri;
         TriangleFeature f;
-        const double d = closest_pair(a, b, is_point, t, &on_seg, &on_tri, &f);
-        if (d < bound_sq || d == 0.0) return true;
+        const double d = closest_pair(a, b, node_bound.is_point, t, &on_seg, &on_tri, &f);
+        if (d < bound_sq || d == 0.0) {
+          found = true;
+          bound = -1.0;
+          return;
+        }
         w.offer(a, b, on_seg, on_tri, d);
-      }
-      continue;
-    }
-    const double ll = node_bound(nodes_[nd.left].box, bound_sq);
-    const double lr = node_bound(nodes_[nd.right].box, bound_sq);
-    if (top + 2 > kStackSize) continue;  // unreachable: the depth is checked when built
-    // Nearer child last, so that it is visited first.
-    const bool left_first = ll < lr;
-    if (may_hold(left_first ? lr : ll)) stack[top++] = left_first ? nd.right : nd.left;
-    if (may_hold(left_first ? ll : lr)) stack[top++] = left_first ? nd.left : nd.right;
-  }
-  return false;
+      },
+      bound);
+  return found;
 }
 
 int TriangleBvh::ray_crossings(const Vec3& origin, const Vec3& dir) const {

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 namespace hugger {
 
@@ -135,7 +134,7 @@ RotateResult Sensing::rotate_until_free(const RotateRequest& req) const {
     const Vec2 q = req.plane.to_plane(t.on_hand) - req.pivot;
     const Vec2 grad(t.normal.dot(req.plane.u), t.normal.dot(req.plane.p));
     pr.slope = grad.dot(Vec2(-q.y(), q.x()));
-    pr.measured = t.gap > -req.radius && t.gap < cap && t.gap != -std::numeric_limits<double>::min();
+    pr.measured = t.gap > -req.radius && t.gap < cap;  // an axis crossing O reports a gap of -radius
     return pr;
   };
   auto finish = [&](const Probe& good) {

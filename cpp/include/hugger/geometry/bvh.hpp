@@ -66,6 +66,19 @@ class TriangleBvh {
   /// nearest-style search) or set it below 0 to stop.
   template <class NodeBound, class Leaf>
   void traverse(NodeBound&& node_bound, Leaf&& leaf, double& bound) const {
+    walk(node_bound, [](const Aabb&) { return false; }, [&](int i) { leaf(tris_[i], ids_[i]); }, bound);
+  }
+
+  const Aabb& bounds() const { return nodes_.front().box; }
+  std::size_t size() const { return tris_.size(); }
+
+ private:
+  /// The best-first traversal every query shares. Children are visited nearer first by
+  /// `node_bound(box)` (computed when pushed); a node is skipped when that bound exceeds `bound`,
+  /// or when `skip(box)` says so as it is popped (a test that may have sharpened meanwhile);
+  /// `leaf(i)` sees tris_[i] and may lower `bound`, or set it below 0 to stop.
+  template <class NodeBound, class Skip, class Leaf>
+  void walk(NodeBound&& node_bound, Skip&& skip, Leaf&& leaf, double& bound) const {
     if (tris_.empty()) return;
     struct Item {
       int node;
@@ -78,14 +91,15 @@ class TriangleBvh {
       const Item it = stack[--top];
       if (it.lb > bound) continue;
       const Node& nd = nodes_[it.node];
+      if (skip(nd.box)) continue;
       if (nd.count > 0) {
-        for (int i = nd.first; i < nd.first + nd.count && bound >= 0.0; ++i) leaf(tris_[i], ids_[i]);
+        for (int i = nd.first; i < nd.first + nd.count && bound >= 0.0; ++i) leaf(i);
         if (bound < 0.0) return;
         continue;
       }
       const double ll = node_bound(nodes_[nd.left].box), lr = node_bound(nodes_[nd.right].box);
       if (top + 2 > kStackSize) continue;  // unreachable: the depth is checked when built
-      if (ll < lr) {
+      if (ll < lr) {  // nearer child last, so that it is visited first
         stack[top++] = {nd.right, lr};
         stack[top++] = {nd.left, ll};
       } else {
@@ -95,10 +109,6 @@ class TriangleBvh {
     }
   }
 
-  const Aabb& bounds() const { return nodes_.front().box; }
-  std::size_t size() const { return tris_.size(); }
-
- private:
   struct Node {
     Aabb box;
     int left = -1, right = -1;  ///< children (internal node)
