@@ -232,6 +232,19 @@ def test_export_mjcf_and_validate(sphere_plan, tmp_path, capsys):
     assert code == 0 and "verdict: held" in out
 
 
+def test_validate_reports_a_diverged_direction(sphere_plan, capsys, monkeypatch):
+    # physics.validate reports None figures for a direction whose simulation diverged; the text
+    # report must say so rather than fail on them
+    from hugger import physics
+
+    held = {"displacement_m": 0.001, "rotation_deg": 0.5, "held": True}
+    lost = {"displacement_m": None, "rotation_deg": None, "held": False, "diverged": True}
+    monkeypatch.setattr(physics, "validate", lambda traj: {"held": False, "directions": {"+x": held, "-x": lost}})
+    code, out, err = run(["validate", sphere_plan], capsys)
+    assert code == 0, err
+    assert "-x  the simulation diverged: LOST" in out and "+x  moved" in out and "verdict: not held" in out
+
+
 def test_plan_timeout_gives_a_partial_plan(tmp_path, capsys, checker):
     out = tmp_path / "t.npz"
     code, text, err = run(["plan", "curvy", "--out", out, "--json", "--timeout", "1e-6"], capsys)

@@ -79,7 +79,9 @@ def _hand(args: argparse.Namespace):
 
 
 def _params(args: argparse.Namespace) -> dict[str, Any]:
-    return {k: getattr(args, k) for k in ("step", "epsilon", "contact_tolerance", "max_iterations")}
+    from .batch import _PARAMS
+
+    return {k: getattr(args, k) for k in _PARAMS}
 
 
 def _load(path: str):
@@ -251,6 +253,9 @@ def cmd_validate(args: argparse.Namespace) -> int:
         print(json.dumps(result))
     else:
         for d, r in result["directions"].items():
+            if r.get("diverged"):
+                print(f"{d:3s} the simulation diverged: LOST")
+                continue
             print(f"{d:3s} moved {1000 * r['displacement_m']:7.2f} mm  turned {r['rotation_deg']:6.2f} deg  "
                   f"{'held' if r['held'] else 'LOST'}")
         print(f"verdict: {'held' if result['held'] else 'not held'}")
