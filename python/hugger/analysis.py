@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from ._checks import positive
 from .trajectory import CONTACT_DISTANCE
 
 __all__ = [
@@ -133,16 +134,6 @@ def _trajectory_index(traj: Any, k: int) -> int:
     if not -len(traj) <= k < len(traj):
         raise IndexError(f"configuration k={k} is out of range for a trajectory of {len(traj)} configurations")
     return int(range(len(traj))[k])
-
-
-def _check_distance(distance: Any) -> float:
-    try:
-        d = float(distance)
-    except (TypeError, ValueError):
-        raise ValueError(f"distance must be a number, got {distance!r}") from None
-    if not math.isfinite(d) or d < 0:
-        raise ValueError(f"distance must be a non-negative finite number (m), got {distance!r}")
-    return d
 
 
 def _link_spacing(radius: float, length: float) -> float:
@@ -322,7 +313,7 @@ def contacts_of(hand: dict, obj: Any, palm_pose: Any, joints: Any, distance: flo
         raise ValueError(f"joints must be (M, N+1, 3) = ({m}, {n + 1}, 3), got {j.shape}")
     if not np.all(np.isfinite(j)):
         raise ValueError("joints must be finite")
-    dist = _check_distance(distance)
+    dist = positive("distance", distance, allow_zero=True)
 
     sources: list[tuple[int, int, np.ndarray, float]] = []  # finger, link, hand-surface samples, radius
     palm = _palm_contacts(obj, pose, palm_radius, palm_thickness, dist)
@@ -500,26 +491,15 @@ def grasp_quality(contacts: Contacts, center: Any, mu: float = 0.5, cone_edges: 
     c = np.asarray(center, dtype=np.float64)
     if c.shape != (3,) or not np.all(np.isfinite(c)):
         raise ValueError(f"center must be a finite 3-vector (m), got {center!r}")
-    try:
-        mu_f = float(mu)
-    except (TypeError, ValueError):
-        raise ValueError(f"mu must be a number, got {mu!r}") from None
-    if not math.isfinite(mu_f) or mu_f < 0:
-        raise ValueError(f"mu must be a non-negative finite number, got {mu!r}")
+    mu_f = positive("mu", mu, allow_zero=True)
     if isinstance(cone_edges, bool) or not isinstance(cone_edges, (int, np.integer)) or not 3 <= cone_edges <= 64:
         raise ValueError(f"cone_edges must be a whole number from 3 to 64, got {cone_edges!r}")
     if torque_scale is None:
         if obj is not None:
-            scale = float(np.linalg.norm(np.asarray(obj.vertices) - c, axis=1).max())
+            torque_scale = float(np.linalg.norm(np.asarray(obj.vertices) - c, axis=1).max())
         else:
-            scale = float(np.linalg.norm(contacts.points - c, axis=1).max()) if len(contacts) else 1.0
-    else:
-        try:
-            scale = float(torque_scale)
-        except (TypeError, ValueError):
-            raise ValueError(f"torque_scale must be a number (m), got {torque_scale!r}") from None
-    if not math.isfinite(scale) or scale <= 0:
-        raise ValueError(f"torque_scale must be a positive finite length (m), got {scale!r}")
+            torque_scale = float(np.linalg.norm(contacts.points - c, axis=1).max()) if len(contacts) else 1.0
+    scale = positive("torque_scale", torque_scale)
     hull_cls, qhull_error = _scipy_hull()
 
     w = primitive_wrenches(contacts.points, contacts.normals, c, mu_f, int(cone_edges), scale)

@@ -14,6 +14,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ._checks import positive
 from .world import Object
 
 
@@ -250,9 +251,7 @@ def load_mesh(path: str | os.PathLike, scale: float = 1.0) -> tuple[Object, list
     except ImportError:
         raise ImportError("reading mesh files needs trimesh: pip install 'hugger[mesh]'") from None
     path = os.fspath(path)
-    scale = float(scale)
-    if not np.isfinite(scale) or scale <= 0:
-        raise ValueError(f"scale must be a positive number, got {scale}")
+    scale = positive("scale", scale)
     if not os.path.isfile(path):
         raise FileNotFoundError(f"no such mesh file: {path}")
     try:

@@ -69,6 +69,7 @@ from typing import Any
 
 import numpy as np
 
+from ._checks import positive as _positive
 from .trajectory import CONTACT_DISTANCE
 
 #: Hinge servo stiffness (N·m/rad).
@@ -253,17 +254,6 @@ def _index(traj, k: Any) -> int:
     if not -n <= int(k) < n:
         raise ValueError(f"k = {k} is out of range for a trajectory of {n} configurations")
     return int(k) % n
-
-
-def _positive(name: str, value: Any, allow_zero: bool = False) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(x) or x < 0 or (x == 0 and not allow_zero):
-        kind = "non-negative" if allow_zero else "positive"
-        raise ValueError(f"{name} must be a {kind} finite number, got {value!r}")
-    return x
 
 
 def _quat(rot: np.ndarray) -> np.ndarray:

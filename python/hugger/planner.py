@@ -75,14 +75,7 @@ def _optional_size(name: str, value: Any) -> float | None:
 
 def _timeout(value: Any) -> float | None:
     """A plan timeout in seconds: None, or a positive finite number."""
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise ValueError(f"timeout must be a number of seconds or None, got {value!r}")
-    v = float(value)
-    if not np.isfinite(v) or v <= 0:
-        raise ValueError(f"timeout must be a positive finite number of seconds or None, got {value!r}")
-    return v
+    return _optional_size("timeout", value)
 
 
 class Planner:

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from . import objects
+from ._checks import positive
 from .hand import Hand
 from .planner import look_at
 from .world import Object
@@ -72,9 +73,7 @@ def interior_target(obj: Object) -> np.ndarray:
 def load_object(spec: str | os.PathLike, scale: float = 1.0) -> tuple[str, Object, list[str]]:
     """A built-in name or a mesh file path -> (name, Object, repairs)."""
     s = os.fspath(spec)
-    scale = float(scale)
-    if not math.isfinite(scale) or scale <= 0:
-        raise ValueError(f"scale must be a positive number, got {scale}")
+    scale = positive("scale", scale)
     if s in objects.BUILTINS:
         if scale != 1.0:
             b = objects.BUILTINS[s].make()

@@ -7,7 +7,7 @@ import struct
 import tokenize
 import zipfile
 import zlib
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -61,6 +61,8 @@ class Trajectory:
     phase: np.ndarray
     status: str
     stats_json: str = "{}"
+    #: the Object built from object_vertices/object_faces by object(), kept for later calls
+    _object: Any = field(default=None, init=False, repr=False, compare=False)
 
     def __len__(self) -> int:
         return int(self.palm_pose.shape[0])
@@ -190,7 +192,7 @@ class Trajectory:
         arrays["tip_state"] = arrays["tip_state"].astype(np.int8)
         arrays["phase"] = arrays["phase"].astype(np.int8)
         arrays["object_faces"] = arrays["object_faces"].astype(np.int64)
-        names = {f.name for f in fields(cls)}
+        names = {f.name for f in fields(cls) if f.init}
         return cls(**{k: v for k, v in {**strings, **arrays}.items() if k in names})
 
     def configuration(self, k: int):
@@ -202,10 +204,16 @@ class Trajectory:
                              tip_state=self.tip_state[k], phase=int(self.phase[k]), iteration=k)
 
     def object(self):
-        """The grasped object as a :class:`hugger.Object`."""
-        from .world import Object
+        """The grasped object as a :class:`hugger.Object`: built (validation and BVH) on the first
+        call from ``object_vertices``/``object_faces`` as they are then, and kept for later calls,
+        so that reports, figures and checks of one trajectory share it. The arrays are the plan's
+        record; edit a copy (``dataclasses.replace``), not the arrays in place."""
+        if self._object is None:
+            from .world import Object
 
-        return Object(self.object_vertices, self.object_faces, warn_size=False)  # warned when it was made
+            obj = Object(self.object_vertices, self.object_faces, warn_size=False)  # warned when it was made
+            object.__setattr__(self, "_object", obj)  # a cache on a frozen dataclass
+        return self._object
 
     def link_gaps(self, k: int = -1, obj=None) -> np.ndarray:
         """(M, N) gap (m) between each link capsule and the object at configuration k."""

@@ -36,6 +36,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from ._checks import positive
 from .trajectory import CONTACT_DISTANCE, Trajectory
 
 __all__ = ["CONTACT_DISTANCE", "RENDER_SUFFIXES", "STATE_COLORS", "animate", "draw_configuration", "ffmpeg_path",
@@ -140,16 +141,6 @@ def _check_still(path: Any) -> None:
     if path is not None and _suffix(path) not in _STILL_EXTENSIONS:
         raise ValueError(f"cannot write a figure to {Path(os.fspath(path)).name!r}: "
                          f"use one of {', '.join(_STILL_EXTENSIONS)}")
-
-
-def _check_dpi(dpi: Any) -> float:
-    try:
-        d = float(dpi)
-    except (TypeError, ValueError):
-        raise ValueError(f"dpi must be a number, got {dpi!r}") from None
-    if not math.isfinite(d) or d <= 0:
-        raise ValueError(f"dpi must be positive, got {dpi!r}")
-    return d
 
 
 def _save(fig: Any, path: Any, dpi: float) -> None:
@@ -577,7 +568,7 @@ def _still(traj: Any, path: Any, dpi: Any, max_faces: Any):
     plt = _pyplot()
     traj = _check_traj(traj)
     _check_still(path)
-    return plt, traj, _check_dpi(dpi), _Scene(traj, _check_faces(max_faces))
+    return plt, traj, positive("dpi", dpi), _Scene(traj, _check_faces(max_faces))
 
 
 def fig4(traj: Trajectory, path: str | os.PathLike | None = None, *, dpi: float = 120,
@@ -682,7 +673,7 @@ def tipstate_plot(traj: Trajectory, path: str | os.PathLike | None = None, *, dp
 
     traj = _check_traj(traj)
     _check_still(path)
-    dpi = _check_dpi(dpi)
+    dpi = positive("dpi", dpi)
     if isinstance(max_samples, bool) or not isinstance(max_samples, (int, np.integer)) or max_samples < 1:
         raise ValueError(f"max_samples must be a positive whole number, got {max_samples!r}")
     count, fingers = traj.tip_state.shape
@@ -760,17 +751,12 @@ def animate(traj: Trajectory, path: str | os.PathLike, fps: float = 30, max_fram
     ext = _suffix(path)
     if ext not in _MOVIE_EXTENSIONS:
         raise ValueError(f"cannot animate to {Path(os.fspath(path)).name!r}: use .gif or .mp4")
-    try:
-        fps = float(fps)
-    except (TypeError, ValueError):
-        raise ValueError(f"fps must be a number, got {fps!r}") from None
-    if not math.isfinite(fps) or fps <= 0:
-        raise ValueError(f"fps must be positive, got {fps!r}")
+    fps = positive("fps", fps)
     if isinstance(max_frames, bool) or not isinstance(max_frames, (int, np.integer)) or max_frames < 1:
         raise ValueError(f"max_frames must be a positive whole number, got {max_frames!r}")
     if progress is not None and not callable(progress):
         raise ValueError("progress must be callable as progress(i, n)")
-    dpi = _check_dpi(dpi)
+    dpi = positive("dpi", dpi)
     max_faces = _check_faces(max_faces)
     _camera(view)
     rc = {}
