@@ -3,7 +3,8 @@
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(CURDIR)/$(VENV)/bin
-APT_PACKAGES := libeigen3-dev libfcl-dev libgtest-dev
+# chromium and chromium-driver: the headless browser the viewer test drives (tests/test_viewer.py)
+APT_PACKAGES := libeigen3-dev libfcl-dev libgtest-dev chromium chromium-driver
 export PATH := $(BIN):$(PATH)
 
 .PHONY: help deps venv install demo test test-cpp test-py test-sanitize fuzz bench clean

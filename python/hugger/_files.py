@@ -1,0 +1,36 @@
+"""Atomic writes: an output appears under its final name complete, or not at all."""
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from pathlib import Path
+from typing import Any, Iterator
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+    """A temporary path beside ``path`` with the same suffix (writers pick the format from it);
+    renamed to ``path`` when the block ends normally, removed when it raises (an interrupted
+    write never leaves a half-written file under the final name). The parent directory must exist."""
+    final = Path(os.fspath(path))
+    parent = final.parent
+    if not parent.is_dir():
+        raise FileNotFoundError(f"no such directory: {str(parent)!r} (for {str(final)!r})")
+    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=f".part{final.suffix}", dir=parent)
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        yield tmp_path
+        os.replace(tmp_path, final)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp_path.unlink()
+        raise
+
+
+def write_atomic(path: str | os.PathLike, data: Any) -> None:
+    """Write ``data`` (bytes or str) to ``path`` atomically."""
+    raw = data.encode() if isinstance(data, str) else bytes(data)
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(raw)
