@@ -68,12 +68,27 @@ def test_case_forms_and_shared_hand(cases, sequential, hand):
 
     forms = [
         (hand, c0["obj"], c0["target"], c0["palm_pose"]),
-        {"object": c1["obj"], "target": c1["target"], "palm_pose": c1["palm_pose"]},
+        {"obj": c1["obj"], "target": c1["target"], "palm_pose": c1["palm_pose"]},
         Case(c2["obj"], np.zeros(3), c2["palm_pose"]),
     ]
     out = hugger.plan_many(forms, hand=hand, threads=2)
     for t, ref in zip(out, sequential[:3]):
         assert same(t, ref)
+
+
+def test_a_mapping_case_names_the_object_obj_only(cases, hand):
+    c = cases[0]
+    with pytest.raises(ValueError, match=r"case 0: unknown keys \['object'\] \(the object's key is 'obj'\)"):
+        hugger.plan_many([{"object": c["obj"], "target": c["target"], "palm_pose": c["palm_pose"]}], hand=hand)
+
+
+def test_default_cases_carry_their_hand_and_share_loaded_objects():
+    small = hugger.Hand(fingers=3, links=3)
+    cases = [hugger.scenarios.default_case("sphere", small), hugger.scenarios.default_case("sphere")]
+    assert cases[0].hand is small and isinstance(cases[1].hand, hugger.Hand)
+    assert cases[0].obj is cases[1].obj  # made once
+    a, b = hugger.plan_many(cases, threads=2)  # no hand argument needed
+    assert a.hand["fingers"] == 3 and b.hand["fingers"] == 5
 
 
 def test_parameters_global_and_per_case(cases, hand):

@@ -46,7 +46,7 @@ def test_plan_every_builtin_with_defaults(name, tmp_path, capsys, checker):
     assert code == 0, err
     report = json.loads(text)
     for key in ("status", "configurations", "plan_time_s", "configurations_per_s", "palm_contact", "links_in_contact",
-                "contacts", "epsilon", "volume"):
+                "contacts", "ferrari_canny_epsilon", "wrench_space_volume"):
         assert key in report, key
     assert report["status"] == "done"
     traj = hugger.Trajectory.load(out)
@@ -86,11 +86,59 @@ def test_plan_mesh_file_with_scale(tmp_path, capsys):
     mesh = tmp_path / "ball_mm.stl"
     trimesh.Trimesh(40.0 * v, f, process=False).export(mesh)  # a 4 cm ball in millimetres
     code, _, err = run(["plan", mesh, "--out", tmp_path / "a.npz"], capsys)
-    assert "hugger: warning: " in err and "millimetres" in err  # warned about the implausible size
+    # an implausible size (millimetres read as metres) is refused before planning, unless --force
+    assert code == 2 and err.startswith("hugger: error: ") and "millimetres" in err and "--force" in err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "a.npz").exists()
     code, text, err = run(["plan", mesh, "--scale", "0.001", "--out", tmp_path / "b.npz", "--json"], capsys)
     assert code == 0, err
     assert json.loads(text)["status"] == "done"
+    assert "repaired" not in err and "merged" not in err  # reading an STL merges vertices: not a repair
 
+
+def test_plan_implausible_size_with_force(tmp_path, capsys):
+    trimesh = pytest.importorskip("trimesh")
+    v, f = objects.icosphere(2)
+    mesh = tmp_path / "speck.stl"
+    trimesh.Trimesh(4e-4 * v, f, process=False).export(mesh)  # a 0.8 mm speck: too small for a hand
+    code, _, err = run(["plan", mesh, "--out", tmp_path / "a.npz"], capsys)
+    assert code == 2 and "implausibly small" in err
+    code, text, err = run(["plan", mesh, "--out", tmp_path / "a.npz", "--force", "--json",
+                           "--max-iterations", "50"], capsys)
+    assert code == 0, err
+    assert "hugger: warning: " in err and "--force" in err and (tmp_path / "a.npz").is_file()
+
+
+def test_scale_is_refused_for_a_builtin(tmp_path, capsys):
+    code, _, err = run(["plan", "sphere", "--scale", "0.001", "--out", tmp_path / "a.npz"], capsys)
+    assert code == 2 and "--scale applies to mesh files only" in err and not (tmp_path / "a.npz").exists()
+    code, _, err = run(["plan", "sphere", "--scale", "1", "--out", tmp_path / "a.npz"], capsys)
+    assert code == 2  # even a scale of 1: the option is for mesh files
+    with pytest.raises(ValueError, match="mesh files only"):
+        hugger.scenarios.default_case("sphere", scale=0.001)
+
+
+def test_stl_load_reports_no_merged_vertices(tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    v, f = objects.icosphere(2)
+    mesh = tmp_path / "ball.stl"
+    trimesh.Trimesh(0.04 * v, f, process=False).export(mesh)  # STL: three vertices of its own per face
+    obj, repairs = objects.load_mesh(mesh)
+    assert repairs == [] and len(obj.vertices) == len(v)  # merged, and not called a repair
+
+
+def test_mesh_files_are_read_once_per_process(tmp_path, monkeypatch):
+    trimesh = pytest.importorskip("trimesh")
+    v, f = objects.icosphere(2)
+    mesh = tmp_path / "ball.stl"
+    trimesh.Trimesh(0.04 * v, f, process=False).export(mesh)
+    reads = []
+    real = objects.load_mesh
+    monkeypatch.setattr(objects, "load_mesh", lambda *a, **k: (reads.append(a), real(*a, **k))[1])
+    cases = [hugger.scenarios.default_case(mesh, turn_deg=t) for t in (0.0, 10.0, 20.0)]
+    assert len(reads) == 1 and cases[0].obj is cases[2].obj
+    os.utime(mesh, ns=(0, 0))  # a changed file is read again
+    hugger.scenarios.default_case(mesh)
+    assert len(reads) == 2
 
 @pytest.mark.parametrize("args, message", [
     (["plan", "banana", "--out", "x.npz"], "neither a built-in object"),
@@ -101,7 +149,26 @@ def test_plan_mesh_file_with_scale(tmp_path, capsys):
     (["plan", "sphere", "--out", "x.npz", "--epsilon", "0"], "epsilon"),
     (["plan", "sphere", "--out", "x.npz", "--target", "1", "0", "0"], "not inside"),
     (["plan", "sphere", "--out", "x.npz", "--start", "0", "0", "0.01"], ""),
-    (["plan", "sphere", "--out", "x.npz", "--scale", "0"], "scale"),
+    (["plan", "x.stl", "--out", "x.npz", "--scale", "0"], "scale"),
+    (["plan", "sphere", "--out", "no/such/dir/x.npz"], "no such directory 'no/such/dir'"),
+    (["plan", "sphere", "--out", "x.txt"], "--out must end in .npz, got 'x.txt'"),
+    (["plan", "sphere", "--out", "."], "--out must end in .npz"),
+    (["render", "p.npz", "--out", "no/such/dir/x.png"], "no such directory"),
+    (["render", "p.npz", "--out", "x.png", "--figure", "animation"], "--figure animation writes .gif or .mp4"),
+    (["render", "p.npz", "--out", "x.gif", "--figure", "fig4"], "--figure fig4 writes .png, .pdf or .svg"),
+    (["render", "p.npz", "--out", "x.png", "--fps", "10"], "--fps applies to animations only"),
+    (["render", "p.npz", "--out", "x.gif", "--fps", "0"], "--fps must be a positive number"),
+    (["render", "p.npz", "--out", "x.gif", "--frames", "0"], "--frames must be at least 1"),
+    (["render", "p.npz", "--out", "x.png", "--figure", "fig6"], "invalid choice"),
+    (["export-mjcf", "p.npz", "--out", "hand.mjcf"], "--out must end in .xml"),
+    (["export-scene", "p.npz", "--out", "grasp.gltf"], "--out must end in .glb"),
+    (["export-scene", "p.npz", "--out", "no/dir/grasp.glb"], "no such directory"),
+    (["export-scene", "no/such/plan.npz", "--out", "grasp.glb"], "no such trajectory file"),
+    (["view", "no/such/plan.npz", "--no-browser"], "no such trajectory file"),
+    (["view", "p.npz", "--port", "70000"], "--port must be in 0..65535"),
+    (["view"], "required: FILE"),
+    (["demo", "--out", "no/such/dir/demo"], "no such directory"),
+    (["validate", "no/such/plan.npz"], "no such trajectory file"),
     (["plan", "sphere", "--out", "x.npz", "--fingers", "two"], "invalid int value"),
     (["plan", "no/such/file.stl", "--out", "x.npz"], "no such mesh file"),
     (["info", "no/such/plan.npz"], "no such trajectory file"),
@@ -122,9 +189,82 @@ def test_info_reports_the_file(sphere_plan, capsys):
     assert code == 0
     info = json.loads(out)
     assert info["status"] == "done" and info["palm_contact"] is True and info["links_in_contact"] >= 15
-    assert "5 fingers x 5 links" in info["hand"]
+    traj = hugger.Trajectory.load(sphere_plan)
+    h = info["hand"]  # structured, not prose
+    assert h["fingers"] == 5 and h["links"] == 5 and h["link_radius"] == 0.004 and h["palm_radius"] == 0.03
+    assert np.array_equal(h["link_lengths"], traj.hand["link_lengths"])
+    o = info["object"]
+    assert o["name"] == "sphere" and o["source"] == "builtin" and o["triangles"] == len(traj.object_faces)
+    assert o["vertices"] == len(traj.object_vertices) and len(o["sha256"]) == 64
+    assert np.allclose(o["extent_m"], np.ptp(traj.object_vertices, axis=0))
+    assert o["volume_m3"] == pytest.approx(4 / 3 * np.pi * 0.04 ** 3, rel=0.02)
+    assert info["params"] == traj.params and info["planner_epsilon_m"] == traj.params["epsilon"]
+    assert "ferrari_canny_epsilon" in info and "epsilon" not in info  # the two epsilons, named apart
+    assert info["provenance"]["hugger_version"] == hugger.__version__
     code, out, _ = run(["info", sphere_plan], capsys)
-    assert code == 0 and "links_in_contact" in out
+    assert code == 0 and "links_in_contact" in out and "ferrari_canny_epsilon" in out
+
+
+def test_plan_records_provenance(tmp_path, capsys):
+    out = tmp_path / "p.npz"
+    args = ["plan", "ellipsoid", "--out", str(out), "--fingers", "3", "--step", "0.002"]
+    assert run(args, capsys)[0] == 0
+    traj = hugger.Trajectory.load(out)
+    prov = traj.provenance
+    assert prov["command"] == ["hugger", *args]
+    assert prov["object"] == "ellipsoid" and prov["object_source"] == "builtin"
+    assert prov["arguments"]["fingers"] == 3 and prov["arguments"]["step"] == 0.002
+    assert prov["hugger_version"] == hugger.__version__
+    assert prov["object_sha256"] == traj.object_sha256() and len(prov["object_sha256"]) == 64
+    # a mesh file is recorded by its absolute path
+    trimesh = pytest.importorskip("trimesh")
+    v, f = objects.icosphere(2)
+    trimesh.Trimesh(0.04 * v, f, process=False).export(tmp_path / "ball.stl")
+    assert run(["plan", tmp_path / "ball.stl", "--out", out], capsys)[0] == 0
+    prov = hugger.Trajectory.load(out).provenance
+    assert prov["object"] == str(tmp_path / "ball.stl") and prov["object_source"] == "file"
+
+
+def test_plan_report_names_the_two_epsilons_apart(sphere_plan, capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["plan", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    assert "overextension threshold" in out and "tip-to-surface" not in out
+    code, out, _ = run(["plan", "sphere", "--out", sphere_plan.parent / "again.npz", "--json"], capsys)
+    report = json.loads(out)
+    assert "epsilon" not in report and report["ferrari_canny_epsilon"] > 0
+
+
+def test_every_output_is_written_atomically(sphere_plan, tmp_path, capsys, monkeypatch):
+    # a writer that fails half way leaves no file under the final name, and no temporary file
+    pytest.importorskip("matplotlib")
+    from hugger import viz
+
+    def half_written(traj, path, **kwargs):
+        with open(path, "wb") as fh:
+            fh.write(b"\x89PNG half")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(viz, "overview", half_written)
+    code, _, err = run(["render", sphere_plan, "--out", tmp_path / "grasp.png"], capsys)
+    assert code == 130 and "interrupted" in err
+    assert list(tmp_path.iterdir()) == []
+    # the trajectory file too
+    traj = hugger.Trajectory.load(sphere_plan)
+
+    def broken(*a, **k):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(np, "savez_compressed", broken)
+    with pytest.raises(OSError, match="disk full"):
+        traj.save(tmp_path / "p.npz")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_out_refuses_a_missing_directory_and_creates_nothing(tmp_path, capsys):
+    out = tmp_path / "missing" / "x.npz"
+    code, _, err = run(["plan", "sphere", "--out", out], capsys)
+    assert code == 2 and "no such directory" in err and not (tmp_path / "missing").exists()
 
 
 def test_corrupt_trajectory_file_exit_2(tmp_path, capsys):
@@ -142,7 +282,46 @@ def test_render_png_and_bad_extension(sphere_plan, tmp_path, capsys):
     assert png.stat().st_size > 10_000
     code, _, err = run(["render", sphere_plan, "--out", tmp_path / "grasp.txt"], capsys)
     assert code == 2 and ".png" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["grasp.png"]  # no temporary file left
 
+
+def test_render_options(sphere_plan, tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    from PIL import Image
+
+    sizes = {}
+    for figure in ("fig4", "fig5", "tipstate", "sheet"):
+        out = tmp_path / f"{figure}.png"
+        code, _, err = run(["render", sphere_plan, "--out", out, "--figure", figure, "--dpi", "50"], capsys)
+        assert code == 0, err
+        with Image.open(out) as im:
+            sizes[figure] = im.size
+    from hugger import viz
+
+    # each figure at its own size, at 50 dpi
+    assert sizes["fig4"] == (round(viz.FIG4_SIZE[0] * 50), round(viz.FIG4_SIZE[1] * 50))
+    assert sizes["fig5"] == (round(viz.FIG5_SIZE[0] * 50), round(viz.FIG5_SIZE[1] * 50))
+    assert sizes["tipstate"] == (round(viz.TIPSTATE_SIZE[0] * 50), round(viz.TIPSTATE_SIZE[1] * 50))
+    assert sizes["sheet"] == (round(viz.OVERVIEW_SIZE[0] * 50), round(viz.OVERVIEW_SIZE[1] * 50))
+    gif = tmp_path / "a.gif"
+    code, _, err = run(["render", sphere_plan, "--out", gif, "--frames", "7", "--fps", "5", "--view", "side",
+                        "--dpi", "40"], capsys)
+    assert code == 0, err
+    with Image.open(gif) as im:
+        assert im.size == (round(viz.MOVIE_SIZE[0] * 40), round(viz.MOVIE_SIZE[1] * 40))
+        assert im.n_frames >= 7 and im.info["duration"] == pytest.approx(200, abs=10)
+        im.seek(im.n_frames - 1)  # the final grasp is held about a second (5 repeated frames, merged or not)
+        held = im.info["duration"] if im.n_frames == 7 else 200 * (im.n_frames - 6)
+        assert held >= 1000 - 10
+
+
+def test_vector_output_stays_small(sphere_plan, tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    for suffix in (".pdf", ".svg"):
+        out = tmp_path / f"sheet{suffix}"
+        code, _, err = run(["render", sphere_plan, "--out", out], capsys)
+        assert code == 0, err
+        assert out.stat().st_size < 1_500_000, (suffix, out.stat().st_size)  # the object surface is rasterised
 
 def test_internal_error_exits_1_with_a_report(monkeypatch, capsys):
     def boom(args):
@@ -224,7 +403,7 @@ def test_export_mjcf_and_validate(sphere_plan, tmp_path, capsys):
     model = mujoco.MjModel.from_xml_path(str(xml))
     assert model.njnt == 25 + 1  # 5 x 5 hinges and the object's free joint
     code, out, err = run(["validate", sphere_plan, "--json"], capsys)
-    assert code == 0, err
+    assert code == 0, err  # held: exit 0
     result = json.loads(out)
     assert result["held"] is True and set(result["directions"]) == {"+x", "-x", "+y", "-y", "+z", "-z"}
     assert "settings" in result
@@ -241,8 +420,31 @@ def test_validate_reports_a_diverged_direction(sphere_plan, capsys, monkeypatch)
     lost = {"displacement_m": None, "rotation_deg": None, "held": False, "diverged": True}
     monkeypatch.setattr(physics, "validate", lambda traj: {"held": False, "directions": {"+x": held, "-x": lost}})
     code, out, err = run(["validate", sphere_plan], capsys)
-    assert code == 0, err
+    assert code == 1, err  # not held: exit 1
     assert "-x  the simulation diverged: LOST" in out and "+x  moved" in out and "verdict: not held" in out
+
+
+def test_validate_exit_status_and_lost_objects(sphere_plan, capsys, monkeypatch):
+    from hugger import physics
+
+    held = {"displacement_m": 0.001, "rotation_deg": 0.5, "held": True}
+    slipped = {"displacement_m": 0.07, "rotation_deg": 3.0, "held": False}
+    flew = {"displacement_m": 186.89144, "rotation_deg": 170.0, "held": False}
+    results = {"held": {"held": True, "directions": {"+x": held}},
+               "not held": {"held": False, "directions": {"+x": held, "-x": slipped, "+z": flew}}}
+    for verdict, result in results.items():
+        monkeypatch.setattr(physics, "validate", lambda traj, r=result: r)
+        code, out, err = run(["validate", sphere_plan], capsys)
+        assert code == (0 if verdict == "held" else 1), err
+        assert f"verdict: {verdict}" in out
+        code, out, _ = run(["validate", sphere_plan, "--json"], capsys)
+        assert code == (0 if verdict == "held" else 1) and json.loads(out)["held"] is (verdict == "held")
+    code, out, _ = run(["validate", sphere_plan], capsys)
+    assert "-x  moved   70.00 mm" in out and "LOST" in out
+    assert "+z  lost (moved more than 200 mm)" in out and "186891" not in out
+    with pytest.raises(SystemExit):
+        cli.main(["validate", "--help"])
+    assert "exit 0 held, 1 not held, 2 bad input" in " ".join(capsys.readouterr().out.split())
 
 
 def test_plan_timeout_gives_a_partial_plan(tmp_path, capsys, checker):

@@ -23,7 +23,7 @@ from .world import Object
 
 __version__ = "0.1.0"
 
-_LAZY = ("analysis", "viz", "physics", "cli")
+_LAZY = ("analysis", "viz", "physics", "cli", "viewer")
 
 
 def __getattr__(name: str):

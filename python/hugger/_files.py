@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
+import secrets
 from pathlib import Path
 from typing import Any, Iterator
 
@@ -17,9 +17,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     parent = final.parent
     if not parent.is_dir():
         raise FileNotFoundError(f"no such directory: {str(parent)!r} (for {str(final)!r})")
-    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=f".part{final.suffix}", dir=parent)
-    os.close(fd)
-    tmp_path = Path(tmp)
+    # not created here (mkstemp would make it private, mode 0600): the writer creates it as any file
+    tmp_path = parent / f".{final.name}.{os.getpid()}-{secrets.token_hex(6)}.part{final.suffix}"
     try:
         yield tmp_path
         os.replace(tmp_path, final)

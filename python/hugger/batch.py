@@ -60,12 +60,11 @@ def _job(index: int, case: Any, hand: Hand | None, params: dict, timeout: float 
     object with ``obj``, ``target`` and ``palm_pose`` attributes (like ``hugger.scenarios.Case``)."""
     own: dict = {}
     if isinstance(case, Mapping):
-        unknown = set(case) - {"hand", "obj", "object", "target", "palm_pose", "timeout", *_PARAMS}
+        unknown = set(case) - {"hand", "obj", "target", "palm_pose", "timeout", *_PARAMS}
         if unknown:
-            raise ValueError(f"case {index}: unknown keys {sorted(unknown)}")
-        if "obj" in case and "object" in case:
-            raise ValueError(f"case {index}: give 'obj' or 'object', not both")
-        c_hand, obj = case.get("hand", hand), case.get("obj", case.get("object"))
+            hint = " (the object's key is 'obj')" if "object" in unknown else ""
+            raise ValueError(f"case {index}: unknown keys {sorted(unknown)}{hint}")
+        c_hand, obj = case.get("hand", hand), case.get("obj")
         target, pose = case.get("target"), case.get("palm_pose")
         own = {k: case[k] for k in _PARAMS if k in case}
         if "timeout" in case:
@@ -103,7 +102,7 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
               errors: str = "raise", **params: Any) -> list[Trajectory] | list[Trajectory | CaseError]:
     """Plan many independent cases on ``threads`` threads; trajectories in input order.
 
-    Each case is a mapping with ``hand`` (or the ``hand`` argument), ``obj`` (or ``object``),
+    Each case is a mapping with ``hand`` (or the ``hand`` argument), ``obj``,
     ``target``, ``palm_pose`` and optionally ``step``, ``epsilon``, ``contact_tolerance``,
     ``max_iterations`` and ``timeout``; or a tuple ``(hand, obj, target, palm_pose[, params])``;
     or an object with ``obj``, ``target`` and ``palm_pose`` attributes such as

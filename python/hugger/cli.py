@@ -2,18 +2,23 @@
 
     hugger plan OBJECT --out plan.npz [--json]   plan a grasp of a built-in object or a mesh file
     hugger demo [--out DIR]                       the paper's example, with figures and animation
-    hugger render plan.npz --out fig.png|.gif|.mp4
+    hugger render plan.npz --out fig.png|.pdf|.svg|.gif|.mp4 [--figure F --fps --frames --view --dpi]
     hugger info plan.npz [--json]                 what a trajectory file holds, and its grasp
     hugger objects                                the built-in objects
-    hugger validate plan.npz [--json]             hold test in MuJoCo (extra: physics)
+    hugger validate plan.npz [--json]             hold test in MuJoCo (extra: physics); exit 1 if not held
     hugger export-mjcf plan.npz --out hand.xml    the hand and object as MJCF
+    hugger view a.npz [b.npz ...] [--port P]      interactive 3D view in the browser (extra: view)
+    hugger export-scene plan.npz --out grasp.glb  the grasp as a glTF scene (extra: view)
 
 Exit status: 0 success, 2 bad input or a missing optional dependency (one line on standard
-error, no traceback), 1 an internal error.
+error, no traceback), 1 an internal error (or, for ``validate``, a grasp that is not held).
+Every output file is written atomically (a temporary name, then a rename) into a directory
+that must exist, with the suffix its kind needs.
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
@@ -21,9 +26,14 @@ import time
 from pathlib import Path
 from typing import Any, Sequence
 
+from ._files import atomic_path
 from ._progress import Progress
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
+#: ``hugger validate``: the grasp is not held (exit 1, like an internal error but without a traceback).
+EXIT_NOT_HELD = 1
+#: ``hugger validate`` says "lost" rather than a distance past this displacement (m): the object left the hand.
+LOST_DISPLACEMENT = 0.2
 
 
 class UsageError(Exception):
@@ -52,7 +62,9 @@ def _hand_options(p: argparse.ArgumentParser) -> None:
 def _planner_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("planner (defaults as hugger.Planner)")
     g.add_argument("--step", type=float, help="approach step, m (default shortest link / 20)")
-    g.add_argument("--epsilon", type=float, help="tip-to-surface distance epsilon, m (default step / 10)")
+    g.add_argument("--epsilon", type=float,
+                   help="overextension threshold epsilon of the planner, m (default step / 10); not the "
+                        "Ferrari-Canny epsilon of the grasp quality")
     g.add_argument("--contact-tolerance", type=float, help="sensing distance delta, m (default 1e-4)")
     g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
     g.add_argument("--timeout", type=float, metavar="SECONDS",
@@ -68,7 +80,10 @@ def _case_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--turn", type=float, default=0.0, metavar="DEG",
                    help="turn the default start away from T by DEG about the palm's y axis (default 0; "
                         "not with --start or --normal)")
-    g.add_argument("--scale", type=float, default=1.0, help="multiply mesh coordinates (0.001 for millimetres)")
+    g.add_argument("--scale", type=float, help="multiply a mesh file's coordinates (0.001 for millimetres; "
+                                               "not for built-in objects)")
+    g.add_argument("--force", action="store_true",
+                   help="plan even when the object's size is implausible for a hand (millimetres read as metres)")
 
 
 def _hand(args: argparse.Namespace):
@@ -92,8 +107,41 @@ def _load(path: str):
     return hugger.Trajectory.load(path)
 
 
-_ANALYSIS_KEYS = ("palm_contact", "links_in_contact", "links", "contacts", "force_closure", "epsilon", "volume",
-                  "per_finger_contacts", "wrap_angle_deg", "mu")
+# --- output paths: an existing directory, the right suffix, written atomically ------------------
+
+def _out_path(value: str, suffixes: Sequence[str], option: str = "--out") -> Path:
+    """``value`` as an output path: its directory must exist (nothing is created silently) and
+    its suffix must be one of ``suffixes`` (case-insensitive); otherwise a UsageError (exit 2)."""
+    out = Path(value)
+    if out.suffix.lower() not in suffixes:
+        raise UsageError(f"{option} must end in {' or '.join(suffixes)}, got {out.name!r}")
+    if out.is_dir():
+        raise UsageError(f"{option} {value!r} is a directory, expected a file name ending in {' or '.join(suffixes)}")
+    parent = out.parent
+    if not parent.is_dir():
+        raise UsageError(f"{option}: no such directory {str(parent)!r} (create it first)")
+    return out
+
+
+def _out_dir(value: str, option: str = "--out") -> Path:
+    """An output folder: created if missing, but its parent must exist."""
+    out = Path(value)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"{option} {value!r} exists and is not a directory")
+    if not out.parent.is_dir():
+        raise UsageError(f"{option}: no such directory {str(out.parent)!r} (create it first)")
+    out.mkdir(exist_ok=True)
+    return out
+
+
+#: The analysis figures of ``plan``, ``info`` and ``demo`` reports, under names that say what they
+#: are: (key in the report, key in :func:`hugger.analysis.analyze`). The planner's epsilon (a
+#: parameter) is ``planner_epsilon_m``; the grasp quality's is ``ferrari_canny_epsilon``.
+_ANALYSIS_KEYS = (("palm_contact", "palm_contact"), ("links_in_contact", "links_in_contact"), ("links", "links"),
+                  ("contacts", "contacts"), ("force_closure", "force_closure"),
+                  ("ferrari_canny_epsilon", "epsilon"), ("wrench_space_volume", "volume"),
+                  ("per_finger_contacts", "per_finger_contacts"), ("wrap_angle_deg", "wrap_angle_deg"),
+                  ("mu", "mu"))
 
 
 def _report(traj, plan_time: float | None = None, obj=None) -> dict[str, Any]:
@@ -107,7 +155,7 @@ def _report(traj, plan_time: float | None = None, obj=None) -> dict[str, Any]:
         out["plan_time_s"] = round(plan_time, 6)
         out["configurations_per_s"] = round(len(traj) / plan_time, 1) if plan_time > 0 else None
     a = analysis.analyze(traj, obj=obj)
-    out.update({key: a[key] for key in _ANALYSIS_KEYS})
+    out.update({key: a[source] for key, source in _ANALYSIS_KEYS})
     return out
 
 
@@ -139,17 +187,42 @@ def _plan(case, hand, params: dict[str, Any], label: str, timeout: float | None 
 # Commands
 
 
+def _provenance(args: argparse.Namespace, case, argv: Sequence[str] | None) -> dict[str, Any]:
+    """What made a trajectory file: the command line and the object's name or path."""
+    from .objects import BUILTINS
+
+    spec = os.fspath(args.object)
+    builtin = spec in BUILTINS
+    return {"command": ["hugger", *(sys.argv[1:] if argv is None else argv)],
+            "object": spec if builtin else os.path.abspath(spec), "object_source": "builtin" if builtin else "file",
+            "arguments": {k: v for k, v in sorted(vars(args).items()) if k not in ("func", "json") and not k.startswith("_")}}
+
+
 def cmd_plan(args: argparse.Namespace) -> int:
+    import warnings
+
+    from .hand import implausible_size
+    from .objects import BUILTINS
     from .scenarios import default_case
 
+    out = _out_path(args.out, (".npz",))
+    if args.scale is not None and os.fspath(args.object) in BUILTINS:
+        raise UsageError(f"--scale applies to mesh files only; {args.object!r} is a built-in object, sized in metres")
     hand = _hand(args)
-    case = default_case(args.object, hand, scale=args.scale, target=args.target, start=args.start, normal=args.normal,
-                        turn_deg=args.turn)
+    with warnings.catch_warnings():  # the size is judged below, with --force
+        warnings.filterwarnings("ignore", message=r".*implausibly", category=UserWarning)
+        case = default_case(args.object, hand, scale=1.0 if args.scale is None else args.scale, target=args.target,
+                            start=args.start, normal=args.normal, turn_deg=args.turn)
+    size = float((case.obj.bounds[1] - case.obj.bounds[0]).max())
+    message = implausible_size(case.name, size)
+    if message and not args.force:
+        raise UsageError(f"{message}; refused (give --scale, or --force to plan it anyway)")
+    if message:
+        _note(f"warning: {message} (planning it anyway: --force)")
     for r in case.repairs:
         _note(f"repaired {case.name}: {r}")
     traj, elapsed = _plan(case, hand, _params(args), case.name, args.timeout)
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    traj = traj.with_provenance(**_provenance(args, case, getattr(args, "_argv", None)))
     traj.save(out)
     report = {"object": case.name, "out": str(out), **_report(traj, elapsed, case.obj)}
     if args.json:
@@ -170,21 +243,21 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
     viz.require()  # fail early, before planning, when the viz extra is missing
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = _out_dir(args.out)
     hand = hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
     case = default_case("curvy", hand, turn_deg=60.0)
     traj, elapsed = _plan(case, hand, {}, "curvy")
+    traj = traj.with_provenance(command=["hugger", "demo", "--out", str(args.out)], object="curvy",
+                                object_source="builtin", arguments={"turn": 60.0})
     traj.save(out / "plan.npz")
     summary = {"object": "curvy", "hand": repr(hand), **_report(traj, elapsed, case.obj)}
     written = ["plan.npz"]
     with Progress("drawing figures", total=3) as p:
-        viz.fig4(traj, out / "fig4.png")
-        p.update(1)
-        viz.fig5(traj, out / "fig5.png")
-        p.update(2)
-        viz.tipstate_plot(traj, out / "tipstate.png")
-        p.update(3)
+        for i, (name, draw) in enumerate((("fig4.png", viz.fig4), ("fig5.png", viz.fig5),
+                                          ("tipstate.png", viz.tipstate_plot)), start=1):
+            with atomic_path(out / name) as tmp:
+                draw(traj, tmp)
+            p.update(i)
     written += ["fig4.png", "fig5.png", "tipstate.png"]
     movies = ["animation.gif"]
     if viz.ffmpeg_path() is not None:
@@ -192,11 +265,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
     else:
         _note("ffmpeg not found: writing the GIF only (pip install imageio-ffmpeg for MP4)")
     for name in movies:
-        with Progress(f"writing {name}", total=1) as p:
-            viz.animate(traj, out / name, max_frames=120, progress=lambda i, n, p=p: (setattr(p, "total", n), p.update(i)))
+        with Progress(f"writing {name}", total=1) as p, atomic_path(out / name) as tmp:
+            viz.animate(traj, tmp, max_frames=120, hold=1.0,
+                        progress=lambda i, n, p=p: (setattr(p, "total", n), p.update(i)))
         written.append(name)
     summary["files"] = written
-    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    with atomic_path(out / "summary.json") as tmp:
+        tmp.write_text(json.dumps(summary, indent=2) + "\n")
     written.append("summary.json")
     _print_table(summary)
     print(f"written to {out}/: {', '.join(written)}")
@@ -205,33 +280,89 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+# --- render: figures and animations ---------------------------------------------------------------
+
+#: ``hugger render --figure``: what each draws and the suffixes it writes.
+FIGURES = {"sheet": "Fig. 4's panels and Fig. 5's two views on one sheet", "fig4": "the paper's Fig. 4",
+           "fig5": "the paper's Fig. 5", "tipstate": "TipState and links in contact over the plan",
+           "animation": "the whole plan as a GIF or MP4"}
+
+
 def cmd_render(args: argparse.Namespace) -> int:
     from . import viz
 
+    out = _out_path(args.out, viz.RENDER_SUFFIXES)
+    movie = out.suffix.lower() in (".gif", ".mp4")
+    figure = args.figure or ("animation" if movie else "sheet")
+    if (figure == "animation") != movie:
+        want = ".gif or .mp4" if figure == "animation" else ".png, .pdf or .svg"
+        raise UsageError(f"--figure {figure} writes {want}, got {out.name!r}")
+    if figure != "animation":
+        for option, value in (("--fps", args.fps), ("--frames", args.frames), ("--view", args.view)):
+            if value is not None:
+                raise UsageError(f"{option} applies to animations only (--figure animation, .gif or .mp4)")
+    for option, value in (("--fps", args.fps), ("--dpi", args.dpi)):
+        if value is not None and not (value > 0 and value < float("inf")):
+            raise UsageError(f"{option} must be a positive number, got {value}")
+    if args.frames is not None and args.frames < 1:
+        raise UsageError(f"--frames must be at least 1, got {args.frames}")
     traj = _load(args.file)
-    out = Path(args.out)
-    if out.suffix.lower() not in viz.RENDER_SUFFIXES:
-        raise UsageError(f"--out must end in one of {', '.join(viz.RENDER_SUFFIXES)}, got {out.name!r}")
-    with Progress(f"rendering {out.name}", total=1) as p:
-        viz.render(traj, out, progress=lambda i, n: (setattr(p, "total", n), p.update(i)))
+    kwargs: dict[str, Any] = {}
+    if args.dpi is not None:
+        kwargs["dpi"] = args.dpi
+    with Progress(f"rendering {out.name}", total=1) as p, atomic_path(out) as tmp:
+        if figure == "animation":
+            for key, value in (("fps", args.fps), ("max_frames", args.frames), ("view", args.view)):
+                if value is not None:
+                    kwargs[key] = value
+            viz.animate(traj, tmp, progress=lambda i, n: (setattr(p, "total", n), p.update(i)), hold=1.0, **kwargs)
+        else:
+            draw = {"sheet": viz.overview, "fig4": viz.fig4, "fig5": viz.fig5, "tipstate": viz.tipstate_plot}[figure]
+            draw(traj, tmp, **kwargs)
+            p.update(1)
     print(f"wrote {out}")
     return EXIT_OK
 
 
-def cmd_info(args: argparse.Namespace) -> int:
-    traj = _load(args.file)
-    h, prm = traj.hand, traj.params
-    obj = traj.object()
+def _hand_info(h: dict[str, Any]) -> dict[str, Any]:
+    """The hand of a trajectory file as structured fields (sizes in m, angles in rad)."""
+    keys = ("fingers", "links", "link_lengths", "link_radius", "palm_radius", "palm_thickness", "finger_angles",
+            "finger_roots", "finger_directions", "joint_limits", "rest_angles")
+    return {k: h[k] for k in keys if k in h}
+
+
+def _object_info(traj, obj) -> dict[str, Any]:
     lo, hi = obj.bounds
+    prov = traj.provenance
+    return {"name": prov.get("object"), "source": prov.get("object_source"), "sha256": traj.object_sha256(),
+            "triangles": int(len(obj.faces)), "vertices": int(len(obj.vertices)),
+            "extent_m": [float(e) for e in hi - lo], "bounds_m": [[float(x) for x in lo], [float(x) for x in hi]],
+            "volume_m3": float(obj.volume)}
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from .trajectory import FORMAT_VERSION
+
+    traj = _load(args.file)
+    prm = traj.params
+    obj = traj.object()
+    if args.json:
+        info = {"file": args.file, "format_version": FORMAT_VERSION, "hand": _hand_info(traj.hand), "object": _object_info(traj, obj),
+                "target": [float(x) for x in traj.target], "params": prm, "provenance": traj.provenance,
+                "step_m": prm.get("step"), "planner_epsilon_m": prm.get("epsilon"), **_report(traj, obj=obj)}
+        print(json.dumps(info))
+        return EXIT_OK
+    h = traj.hand
+    lo, hi = obj.bounds
+    prov = traj.provenance
     info = {"file": args.file, "hand": f"{h['fingers']} fingers x {h['links']} links, link radius {h['link_radius']} m, "
                                       f"palm radius {h['palm_radius']} m",
-            "object": f"{len(obj.faces)} triangles, {' x '.join(f'{1000 * e:.0f}' for e in hi - lo)} mm",
+            "object": f"{prov.get('object', '(not recorded)')}: {len(obj.faces)} triangles, "
+                      f"{' x '.join(f'{1000 * e:.0f}' for e in hi - lo)} mm",
+            "object_sha256": traj.object_sha256(), "hugger_version": prov.get("hugger_version", "(not recorded)"),
             "target": [float(x) for x in traj.target],
-            "step_m": prm.get("step"), "tip_epsilon_m": prm.get("epsilon"), **_report(traj, obj=obj)}
-    if args.json:
-        print(json.dumps(info))
-    else:
-        _print_table(info)
+            "step_m": prm.get("step"), "planner_epsilon_m": prm.get("epsilon"), **_report(traj, obj=obj)}
+    _print_table(info)
     return EXIT_OK
 
 
@@ -243,7 +374,19 @@ def cmd_objects(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _moved(r: dict[str, Any]) -> str:
+    """One direction's result of the hold test, in words: a distance, or "lost" past LOST_DISPLACEMENT."""
+    if r.get("diverged") or r.get("displacement_m") is None:
+        return "the simulation diverged: LOST"
+    d = float(r["displacement_m"])
+    if d > LOST_DISPLACEMENT:
+        return f"lost (moved more than {1000 * LOST_DISPLACEMENT:.0f} mm)"
+    return (f"moved {1000 * d:7.2f} mm  turned {r['rotation_deg']:6.2f} deg  "
+            f"{'held' if r['held'] else 'LOST'}")
+
+
 def cmd_validate(args: argparse.Namespace) -> int:
+    """Exit 0 when the grasp is held in all six directions, 1 when it is not, 2 for bad input."""
     from . import physics
 
     traj = _load(args.file)
@@ -253,36 +396,74 @@ def cmd_validate(args: argparse.Namespace) -> int:
         print(json.dumps(result))
     else:
         for d, r in result["directions"].items():
-            if r.get("diverged"):
-                print(f"{d:3s} the simulation diverged: LOST")
-                continue
-            print(f"{d:3s} moved {1000 * r['displacement_m']:7.2f} mm  turned {r['rotation_deg']:6.2f} deg  "
-                  f"{'held' if r['held'] else 'LOST'}")
+            print(f"{d:3s} {_moved(r)}")
         print(f"verdict: {'held' if result['held'] else 'not held'}")
-    return EXIT_OK
+    return EXIT_OK if result["held"] else EXIT_NOT_HELD
 
 
 def cmd_export_mjcf(args: argparse.Namespace) -> int:
     from . import physics
 
+    out = _out_path(args.out, (".xml",))
     traj = _load(args.file)
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    physics.export_mjcf(traj, out, k=args.configuration)
+    with atomic_path(out) as tmp:
+        physics.export_mjcf(traj, tmp, k=args.configuration)
     print(f"wrote {out}")
+    return EXIT_OK
+
+
+# --- the 3D viewer and glTF export (extra: view) --------------------------------------------------
+
+def cmd_view(args: argparse.Namespace) -> int:
+    from . import viewer
+
+    if not 0 <= args.port <= 65535:
+        raise UsageError(f"--port must be in 0..65535, got {args.port}")
+    if args.fps is not None and not (0 < args.fps < float("inf")):
+        raise UsageError(f"--fps must be a positive number, got {args.fps}")
+    viewer._viser()  # the extra, before loading anything
+    trajs = [_load(f) for f in args.files]
+    labels = [f"{os.path.basename(f)}: {t.status}, {len(t)} configurations" for f, t in zip(args.files, trajs)]
+    v = viewer.Viewer(trajs, host=args.host, port=args.port, fps=args.fps or 20.0, labels=labels)
+    print(f"hugger: serving {len(trajs)} plan{'s' if len(trajs) > 1 else ''} at {v.url} (Ctrl-C stops)", flush=True)
+    if not args.no_browser:
+        import webbrowser
+
+        webbrowser.open(v.url)
+    try:
+        while True:
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        v.close()
+    return EXIT_OK
+
+
+def cmd_export_scene(args: argparse.Namespace) -> int:
+    from . import viewer
+
+    out = _out_path(args.out, (".glb",))
+    viewer._trimesh()
+    traj = _load(args.file)
+    with Progress(f"writing {out.name}", total=1):
+        scene = viewer.export_scene(traj, out, all_frames=args.all)
+    print(f"wrote {out}: {len(scene.graph.nodes_geometry)} meshes"
+          f"{f' over {len(traj)} configurations' if args.all else ' (the final configuration)'}")
     return EXIT_OK
 
 
 def build_parser() -> argparse.ArgumentParser:
     ap = _Parser(prog="hugger", description="Hugging grasps for multi-finger hands (Reznik & Lumelsky, ICRA 1994).",
-                 epilog="Exit status: 0 success, 2 bad input or missing optional dependency, 1 internal error.")
+                 epilog="Exit status: 0 success, 2 bad input or missing optional dependency, 1 internal error "
+                        "(hugger validate: 1 also when the grasp is not held).")
     ap.add_argument("--version", action="version", version=f"hugger {_version()}")
     sub = ap.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
 
     p = sub.add_parser("plan", help="plan a grasp of a built-in object or a mesh file")
     p.add_argument("object", help="a built-in object name (see 'hugger objects') or a mesh file (STL, OBJ, PLY, OFF, GLB)")
-    p.add_argument("--out", required=True, help="trajectory file to write (.npz)")
+    p.add_argument("--out", required=True, help="trajectory file to write (.npz), in an existing directory")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     _hand_options(p)
     _planner_options(p)
@@ -290,32 +471,58 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_plan)
 
     p = sub.add_parser("demo", help="the paper's example: plan, Fig. 4, Fig. 5, animation, summary.json")
-    p.add_argument("--out", default="demo-out", help="output folder (default demo-out)")
+    p.add_argument("--out", default="demo-out", help="output folder, created in an existing directory (default demo-out)")
     p.set_defaults(func=cmd_demo)
 
-    p = sub.add_parser("render", help="draw a trajectory: PNG/PDF/SVG panel, GIF or MP4 animation")
+    p = sub.add_parser("render", help="draw a trajectory: PNG/PDF/SVG figures, GIF or MP4 animation")
     p.add_argument("file", help="trajectory file (.npz)")
-    p.add_argument("--out", required=True, help="output path; its extension picks the kind")
+    p.add_argument("--out", required=True, help="output path (.png .pdf .svg .gif .mp4), in an existing directory")
+    p.add_argument("--figure", choices=tuple(FIGURES),
+                   help="what to draw: " + "; ".join(f"{k}: {v}" for k, v in FIGURES.items())
+                        + " (default: sheet for .png/.pdf/.svg, animation for .gif/.mp4)")
+    p.add_argument("--dpi", type=float, help="resolution, dots per inch (default 100 sheet and animation, 120 others)")
+    p.add_argument("--fps", type=float, help="animation: frames per second (default 30)")
+    p.add_argument("--frames", type=int, help="animation: at most this many frames, evenly spread (default 300)")
+    p.add_argument("--view", choices=("oblique", "side", "normal"), help="animation: the camera (default oblique)")
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("info", help="what a trajectory file holds, and the grasp it ends in")
     p.add_argument("file", help="trajectory file (.npz)")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--json", action="store_true", help="print one JSON object (hand, object, provenance structured)")
     p.set_defaults(func=cmd_info)
 
     p = sub.add_parser("objects", help="list the built-in objects: name, size, description")
     p.set_defaults(func=cmd_objects)
 
-    p = sub.add_parser("validate", help="hold test of the final grasp in MuJoCo (needs hugger[physics])")
+    p = sub.add_parser("validate", help="hold test of the final grasp in MuJoCo (needs hugger[physics]); "
+                                        "exit 0 held, 1 not held, 2 bad input",
+                       description="Hold test of the final grasp in MuJoCo (needs hugger[physics]): a force of 10 "
+                                   "times the object's weight along +x, -x, +y, -y, +z, -z in turn. Exit status: "
+                                   "0 held, 1 not held, 2 bad input.")
     p.add_argument("file", help="trajectory file (.npz)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_validate)
 
     p = sub.add_parser("export-mjcf", help="write the hand and object at a configuration as MJCF (hugger[physics])")
     p.add_argument("file", help="trajectory file (.npz)")
-    p.add_argument("--out", required=True, help="MJCF file to write (.xml)")
+    p.add_argument("--out", required=True, help="MJCF file to write (.xml), in an existing directory")
     p.add_argument("--configuration", type=int, default=-1, help="configuration index (default -1, the last)")
     p.set_defaults(func=cmd_export_mjcf)
+
+    p = sub.add_parser("view", help="interactive 3D view of one or more plans in the browser (needs hugger[view])")
+    p.add_argument("files", nargs="+", metavar="FILE", help="trajectory files (.npz), shown side by side")
+    p.add_argument("--port", type=int, default=8080, help="HTTP port (default 8080; 0 picks a free one)")
+    p.add_argument("--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1, this machine only)")
+    p.add_argument("--no-browser", action="store_true", help="do not open a web browser, just serve")
+    p.add_argument("--fps", type=float, help="playback frames per second (default 20)")
+    p.set_defaults(func=cmd_view)
+
+    p = sub.add_parser("export-scene", help="write the final grasp (or every configuration) as a glTF scene "
+                                            "(.glb; needs hugger[view])")
+    p.add_argument("file", help="trajectory file (.npz)")
+    p.add_argument("--out", required=True, help="glTF binary to write (.glb), in an existing directory")
+    p.add_argument("--all", action="store_true", help="every configuration, one group of nodes k<k>/ each")
+    p.set_defaults(func=cmd_export_scene)
     return ap
 
 
@@ -341,12 +548,17 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _main(argv: Sequence[str] | None) -> int:
     try:
         args = build_parser().parse_args(argv)
+        args._argv = None if argv is None else [str(a) for a in argv]
         return int(args.func(args))
     except (UsageError, ValueError, FileNotFoundError, IsADirectoryError, PermissionError, ImportError) as exc:
         print(f"hugger: error: {exc}", file=sys.stderr)
     except KeyboardInterrupt:
         print("hugger: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader of our output went away (hugger ... | head)
+        with contextlib.suppress(OSError):
+            sys.stdout = open(os.devnull, "w")
+        return EXIT_OK
     except Exception as exc:  # an internal error: keep the traceback for the report
         import traceback
 

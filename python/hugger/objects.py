@@ -275,12 +275,11 @@ def _repair(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[
     repairs: list[str] = []
     if not np.all(np.isfinite(v)):
         return v, f, repairs  # Object says which vertex
-    n0 = len(v)
     mesh = trimesh.Trimesh(v, f, process=False)
     mesh.merge_vertices()
     v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces, dtype=np.int64)
-    if len(v) < n0:
-        repairs.append(f"merged {n0 - len(v)} coincident vertices")
+    # merging coincident vertices is how an STL (one vertex triple per face) is read, not a
+    # repair: it is not reported
     repeat = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
     if repeat.any():
         f = f[~repeat]

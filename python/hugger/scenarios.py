@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,6 +32,7 @@ class Case:
     target: np.ndarray  #: T (3,), inside obj
     palm_pose: np.ndarray  #: (4, 4) start pose, clear of obj
     repairs: list[str] = field(default_factory=list)  #: what loading a mesh file repaired
+    hand: Hand | None = None  #: the hand the start pose was made for (what :func:`hugger.plan_many` plans with)
 
 
 def safe_distance(obj: Object, hand: Hand, target: Any, margin: float = 0.005) -> float:
@@ -70,24 +72,60 @@ def interior_target(obj: Object) -> np.ndarray:
     return c if c_depth > 0 and c_depth >= 0.5 * float(depth.max()) else best
 
 
+#: Mesh files already read, by (absolute path, size, modification time, scale): an Object is
+#: immutable, so cases built from one file share it (building 180 cases reads each file once).
+_MESH_CACHE: dict[tuple[str, int, int, float], tuple[Object, list[str]]] = {}
+_MESH_CACHE_SIZE = 64
+_MESH_LOCK = threading.Lock()
+#: The built-in objects already made (each is made once per process).
+_BUILTIN_CACHE: dict[str, Object] = {}
+
+
+def _load_mesh_cached(path: str, scale: float) -> tuple[Object, list[str]]:
+    try:
+        st = os.stat(path)
+    except OSError:
+        return objects.load_mesh(path, scale)  # says what is wrong
+    key = (os.path.abspath(path), st.st_size, st.st_mtime_ns, scale)
+    with _MESH_LOCK:
+        hit = _MESH_CACHE.get(key)
+    if hit is not None:
+        return hit[0], list(hit[1])
+    obj, repairs = objects.load_mesh(path, scale)
+    with _MESH_LOCK:
+        if len(_MESH_CACHE) >= _MESH_CACHE_SIZE:
+            _MESH_CACHE.pop(next(iter(_MESH_CACHE)))
+        _MESH_CACHE[key] = (obj, list(repairs))
+    return obj, repairs
+
+
 def load_object(spec: str | os.PathLike, scale: float = 1.0) -> tuple[str, Object, list[str]]:
-    """A built-in name or a mesh file path -> (name, Object, repairs)."""
+    """A built-in name or a mesh file path -> (name, Object, repairs).
+
+    ``scale`` multiplies a mesh file's coordinates; built-ins are sized in metres and refuse any
+    scale other than 1 (``ValueError``). A mesh file is read once per (path, size, modification
+    time, scale), and a built-in made once, the Object shared by later calls."""
     s = os.fspath(spec)
     scale = positive("scale", scale)
     if s in objects.BUILTINS:
         if scale != 1.0:
-            b = objects.BUILTINS[s].make()
-            return s, Object(b.vertices * float(scale), b.faces), []
-        return s, objects.get(s), []
+            raise ValueError(f"scale applies to mesh files only; {s!r} is a built-in object, sized in metres "
+                             f"(got scale {scale:g})")
+        with _MESH_LOCK:
+            if s not in _BUILTIN_CACHE:
+                _BUILTIN_CACHE[s] = objects.get(s)
+            return s, _BUILTIN_CACHE[s], []
     if os.path.splitext(s)[1].lower() in objects.MESH_SUFFIXES or os.path.exists(s):
-        obj, repairs = objects.load_mesh(s, scale)
+        obj, repairs = _load_mesh_cached(s, scale)
         return os.path.basename(s), obj, repairs
     raise ValueError(f"{s!r} is neither a built-in object ({', '.join(objects.BUILTINS)}) nor a mesh file")
 
 
 def default_case(spec: str | os.PathLike, hand: Hand | None = None, scale: float = 1.0, target: Any = None,
                  start: Any = None, normal: Any = None, turn_deg: float = 0.0) -> Case:
-    """The case the ``hugger plan`` command solves for ``spec`` (built-in name or mesh file).
+    """The case the ``hugger plan`` command solves for ``spec`` (built-in name or mesh file), with
+    ``hand`` (default ``Hand()``, the 5 x 5 hand) recorded in the case so that
+    ``plan_many([default_case(...), ...])`` plans it as the command would.
 
     ``target`` overrides T; ``start`` the palm centre; ``normal`` the palm normal (default: towards T).
     """
@@ -111,7 +149,7 @@ def default_case(spec: str | os.PathLike, hand: Hand | None = None, scale: float
         p = _finite("start", start) if start is not None else t - safe_distance(obj, hand, t) * _unit("normal", normal)
         n = _unit("normal", normal) if normal is not None else _unit("start - target", t - p)
         pose = look_at(p, p + n)
-    return Case(name=name, obj=obj, target=t, palm_pose=pose, repairs=repairs)
+    return Case(name=name, obj=obj, target=t, palm_pose=pose, repairs=repairs, hand=hand)
 
 
 def _finite(name: str, value: Any) -> np.ndarray:

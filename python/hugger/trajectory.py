@@ -1,17 +1,20 @@
 """The trajectory file (format 1, DESIGN.md section 5): a NumPy .npz without pickles."""
 from __future__ import annotations
 
+import hashlib
+import importlib.metadata
 import json
 import os
 import struct
 import tokenize
 import zipfile
 import zlib
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
 
+from ._files import atomic_path
 from .hand import MAX_FINGERS, MAX_LINKS
 
 FORMAT_VERSION = 1
@@ -61,6 +64,8 @@ class Trajectory:
     phase: np.ndarray
     status: str
     stats_json: str = "{}"
+    #: JSON object: what made the plan (see :attr:`provenance`); ``"{}"`` in files written before it existed
+    provenance_json: str = "{}"
     #: the Object built from object_vertices/object_faces by object(), kept for later calls
     _object: Any = field(default=None, init=False, repr=False, compare=False)
 
@@ -79,13 +84,43 @@ class Trajectory:
     def stats(self) -> dict:
         return json.loads(self.stats_json)
 
+    @property
+    def provenance(self) -> dict:
+        """What made the plan: ``hugger_version`` and ``object_sha256`` (filled in by :meth:`save`
+        when missing), and, when the ``hugger`` command or the caller recorded them, ``object``
+        (a built-in name or a mesh file's absolute path), ``object_source`` (``builtin`` or
+        ``file``), ``command`` (the command line as a list) and ``arguments`` (its parsed options)."""
+        return json.loads(self.provenance_json)
+
+    def with_provenance(self, **fields: Any) -> Trajectory:
+        """A copy whose provenance holds ``fields`` (JSON-serialisable) over the present ones."""
+        merged = {**self.provenance, **fields}
+        try:
+            text = json.dumps(merged, sort_keys=True, allow_nan=False)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"provenance must be JSON-serialisable: {exc}") from None
+        return replace(self, provenance_json=text)
+
+    def object_sha256(self) -> str:
+        """SHA-256 (hex) of the object as stored: the little-endian float64 vertices, then the
+        int64 faces, C order (what ``object_vertices`` and ``object_faces`` hold in the file)."""
+        h = hashlib.sha256()
+        h.update(np.ascontiguousarray(self.object_vertices, dtype="<f8").tobytes())
+        h.update(np.ascontiguousarray(self.object_faces, dtype="<i8").tobytes())
+        return h.hexdigest()
+
     def save(self, path: str | os.PathLike) -> None:
-        """Write the .npz (loads with ``allow_pickle=False``)."""
+        """Write the .npz (loads with ``allow_pickle=False``) atomically: under a temporary name in
+        the same directory (which must exist), then renamed, so that an interrupted save never
+        leaves a partial file under ``path``. The provenance gets ``hugger_version`` and
+        ``object_sha256`` when it lacks them."""
+        prov = {"hugger_version": _version(), "object_sha256": self.object_sha256(), **self.provenance}
         arrays = {
             "format_version": np.int64(FORMAT_VERSION),
             "hand_json": np.array(self.hand_json),
             "params_json": np.array(self.params_json),
             "stats_json": np.array(self.stats_json),
+            "provenance_json": np.array(json.dumps(prov, sort_keys=True)),
             "status": np.array(self.status),
             "object_vertices": np.asarray(self.object_vertices, dtype=np.float64),
             "object_faces": np.asarray(self.object_faces, dtype=np.int64),
@@ -96,7 +131,7 @@ class Trajectory:
             "tip_state": np.asarray(self.tip_state, dtype=np.int8),
             "phase": np.asarray(self.phase, dtype=np.int8),
         }
-        with open(path, "wb") as fh:
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
             np.savez_compressed(fh, **arrays)
 
     @classmethod
@@ -135,7 +170,7 @@ class Trajectory:
         if version.shape != () or version.dtype.kind not in "iu" or int(version) != FORMAT_VERSION:
             raise ValueError(f"{source}: format_version must be {FORMAT_VERSION}, got {version!r}")
         strings = {}
-        for key in (*_STRINGS, "stats_json"):
+        for key in (*_STRINGS, "stats_json", "provenance_json"):
             if key not in data:
                 strings[key] = "{}"
                 continue
@@ -155,12 +190,13 @@ class Trajectory:
             hand = json.loads(strings["hand_json"])
             params = json.loads(strings["params_json"])
             stats = json.loads(strings["stats_json"])
+            provenance = json.loads(strings["provenance_json"])
             m, n = hand["fingers"], hand["links"]
         except (ValueError, KeyError, TypeError, RecursionError) as exc:
-            raise ValueError(f"{source}: hand_json/params_json/stats_json are not valid: "
+            raise ValueError(f"{source}: hand_json/params_json/stats_json/provenance_json are not valid: "
                              f"{type(exc).__name__}: {exc}") from None
-        if not isinstance(params, dict) or not isinstance(stats, dict):
-            raise ValueError(f"{source}: params_json and stats_json must be JSON objects")
+        if not isinstance(params, dict) or not isinstance(stats, dict) or not isinstance(provenance, dict):
+            raise ValueError(f"{source}: params_json, stats_json and provenance_json must be JSON objects")
         if isinstance(m, float) and m.is_integer():
             m = int(m)
         if isinstance(n, float) and n.is_integer():
@@ -284,3 +320,11 @@ def _check_hand_sizes(hand: dict, m: int, n: int, source: str) -> None:
         lengths = np.zeros(0)
     if lengths.shape != (m, n) or not np.all(np.isfinite(lengths)) or not np.all(lengths > 0):
         raise ValueError(f"{source}: hand_json link_lengths must be a ({m}, {n}) list of positive lengths (m)")
+
+
+def _version() -> str:
+    """The installed hugger's version (``unknown`` when run from a source tree without metadata)."""
+    try:
+        return importlib.metadata.version("hugger")
+    except importlib.metadata.PackageNotFoundError:
+        return "unknown"

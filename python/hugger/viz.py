@@ -459,6 +459,9 @@ def draw_configuration(ax: Any, traj: Trajectory, k: int = -1, *, view: str = "s
     edges = all_rgba.copy()
     edges[: len(obj_rgba), 3] = 0.0
     coll = Poly3DCollection(all_polys, facecolors=all_rgba, edgecolors=edges, linewidths=0.3, zorder=1)
+    # thousands of shaded faces: an image in PDF and SVG output (text, legend and dots stay vector),
+    # which keeps a sheet under a megabyte or two instead of tens of megabytes
+    coll.set_rasterized(True)
     ax.add_collection3d(coll)
     artists.append(coll)
     t = scene.to_display(np.asarray(traj.target, dtype=float)[None])[0]
@@ -552,8 +555,9 @@ MOVIE_SIZE = (6.4, 4.8)
 def _fig4_axes(fig, traj: Trajectory, scene: _Scene, grid, cells: Sequence[tuple[int, int]]) -> list:
     panels = _fig4_panels(traj)
     rows = sorted({r for r, _ in cells})
-    row_ks = {r: [k for (k, _), (rr, _) in zip(panels, cells) if rr == r] for r in rows}
-    limits = {r: scene.limits(ks) for r, ks in row_ks.items() if ks}
+    # one box for every panel: one scale (and one camera) across the figure, as in the paper
+    common = scene.limits([k for k, _ in panels])
+    limits = {r: common for r in rows}
     axes = []
     for (k, caption), (r, c), letter in zip(panels, cells, "abcdefgh"):
         ax = fig.add_subplot(grid[r, c], projection="3d")
@@ -577,7 +581,7 @@ def fig4(traj: Trajectory, path: str | os.PathLike | None = None, *, dpi: float 
     (c) first contact (the first configuration in which a finger leaves FROZEN; the first Phase 2
     configuration if none does), (d), (e) two intermediate Phase 2 configurations (a third and two
     thirds of the way from (c) to the end), (f) the final one. All panels share one camera (fixed
-    to the final palm pose); the panels of a row share one scale. A panel that would repeat
+    to the final palm pose) and one scale. A panel that would repeat
     another's configuration (no Phase 1, a very short plan) is left out, so there may be fewer
     than six. Each panel's title gives its letter, what it shows, the configuration index k and
     the phase. Saves to ``path`` (PNG, PDF or SVG) and closes the figure when ``path`` is given;
@@ -737,12 +741,13 @@ def tipstate_plot(traj: Trajectory, path: str | os.PathLike | None = None, *, dp
 
 def animate(traj: Trajectory, path: str | os.PathLike, fps: float = 30, max_frames: int = 300, *,
             dpi: float = 100, view: str = "oblique", max_faces: int = 6000,
-            progress: Callable[[int, int], Any] | None = None) -> int:
+            progress: Callable[[int, int], Any] | None = None, hold: float = 0.0) -> int:
     """Write the whole plan as a ``.gif`` (Pillow) or ``.mp4`` (ffmpeg, H.264), subsampled evenly to at
     most ``max_frames`` frames (first and last included) at ``fps`` frames per second, with fixed
     axis limits over the plan. ``progress(i, n)`` is called after frame i of n (1-based) is
-    written. The object is simplified to ``max_faces`` triangles for speed. Returns the number of
-    frames written. ``ValueError`` for another extension or bad numbers; ``ImportError`` (naming
+    written. The object is simplified to ``max_faces`` triangles for speed. ``hold`` (s) shows the
+    final grasp that much longer (repeated frames, not counted). Returns the number of
+    configurations drawn. ``ValueError`` for another extension or bad numbers; ``ImportError`` (naming
     what to install) when an MP4 is asked for and no ffmpeg is found (see :func:`ffmpeg_path`)."""
     plt = _pyplot()
     from matplotlib import animation, rc_context
@@ -752,6 +757,7 @@ def animate(traj: Trajectory, path: str | os.PathLike, fps: float = 30, max_fram
     if ext not in _MOVIE_EXTENSIONS:
         raise ValueError(f"cannot animate to {Path(os.fspath(path)).name!r}: use .gif or .mp4")
     fps = positive("fps", fps)
+    hold = positive("hold", hold, allow_zero=True)
     if isinstance(max_frames, bool) or not isinstance(max_frames, (int, np.integer)) or max_frames < 1:
         raise ValueError(f"max_frames must be a positive whole number, got {max_frames!r}")
     if progress is not None and not callable(progress):
@@ -786,6 +792,8 @@ def animate(traj: Trajectory, path: str | os.PathLike, fps: float = 30, max_fram
                 writer.grab_frame()
                 if progress is not None:
                     progress(i, len(frames))
+            for _ in range(int(round(hold * fps))):  # a pause on the final grasp
+                writer.grab_frame()
     finally:
         plt.close(fig)
     return len(frames)
