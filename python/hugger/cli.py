@@ -431,13 +431,18 @@ def cmd_view(args: argparse.Namespace) -> int:
 
         webbrowser.open(v.url)
     try:
-        while True:
-            time.sleep(0.5)
+        _serve(v)
     except KeyboardInterrupt:
         pass
     finally:
         v.close()
     return EXIT_OK
+
+
+def _serve(v) -> None:
+    """Serve until interrupted (Ctrl-C)."""
+    while True:
+        time.sleep(0.5)
 
 
 def cmd_export_scene(args: argparse.Namespace) -> int:

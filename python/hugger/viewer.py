@@ -17,6 +17,8 @@ when a function is called. The meshes of the hand are built here with numpy alon
 """
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 import threading
 import time
@@ -105,14 +107,12 @@ def palm_mesh(radius: float, thickness: float, sides: int = 48) -> tuple[np.ndar
 
 
 def _rotation_z_to(d: np.ndarray) -> np.ndarray:
-    """A rotation taking +z to the unit vector d (the shortest one; any one for d = -z)."""
-    z = np.array([0.0, 0.0, 1.0])
-    c = float(d @ z)
-    if c < -1.0 + 1e-12:
-        return np.diag([1.0, -1.0, -1.0])
-    v = np.cross(z, d)
-    k = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-    return np.eye(3) + k + k @ k / (1.0 + c)
+    """A rotation (3, 3) whose z column is the unit vector d (a capsule is the same about its axis,
+    so any such rotation will do; this one is exact to rounding for every d)."""
+    hint = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(hint, d)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(d, x), d])
 
 
 def _wxyz(r: np.ndarray) -> np.ndarray:
@@ -232,7 +232,8 @@ class Viewer:
         self.fps = float(fps)
         self._contact_cache: dict[tuple[int, int], np.ndarray] = {}
         self._lock = threading.Lock()
-        self.server = viser.ViserServer(host=host, port=port, label="hugger", verbose=False)
+        with contextlib.redirect_stdout(io.StringIO()):  # viser's banner: our callers say where it serves
+            self.server = viser.ViserServer(host=host, port=port, label="hugger", verbose=False)
         self.playing = False
         self._closed = threading.Event()
         try:
@@ -417,6 +418,15 @@ def _spheres(centres: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray
     return verts, faces
 
 
+def _place(scene: Any, node: str, geom_name: str, mesh: Any, transform: np.ndarray | None = None) -> None:
+    """Add node ``node`` showing ``mesh`` stored once under ``geom_name`` (later nodes instance it)."""
+    if geom_name not in scene.geometry:
+        scene.add_geometry(mesh, node_name=node, geom_name=geom_name, transform=transform)
+    else:
+        scene.graph.update(frame_to=node, frame_from=scene.graph.base_frame,
+                           matrix=np.eye(4) if transform is None else transform, geometry=geom_name)
+
+
 def export_scene(traj: Trajectory, path: Any = None, *, all_frames: bool = False) -> Any:
     """The plan as a ``trimesh.Scene``, written to ``path`` (``.glb``) atomically when given.
 
@@ -438,7 +448,7 @@ def export_scene(traj: Trajectory, path: Any = None, *, all_frames: bool = False
     frames = range(len(t)) if all_frames else [len(t) - 1]
     for k in frames:
         prefix = f"k{k}/" if all_frames else ""
-        scene.add_geometry(palm, node_name=f"{prefix}palm", geom_name="palm", transform=t.palm_pose[k])
+        _place(scene, f"{prefix}palm", "palm", palm, t.palm_pose[k])
         lf = plan.link_frames(k)
         for m in range(plan.fingers):
             state = int(t.tip_state[k, m])
@@ -448,7 +458,7 @@ def export_scene(traj: Trajectory, path: Any = None, *, all_frames: bool = False
                     cv, cf = capsule_mesh(key[0], plan.radius, sides=12, rings=3)
                     link_meshes[key] = (f"link_{len(link_meshes)}", _colored(trimesh, cv, cf, STATE_RGB[state]))
                 geom_name, mesh = link_meshes[key]
-                scene.add_geometry(mesh, node_name=f"{prefix}f{m}_l{n}", geom_name=geom_name, transform=lf[m, n])
+                _place(scene, f"{prefix}f{m}_l{n}", geom_name, mesh, lf[m, n])
         pts = plan.contacts(k)
         if len(pts):
             sv, sf = _spheres(pts, max(0.25 * plan.radius, 5e-4))
