@@ -1,5 +1,6 @@
 """Figures and animations of a plan (matplotlib): the paper's Fig. 4 and Fig. 5, a TipState plot,
-GIF/MP4 animations, and :func:`render`, which the command line calls.
+GIF/MP4 animations, and :func:`render`, which the command line calls. :func:`view` (an interactive
+3D view in the browser) and :func:`export_scene` (a glTF scene) come from :mod:`hugger.viewer`.
 
 Needs the ``viz`` extra (``pip install 'hugger[viz]'``: matplotlib and Pillow); MP4 also needs an
 ffmpeg binary (the ``imageio-ffmpeg`` package, or ``ffmpeg`` on the ``PATH``). Nothing here is
@@ -38,9 +39,10 @@ import numpy as np
 
 from ._checks import positive
 from .trajectory import CONTACT_DISTANCE, Trajectory
+from .viewer import export_scene, view  # the 3D viewer and glTF export (extra: view), hugger.viz.view
 
-__all__ = ["CONTACT_DISTANCE", "RENDER_SUFFIXES", "STATE_COLORS", "animate", "draw_configuration", "ffmpeg_path",
-           "fig4", "fig5", "overview", "render", "require", "tipstate_plot"]
+__all__ = ["CONTACT_DISTANCE", "RENDER_SUFFIXES", "STATE_COLORS", "animate", "draw_configuration", "export_scene",
+           "ffmpeg_path", "fig4", "fig5", "overview", "render", "require", "tipstate_plot", "view"]
 
 #: Colours of the TipStates FROZEN, CONTACT, DONE.
 STATE_COLORS = ("#3b6fb6", "#e8842c", "#2e9e4f")
