@@ -456,3 +456,24 @@ def test_plan_timeout_gives_a_partial_plan(tmp_path, capsys, checker):
     assert ok, failures
     code, _, err = run(["plan", "curvy", "--out", out, "--timeout", "-1"], capsys)
     assert code == 2 and "timeout" in err
+
+
+def test_render_draws_palm_contacts_only_where_the_palm_does_not_hide_them(sphere_plan):
+    pytest.importorskip("matplotlib")
+    import matplotlib.pyplot as plt
+
+    from hugger import analysis, viz
+
+    traj = hugger.Trajectory.load(sphere_plan)
+    c = analysis.contacts(traj, -1)
+    palm, links = int(np.sum(c.finger < 0)), int(np.sum(c.finger >= 0))
+    assert palm > 0 and links > 0
+    shown = {}
+    for view in ("oblique", "normal"):  # from behind the palm; from beyond the object, facing it
+        fig = plt.figure()
+        ax = fig.add_subplot(projection="3d")
+        artists = viz.draw_configuration(ax, traj, -1, view=view, max_faces=500)
+        dots = [a for a in artists if hasattr(a, "_offsets3d") and len(a._offsets3d[0]) > 1]
+        shown[view] = len(dots[0]._offsets3d[0]) if dots else 0
+        plt.close(fig)
+    assert shown == {"oblique": links, "normal": palm + links}

@@ -327,7 +327,7 @@ class _Scene:
         norm = np.linalg.norm(n, axis=1, keepdims=True)
         self.tri_normals = n / np.where(norm > 0, norm, 1.0)
         self._object = None
-        self._contacts: dict[int, np.ndarray] = {}
+        self._contacts: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     def to_display(self, p: np.ndarray) -> np.ndarray:
         return (np.asarray(p, dtype=float) - self.origin) @ self.rot.T
@@ -340,9 +340,26 @@ class _Scene:
 
     def contacts(self, k: int) -> np.ndarray:
         """Contact points (C, 3) of configuration k, in the world frame."""
+        return self._contact_set(k)[0]
+
+    def _contact_set(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Contact points (C, 3) of configuration k and which of them are the palm's (C,) bool."""
         if k not in self._contacts:
-            self._contacts[k] = _contact_points(self.traj, k, self.object)
+            from . import analysis
+
+            c = analysis.contacts(self.traj, k, obj=self.object)
+            self._contacts[k] = (np.asarray(c.points, dtype=float).reshape(-1, 3), np.asarray(c.finger) < 0)
         return self._contacts[k]
+
+    def visible_contacts(self, k: int, cam: _View) -> np.ndarray:
+        """The contact points of configuration k that ``cam`` can see: the palm's contacts lie
+        between the opaque palm and the object, so they are left out when the camera is behind
+        the palm (on the side of its back face); the links' always show."""
+        points, palm = self._contact_set(k)
+        normal = self.rot @ self.traj.palm_pose[k][:3, 2]  # the palm normal in the display frame
+        if palm.any() and float(cam.eye @ normal) <= 0.0:
+            return points[~palm]
+        return points
 
     def pose_display(self, k: int) -> np.ndarray:
         pose = np.eye(4)
@@ -433,7 +450,8 @@ def draw_configuration(ax: Any, traj: Trajectory, k: int = -1, *, view: str = "s
     side), ``"normal"`` (along the final palm normal, seen from beyond the object, looking back
     at the palm) or ``"oblique"`` (38 degrees from the palm's side).
     ``limits`` = (lower, upper) corners (3,) of the box shown, in the display frame (see the
-    module doc); default: the object and this configuration. ``contacts`` marks contacts as red dots.
+    module doc); default: the object and this configuration. ``contacts`` marks contacts as red dots
+    (the palm's only when the camera sees the palm's front face: behind the palm they are hidden by it).
     """
     _pyplot()
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
@@ -470,7 +488,7 @@ def draw_configuration(ax: Any, traj: Trajectory, k: int = -1, *, view: str = "s
     artists.append(ax.scatter([t[0]], [t[1]], [t[2]], marker="x", s=40, c="k", linewidths=1.5,
                               depthshade=False, zorder=4))
     if contacts:
-        cp = scene.contacts(k)
+        cp = scene.visible_contacts(k, cam)
         if len(cp):
             d = scene.to_display(cp)
             artists.append(ax.scatter(d[:, 0], d[:, 1], d[:, 2], s=14, c=_CONTACT_COLOR, edgecolors="k",
