@@ -444,7 +444,7 @@ def test_validate_exit_status_and_lost_objects(sphere_plan, capsys, monkeypatch)
     assert "+z  lost (moved more than 200 mm)" in out and "186891" not in out
     with pytest.raises(SystemExit):
         cli.main(["validate", "--help"])
-    assert "exit 0 held, 1 not held, 2 bad input" in " ".join(capsys.readouterr().out.split())
+    assert "Exit status: 0 held, 1 not held, 2 bad input." in " ".join(capsys.readouterr().out.split())
 
 
 def test_plan_timeout_gives_a_partial_plan(tmp_path, capsys, checker):
