@@ -292,7 +292,7 @@ class Viewer:
         self.transparent = gui.add_checkbox("transparent object", initial_value=True)
         self.show_contacts = gui.add_checkbox("contacts", initial_value=True)
         self.status = gui.add_markdown("")
-        self.slider.on_update(lambda _: self.show(int(self.slider.value)))
+        self.slider.on_update(lambda _: self._on_slider())
         self.play_button.on_click(lambda _: self._toggle())
         self.fps_number.on_update(lambda _: setattr(self, "fps", float(self.fps_number.value)))
         self.transparent.on_update(lambda _: self._set_opacity())
@@ -348,6 +348,11 @@ class Viewer:
             self.status.content = "  \n".join(lines)
         if int(self.slider.value) != k:
             self.slider.value = k
+
+    def _on_slider(self) -> None:
+        k = int(self.slider.value)
+        if k != self.configuration:  # not the echo of show() moving the slider
+            self.show(k)
 
     def _toggle(self) -> None:
         if not self.playing and self.configuration >= self.count - 1:
