@@ -29,7 +29,7 @@ import numpy as np
 
 from . import analysis
 from ._files import write_atomic
-from .trajectory import CONTACT_DISTANCE, Trajectory
+from .trajectory import Trajectory
 
 __all__ = ["Viewer", "capsule_mesh", "export_scene", "palm_mesh", "scene_nodes", "view"]
 

@@ -630,9 +630,9 @@ def _fig5_axes(fig, traj: Trajectory, scene: _Scene, cells) -> list:
     limits = scene.limits([k])
     axes = []
     views = (("side", "side view"), ("normal", "along the palm normal,\nseen from beyond O"))
-    for cell, (view, caption) in zip(cells, views):
+    for cell, (camera, caption) in zip(cells, views):
         ax = fig.add_subplot(cell, projection="3d")
-        draw_configuration(ax, traj, k, view=view, limits=limits, _scene=scene)
+        draw_configuration(ax, traj, k, view=camera, limits=limits, _scene=scene)
         ax.set_title(f"final grasp, {caption}", fontsize=9, pad=-4)
         axes.append(ax)
     return axes
