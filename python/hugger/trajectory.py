@@ -1,4 +1,4 @@
-"""The trajectory file (format 1, DESIGN.md section 5): a NumPy .npz without pickles."""
+"""The trajectory file (format 1, docs/file-format.md): a NumPy .npz without pickles."""
 from __future__ import annotations
 
 import hashlib
@@ -47,7 +47,7 @@ _STRINGS = ("hand_json", "params_json", "status")
 class Trajectory:
     """A plan: K configurations of a hand with M fingers of N links, and what it grasped.
 
-    Arrays as in DESIGN.md section 5: ``palm_pose`` (K, 4, 4), ``joints`` (K, M, N+1, 3),
+    Arrays as in docs/file-format.md: ``palm_pose`` (K, 4, 4), ``joints`` (K, M, N+1, 3),
     ``angles`` (K, M, N), ``tip_state`` (K, M) int8 (0 FROZEN, 1 CONTACT, 2 DONE),
     ``phase`` (K,) int8; ``status`` says which rule ended the plan.
     """
@@ -136,7 +136,7 @@ class Trajectory:
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> Trajectory:
-        """Read and check a trajectory file (format 1, DESIGN.md section 5).
+        """Read and check a trajectory file (format 1, docs/file-format.md).
 
         ``ValueError`` if it is not a valid format-1 file: not a zip, truncated or corrupt,
         an array holding pickled Python objects (never unpickled), a declared array size the
