@@ -477,3 +477,21 @@ def test_render_draws_palm_contacts_only_where_the_palm_does_not_hide_them(spher
         shown[view] = len(dots[0]._offsets3d[0]) if dots else 0
         plt.close(fig)
     assert shown == {"oblique": links, "normal": palm + links}
+
+
+def test_fig4_keeps_one_scale_across_panels(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    import matplotlib.pyplot as plt
+
+    from hugger import viz
+
+    out = tmp_path / "turned.npz"
+    assert run(["plan", "ellipsoid", "--turn", "40", "--out", out], capsys)[0] == 0
+    traj = hugger.Trajectory.load(out)
+    for draw in (viz.fig4, viz.overview):
+        fig = draw(traj, max_faces=500)
+        panels = [ax for ax in fig.axes if ax.name == "3d"][:6]  # Fig. 4's panels (a)-(f)
+        assert len(panels) == 6
+        limits = {(ax.get_xlim(), ax.get_ylim(), ax.get_zlim(), tuple(ax.get_box_aspect())) for ax in panels}
+        assert len(limits) == 1  # one box, one scale: the hand far away in (a) is as large as in (f)
+        plt.close(fig)

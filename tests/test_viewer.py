@@ -193,37 +193,48 @@ def _screenshot(driver) -> np.ndarray:
         return np.asarray(im.convert("RGB"), dtype=np.int64)
 
 
+needs_chromium = pytest.mark.skipif(
+    CHROMIUM is None or CHROMEDRIVER is None,
+    reason="needs Debian's chromium and chromium-driver (apt-get install chromium chromium-driver; make installs them)")
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Headless Chromium (the system's) under the system chromedriver, one for this module's tests."""
+    webdriver = pytest.importorskip("selenium.webdriver")
+    from selenium.webdriver.chrome.options import Options
+    from selenium.webdriver.chrome.service import Service
+
+    options = Options()
+    options.binary_location = CHROMIUM
+    for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--window-size=800,600",
+                "--use-angle=swiftshader", "--enable-unsafe-swiftshader"):
+        options.add_argument(arg)
+    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
+    driver.set_page_load_timeout(60)
+    yield driver
+    driver.quit()
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return int(s.getsockname()[1])
 
 
-@pytest.mark.skipif(CHROMIUM is None or CHROMEDRIVER is None,
-                    reason="needs Debian's chromium and chromium-driver (apt-get install chromium chromium-driver; "
-                           "make installs them)")
-def test_viewer_in_headless_chromium(plans, tmp_path):
+@needs_chromium
+def test_viewer_in_headless_chromium(plans, tmp_path, browser):
     pytest.importorskip("viser")
-    webdriver = pytest.importorskip("selenium.webdriver")
     from PIL import Image
-    from selenium.webdriver.chrome.options import Options
-    from selenium.webdriver.chrome.service import Service
 
     port = _free_port()
     # the command itself, as a user runs it
     proc = subprocess.Popen([sys.executable, "-m", "hugger", "view", str(plans[0]), str(plans[1]), "--no-browser",
                              "--port", str(port)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    driver = None
+    driver = browser
     try:
         line = proc.stdout.readline()
         assert f"at http://localhost:{port}" in line, (line, proc.stderr.read() if proc.poll() is not None else "")
-        options = Options()
-        options.binary_location = CHROMIUM
-        for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--window-size=1100,750",
-                    "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--disable-gpu-sandbox"):
-            options.add_argument(arg)
-        driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
-        driver.set_page_load_timeout(60)
         driver.get(f"http://localhost:{port}")
         # the scene is drawn on a WebGL canvas, the controls are the GUI panel
         deadline = time.time() + 60
@@ -250,8 +261,6 @@ def test_viewer_in_headless_chromium(plans, tmp_path):
         colours = len(np.unique(rgb.reshape(-1, 3) // 8, axis=0))
         assert colours > 50, colours
     finally:
-        if driver is not None:
-            driver.quit()
         proc.terminate()
         try:
             proc.communicate(timeout=10)  # also closes the pipes
@@ -260,25 +269,14 @@ def test_viewer_in_headless_chromium(plans, tmp_path):
             proc.communicate()
 
 
-@pytest.mark.skipif(CHROMIUM is None or CHROMEDRIVER is None,
-                    reason="needs Debian's chromium and chromium-driver (apt-get install chromium chromium-driver; "
-                           "make installs them)")
-def test_viewer_page_has_every_link_mesh(plans, tmp_path):
+@needs_chromium
+def test_viewer_page_has_every_link_mesh(plans, tmp_path, browser):
     """The page connects and receives the scene: M x N link meshes per plan in the scene the viser
     server sends every client, and the page redraws when the timeline moves."""
     pytest.importorskip("viser")
-    webdriver = pytest.importorskip("selenium.webdriver")
-    from selenium.webdriver.chrome.options import Options
-    from selenium.webdriver.chrome.service import Service
-
     trajs = [hugger.Trajectory.load(p) for p in plans]
     with viewer.view(trajs, port=_free_port(), open_browser=False, block=False) as v:
-        options = Options()
-        options.binary_location = CHROMIUM
-        for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--window-size=900,650",
-                    "--use-angle=swiftshader", "--enable-unsafe-swiftshader"):
-            options.add_argument(arg)
-        driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
+        driver = browser
         try:
             driver.get(v.url)
             deadline = time.time() + 60
@@ -297,7 +295,7 @@ def test_viewer_page_has_every_link_mesh(plans, tmp_path):
             changed = np.any(np.abs(final - start) > 40, axis=2)
             assert changed.mean() > 0.003, changed.mean()
         finally:
-            driver.quit()
+            driver.get("about:blank")  # leave the page before its server stops
 
 
 def test_view_command_serves_until_interrupted(plans, monkeypatch, capsys):

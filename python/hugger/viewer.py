@@ -259,17 +259,20 @@ class Viewer:
             names = scene_nodes(plan.fingers, plan.links, i)
             scene.add_frame(f"/plan{i}", show_axes=False, position=tuple(off))
             self.objects.append(scene.add_mesh_simple(names["object"][0], t.object_vertices, t.object_faces,
-                                                      color=OBJECT_RGB, opacity=OBJECT_OPACITY, side="double"))
+                                                      color=OBJECT_RGB, opacity=OBJECT_OPACITY, side="double",
+                                                      cast_shadow=False, receive_shadow=False))
             scene.add_icosphere(names["target"][0], radius=max(0.5 * plan.radius, 1e-3), color=TARGET_RGB,
                                 position=tuple(t.target))
             pv, pf = palm_mesh(float(t.hand["palm_radius"]), max(float(t.hand["palm_thickness"]), 1e-4))
-            self.palms.append(scene.add_mesh_simple(names["palm"][0], pv, pf, color=PALM_RGB, flat_shading=True))
+            self.palms.append(scene.add_mesh_simple(names["palm"][0], pv, pf, color=PALM_RGB, flat_shading=True,
+                                                    cast_shadow=False, receive_shadow=False))
             handles = []
             for m in range(plan.fingers):
                 for n in range(plan.links):
                     cv, cf = capsule_mesh(float(plan.lengths[m, n]), plan.radius)
                     handles.append(scene.add_mesh_simple(names["links"][m * plan.links + n], cv, cf,
-                                                         color=STATE_RGB[0]))
+                                                         color=STATE_RGB[0], cast_shadow=False,
+                                                         receive_shadow=False))
             self.links.append(handles)
             self.contact_clouds.append(scene.add_point_cloud(
                 names["contacts"][0], np.zeros((1, 3)), colors=CONTACT_RGB, point_size=max(plan.radius, 2e-3),
