@@ -187,15 +187,17 @@ def _plan(case, hand, params: dict[str, Any], label: str, timeout: float | None 
 # Commands
 
 
-def _provenance(args: argparse.Namespace, case, argv: Sequence[str] | None) -> dict[str, Any]:
-    """What made a trajectory file: the command line and the object's name or path."""
+def _provenance(args: argparse.Namespace, argv: Sequence[str] | None) -> dict[str, Any]:
+    """What made a trajectory file: the command line, its parsed options and the object's name or
+    path (``argv``: the arguments main() was given, None for the process's own)."""
     from .objects import BUILTINS
 
     spec = os.fspath(args.object)
     builtin = spec in BUILTINS
+    options = {k: v for k, v in sorted(vars(args).items()) if k not in ("func", "json") and not k.startswith("_")}
     return {"command": ["hugger", *(sys.argv[1:] if argv is None else argv)],
             "object": spec if builtin else os.path.abspath(spec), "object_source": "builtin" if builtin else "file",
-            "arguments": {k: v for k, v in sorted(vars(args).items()) if k not in ("func", "json") and not k.startswith("_")}}
+            "arguments": options}
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
@@ -222,7 +224,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     for r in case.repairs:
         _note(f"repaired {case.name}: {r}")
     traj, elapsed = _plan(case, hand, _params(args), case.name, args.timeout)
-    traj = traj.with_provenance(**_provenance(args, case, getattr(args, "_argv", None)))
+    traj = traj.with_provenance(**_provenance(args, getattr(args, "_argv", None)))
     traj.save(out)
     report = {"object": case.name, "out": str(out), **_report(traj, elapsed, case.obj)}
     if args.json:
@@ -347,7 +349,8 @@ def cmd_info(args: argparse.Namespace) -> int:
     prm = traj.params
     obj = traj.object()
     if args.json:
-        info = {"file": args.file, "format_version": FORMAT_VERSION, "hand": _hand_info(traj.hand), "object": _object_info(traj, obj),
+        info = {"file": args.file, "format_version": FORMAT_VERSION, "hand": _hand_info(traj.hand),
+                "object": _object_info(traj, obj),
                 "target": [float(x) for x in traj.target], "params": prm, "provenance": traj.provenance,
                 "step_m": prm.get("step"), "planner_epsilon_m": prm.get("epsilon"), **_report(traj, obj=obj)}
         print(json.dumps(info))
@@ -476,7 +479,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_plan)
 
     p = sub.add_parser("demo", help="the paper's example: plan, Fig. 4, Fig. 5, animation, summary.json")
-    p.add_argument("--out", default="demo-out", help="output folder, created in an existing directory (default demo-out)")
+    p.add_argument("--out", default="demo-out",
+                   help="output folder, created in an existing directory (default demo-out)")
     p.set_defaults(func=cmd_demo)
 
     p = sub.add_parser("render", help="draw a trajectory: PNG/PDF/SVG figures, GIF or MP4 animation")
