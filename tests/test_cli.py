@@ -495,3 +495,29 @@ def test_fig4_keeps_one_scale_across_panels(tmp_path, capsys):
         limits = {(ax.get_xlim(), ax.get_ylim(), ax.get_zlim(), tuple(ax.get_box_aspect())) for ax in panels}
         assert len(limits) == 1  # one box, one scale: the hand far away in (a) is as large as in (f)
         plt.close(fig)
+
+
+def test_files_without_provenance_still_load(sphere_plan, tmp_path, capsys):
+    with np.load(sphere_plan, allow_pickle=False) as data:
+        arrays = {k: data[k] for k in data.files if k != "provenance_json"}  # as written before it existed
+    old = tmp_path / "old.npz"
+    np.savez_compressed(old, **arrays)
+    traj = hugger.Trajectory.load(old)
+    assert traj.provenance == {}
+    code, out, _ = run(["info", old, "--json"], capsys)
+    info = json.loads(out)
+    assert code == 0 and info["provenance"] == {} and info["object"]["name"] is None
+    assert info["object"]["sha256"] == hugger.Trajectory.load(sphere_plan).object_sha256()
+    code, out, _ = run(["info", old], capsys)
+    assert code == 0 and "(not recorded)" in out
+    # an API user adds their own fields; saving fills in the version and the object's hash
+    again = tmp_path / "again.npz"
+    traj.with_provenance(experiment="grid 3", seed=7).save(again)
+    prov = hugger.Trajectory.load(again).provenance
+    assert prov["experiment"] == "grid 3" and prov["seed"] == 7 and prov["hugger_version"] == hugger.__version__
+    with pytest.raises(ValueError, match="JSON-serialisable"):
+        traj.with_provenance(when=object())
+    bad = dict(arrays, provenance_json=np.array("[1, 2]"))
+    np.savez_compressed(tmp_path / "bad.npz", **bad)
+    with pytest.raises(ValueError, match="must be JSON objects"):
+        hugger.Trajectory.load(tmp_path / "bad.npz")
