@@ -182,6 +182,12 @@ def test_viewer_scene_timeline_and_toggles(plans):
         assert not v.playing and v.configuration == v.count - 1
         with pytest.raises(ValueError, match="k must be in"):
             v.show(v.count)
+    with viewer.view(str(plans[0]), port=0, open_browser=False, block=False) as v:  # a file's path
+        assert len(v.plans) == 1 and len(v.links[0]) == 25
+    with pytest.raises(ValueError, match="at least one"):
+        viewer.Viewer([])
+    with pytest.raises(ValueError, match="port"):
+        viewer.Viewer(trajs, port=-1)
 
 
 # --- the viewer in a real browser -------------------------------------------------------------------

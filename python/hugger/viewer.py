@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import io
 import math
+import os
 import threading
 import time
 from dataclasses import dataclass
@@ -185,10 +186,11 @@ class _Plan:
 
 
 def _plans(trajs: Any) -> list[_Plan]:
-    items = [trajs] if isinstance(trajs, Trajectory) else list(trajs)
+    """Plans from a trajectory, a trajectory file's path, or a list of either."""
+    items = [trajs] if isinstance(trajs, (Trajectory, str, os.PathLike)) else list(trajs)
     if not items:
         raise ValueError("give at least one trajectory")
-    return [_Plan.of(_check_traj(t)) for t in items]
+    return [_Plan.of(Trajectory.load(t) if isinstance(t, (str, os.PathLike)) else _check_traj(t)) for t in items]
 
 
 def _offsets(plans: Sequence[_Plan]) -> np.ndarray:
@@ -391,10 +393,11 @@ class Viewer:
 
 def view(trajs: Any, *, port: int = 8080, host: str = "127.0.0.1", open_browser: bool = True, block: bool = True,
          fps: float = 20.0, labels: Sequence[str] | None = None) -> Viewer:
-    """Serve an interactive 3D view of one trajectory or a list of them (side by side) at
-    ``http://host:port`` (``port=0``: any free port, see ``Viewer.url``). ``open_browser`` opens
-    it in the default web browser. ``block``: serve until interrupted (Ctrl-C), then stop;
-    otherwise return the running :class:`Viewer` at once (stop it with ``close()``)."""
+    """Serve an interactive 3D view of one trajectory or a list of them (side by side; trajectory
+    file paths are read) at ``http://host:port`` (``port=0``: any free port, see ``Viewer.url``).
+    ``open_browser`` opens it in the default web browser. ``block``: serve until interrupted
+    (Ctrl-C), then stop and return the stopped :class:`Viewer`; otherwise return the running
+    viewer at once (stop it with ``close()``)."""
     viewer = Viewer(trajs, host=host, port=port, fps=fps, labels=labels)
     if open_browser:
         import webbrowser
@@ -405,8 +408,11 @@ def view(trajs: Any, *, port: int = 8080, host: str = "127.0.0.1", open_browser:
     try:
         while True:
             time.sleep(0.5)
+    except KeyboardInterrupt:
+        pass
     finally:
         viewer.close()
+    return viewer
 
 
 # --- glTF export ------------------------------------------------------------------------------------
