@@ -214,8 +214,8 @@ class Hand:
             if np.any(np.isnan(lim)):
                 raise ValueError("limits hold NaN (use -inf / inf for an unlimited joint)")
             lo, hi = lim[..., 0].copy(), lim[..., 1].copy()
-            lo[lo <= -np.pi] = -np.inf
-            hi[hi >= np.pi] = np.inf
+            lo[lo <= -np.pi + 1e-12] = -np.inf  # at or beyond -pi: no bound (rounding allowed)
+            hi[hi >= np.pi - 1e-12] = np.inf
         radius = _size("link_radius", link_radius, allow_zero=True)
         if palm_radius is None:
             palm_radius = max(1e-3, float(np.hypot(r[:, 0], r[:, 1]).max()) + radius)
@@ -372,6 +372,28 @@ class Hand:
         la, lb = self.joint_limits, other.joint_limits
         same_inf = np.array_equal(np.isinf(la), np.isinf(lb)) and np.array_equal(la[np.isinf(la)], lb[np.isinf(lb)])
         return same_inf and bool(np.allclose(la[np.isfinite(la)], lb[np.isfinite(lb)], rtol=0.0, atol=tol))
+
+    @classmethod
+    def from_urdf(cls, path: Any, palm_link: str | None = None, fixed_joints: dict | None = None,
+                  link_radius: float | None = None) -> Hand:
+        """The hand of a URDF file: see :func:`hugger.hands.from_urdf` (needs ``hugger[hands]``)."""
+        from .hands import from_urdf
+        return from_urdf(path, palm_link=palm_link, fixed_joints=fixed_joints, link_radius=link_radius)
+
+    @classmethod
+    def from_mjcf(cls, path: Any, palm_body: str | None = None, fixed_joints: dict | None = None,
+                  link_radius: float | None = None) -> Hand:
+        """The hand of a MuJoCo MJCF file: see :func:`hugger.hands.from_mjcf` (needs MuJoCo)."""
+        from .hands import from_mjcf
+        return from_mjcf(path, palm_body=palm_body, fixed_joints=fixed_joints, link_radius=link_radius)
+
+    def to_urdf(self, path: Any = None, angles: Any = None) -> str:
+        """The hand as URDF text (see :func:`hugger.hands.to_urdf`), also written to ``path``."""
+        from .hands.robot import to_urdf, write_text
+        text = to_urdf(self, angles)
+        if path is not None:
+            write_text(path, text)
+        return text
 
     def __repr__(self) -> str:
         ll = self.link_lengths
