@@ -223,8 +223,8 @@ def from_urdf(path: str | os.PathLike, palm_link: str | None = None, fixed_joint
     # the palm group: links reached from the palm link through fixed joints
     frames = {palm: np.eye(4)}
     stack, starts = [palm], []
-    while stack:
-        link = stack.pop()
+    while stack:  # breadth first: the fingers in the order of the file
+        link = stack.pop(0)
         for j in children.get(link, []):
             if is_fixed(j):
                 frames[j.child] = frames[link] @ motion(j, fixed.get(j.name, 0.0))
@@ -454,7 +454,7 @@ def from_mjcf(path: str | os.PathLike, palm_body: str | None = None, fixed_joint
 
     palm_group, stack, starts = {palm}, [palm], []
     while stack:
-        b = stack.pop()
+        b = stack.pop(0)
         for k in kids.get(b, []):
             if moving(k):
                 starts.append(k)
