@@ -54,15 +54,17 @@ def random_layout(rng: np.random.Generator) -> hugger.Hand:
         rest = np.zeros((m, n))
         for f in range(m):
             r = rng.random()
-            if r < 0.25:  # sideways: link 0 along the palm (outward), the next link straight up
+            if r < 0.2:  # sideways: link 0 along the palm (outward), the next link straight up
                 rest[f, 0], lo[f, 0], hi[f, 0] = -np.pi / 2, -np.pi / 2, -np.pi / 2 + rng.uniform(0, 0.5)
                 if n > 1:
                     rest[f, 1], lo[f, 1], hi[f, 1] = np.pi / 2, np.pi / 2 - 0.2, np.pi / 2 + 1.2
+            elif r < 0.3:  # lying along the palm toward its centre (an Allegro-like finger laid flat)
+                rest[f, 0], lo[f, 0], hi[f, 0] = np.pi / 2, np.pi / 2 - rng.uniform(0, 0.5), np.pi / 2
             elif r < 0.5:
                 rest[f] = rng.uniform(lo, hi)[f] * 0.3
-        limits = np.stack([lo, hi], axis=-1) if rng.random() < 0.85 else None
-        if limits is None:
+        if limits_off := rng.random() >= 0.85:
             rest[:] = 0.0
+        limits = None if limits_off else np.stack([lo, hi], axis=-1)
         try:
             return hugger.Hand.from_layout(roots, dirs, lengths, rest=rest, limits=limits, link_radius=radius,
                                            palm_radius=palm)
