@@ -246,7 +246,9 @@ def cmd_info(args: argparse.Namespace) -> int:
     obj = traj.object()
     lo, hi = obj.bounds
     info = {"file": args.file, "hand": f"{h['fingers']} fingers x {h['links']} links, link radius {h['link_radius']} m, "
-                                      f"palm radius {h['palm_radius']} m",
+                                      f"palm radius {h['palm_radius']} m"
+                    + (", general layout" if "finger_roots" in h else "")
+                    + (f" ({h['name']})" if isinstance(h.get("name"), str) else ""),
             "object": f"{len(obj.faces)} triangles, {' x '.join(f'{1000 * e:.0f}' for e in hi - lo)} mm",
             "target": [float(x) for x in traj.target],
             "step_m": prm.get("step"), "tip_epsilon_m": prm.get("epsilon"), **_report(traj, obj=obj)}
