@@ -100,6 +100,37 @@ TEST(Limits, TailToHeadHoldsEveryJointWithinItsLimits) {
   }
 }
 
+TEST(Limits, HeadToTailHoldsTheJointsItPassesWithinTheirLimits) {
+  // Head2Tail decides joints N-1 .. 1 (joint 0, at the root, is Tail2Head's): with nothing to
+  // collide with they end within their limits, with exact link lengths and the tip at the head.
+  const EmptySkin skin;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int N = 4;
+  const double lengths[N] = {0.02, 0.015, 0.02, 0.01};
+  const double lower[N] = {-0.3, 0.0, -0.2, 0.1}, upper[N] = {0.6, 1.2, 0.9, 1.5};
+  SnakeRequest req;
+  req.lengths = lengths;
+  req.lower = lower;
+  req.upper = upper;
+  for (int i = 0; i < 500; ++i) {
+    Chain c(N + 1);
+    c[0] = Vec2(0.03, 0.0);
+    double theta = 0.0;
+    for (int n = 0; n < N; ++n) c[n + 1] = c[n] + lengths[n] * unit(theta += 2.0 * u(rng));
+    const Vec2 head = c[N] + 0.003 * Vec2(u(rng), u(rng));
+    ASSERT_TRUE(head_to_tail(skin, req, head, c));
+    EXPECT_TRUE(c[N] == head);
+    double angles[N];
+    HandModel::planar_angles(c, angles);
+    for (int n = 0; n < N; ++n) EXPECT_NEAR((c[n + 1] - c[n]).norm(), lengths[n], 1e-15);
+    for (int n = 1; n < N; ++n) {
+      EXPECT_GE(angles[n], lower[n] - 1e-12);
+      EXPECT_LE(angles[n], upper[n] + 1e-12);
+    }
+  }
+}
+
 TEST(Limits, HandModelRefusesBadLayouts) {
   const MatrixX L = MatrixX::Constant(2, 3, 0.02);
   auto make = [&](const HandLayout& l) { return HandModel(2, 3, L, 0.003, 0.03, 0.01, l); };

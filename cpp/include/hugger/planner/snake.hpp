@@ -36,14 +36,20 @@ constexpr double kLimitSlack = 1e-12;
 /// `joint` points along `dir`: relative to link joint - 1 of `chain`, or to the palm normal.
 double relative_angle(const Chain& chain, int joint, const Vec2& dir);
 
-/// The one place the limits act. With `dir` the direction wanted for link `joint` (its tail
+/// The limit test both propagations use: true when the angle from `base` to `dir` (rad,
+/// counter-clockwise) lies within [lo, hi] (beyond kLimitSlack: false); with `clamp`, instead
+/// turns `dir` (keeping its length) onto the nearer limit and returns true.
+bool angle_within_limits(double lo, double hi, const Vec2& base, Vec2& dir, bool clamp);
+
+/// Tail2Head's limit test. With `dir` the direction wanted for link `joint` (its tail
 /// joint already placed in `chain`), returns false when the angle lies outside [lower, upper]
 /// of that joint (beyond kLimitSlack); with `clamp`, instead turns `dir` onto the nearer limit
 /// and returns true. Always true without limits.
 bool joint_within_limits(const SnakeRequest& req, const Chain& chain, int joint, Vec2& dir, bool clamp);
 
 /// Head2Tail (DESIGN.md decision 6): tip to `head`, then each joint on the ray toward its old
-/// position at the link's length; a link that would hit O is rotated about its distal joint by
+/// position at the link's length (turned, with joint limits, so that the joint just passed is
+/// within them); a link that would hit O is rotated about its distal joint by
 /// a small angle that frees it (Sensing::rotate_until_free). Returns false (chain partly
 /// updated) if none frees it.
 bool head_to_tail(const Sensing& sensing, const SnakeRequest& req, const Vec2& head, Chain& chain);
