@@ -280,3 +280,20 @@ def test_cli_hands_export_urdf_and_plan_with_it(tmp_path):
     assert np.array_equal(hugger.Trajectory.load(plan2).joints, traj.joints)
     r = run("plan", "sphere", "--hand", "nonesuch", "--out", str(plan2))
     assert r.returncode == 2 and "barrett_bh8" in r.stderr
+
+
+def test_export_mjcf_of_a_general_layout_puts_every_joint_where_the_plan_has_it():
+    mujoco = pytest.importorskip("mujoco")
+    from hugger import physics
+
+    hand = hands.preset("barrett_bh8")  # a root on the palm axis, links along the palm
+    case = hugger.scenarios.default_case("sphere", hand)
+    traj = hugger.Planner(hand, case.obj, case.target, case.palm_pose).plan()
+    model = mujoco.MjModel.from_xml_string(physics.export_mjcf(traj, decompose=False))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, 0)
+    mujoco.mj_kinematics(model, data)
+    for f in range(hand.fingers):
+        for n in range(hand.links):
+            body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"f{f}_l{n}")
+            assert np.allclose(data.xpos[body], traj.joints[-1, f, n], atol=1e-9)
