@@ -297,3 +297,16 @@ def test_export_mjcf_of_a_general_layout_puts_every_joint_where_the_plan_has_it(
         for n in range(hand.links):
             body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"f{f}_l{n}")
             assert np.allclose(data.xpos[body], traj.joints[-1, f, n], atol=1e-9)
+
+
+def test_mjcf_with_a_non_planar_finger_names_the_joint(tmp_path):
+    pytest.importorskip("mujoco")
+    text = hands.to_mjcf(hands.preset("parallel_3link"))
+    start = text.index('name="f0_j1"')
+    axis = text.index('axis="', start)
+    bad = text[:axis] + 'axis="0.0 0.3 1.0"' + text[text.index('"', axis + 6) + 1:]
+    bad = bad[bad.index("-->") + 3:]  # without the embedded description: read from geometry
+    f = tmp_path / "bad.xml"
+    f.write_text(bad)
+    with pytest.raises(ValueError, match="joint 'f0_j1' breaks planarity"):
+        hugger.Hand.from_mjcf(f)
