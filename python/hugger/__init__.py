@@ -14,7 +14,7 @@ this package holds the Python API::
 """
 from __future__ import annotations
 
-from . import objects, scenarios
+from . import hands, objects, scenarios
 from .batch import CaseError, PlanManyError, plan_many
 from .hand import Hand
 from .planner import FROZEN, CONTACT, DONE, Configuration, Planner, look_at, plan
@@ -47,6 +47,7 @@ __all__ = [
     "PlanManyError",
     "Planner",
     "Trajectory",
+    "hands",
     "look_at",
     "objects",
     "plan",

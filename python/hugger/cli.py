@@ -9,6 +9,8 @@
     hugger export-mjcf plan.npz --out hand.xml    the hand and object as MJCF
     hugger view a.npz [b.npz ...] [--port P]      interactive 3D view in the browser (extra: view)
     hugger export-scene plan.npz --out grasp.glb  the grasp as a glTF scene (extra: view)
+    hugger export-urdf plan.npz --out hand.urdf   the hand and its grasp's joint values as URDF
+    hugger hands                                  the preset hands (plan ... --hand PRESET|FILE)
 
 Exit status: 0 success, 2 bad input or a missing optional dependency (one line on standard
 error, no traceback), 1 an internal error (or, for ``validate``, a grasp that is not held).
@@ -57,6 +59,11 @@ def _hand_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--link-radius", type=float, default=0.004, help="link (capsule) radius, m (default 0.004)")
     g.add_argument("--palm-radius", type=float, default=0.03, help="palm radius, m (default 0.03)")
     g.add_argument("--palm-thickness", type=float, default=0.01, help="palm thickness, m (default 0.01)")
+    g.add_argument("--hand", metavar="FILE|PRESET",
+                   help="a preset hand (see 'hugger hands'), a URDF (.urdf), MJCF (.xml) or hand JSON file; "
+                        "replaces the options above (URDF/MJCF need hugger[hands])")
+    g.add_argument("--fixed-joint", action="append", default=[], metavar="NAME=RAD",
+                   help="with --hand FILE: hold this joint at RAD (repeatable; e.g. a spread joint)")
 
 
 def _planner_options(p: argparse.ArgumentParser) -> None:
@@ -89,6 +96,21 @@ def _case_options(p: argparse.ArgumentParser) -> None:
 def _hand(args: argparse.Namespace):
     import hugger
 
+    if getattr(args, "hand", None):
+        from . import hands
+
+        fixed = {}
+        for item in args.fixed_joint:
+            name, sep, value = item.partition("=")
+            try:
+                fixed[name] = float(value)
+            except ValueError:
+                sep = ""
+            if not sep or not name:
+                raise UsageError(f"--fixed-joint must be NAME=RAD, got {item!r}")
+        return hands.load(args.hand, fixed_joints=fixed or None)
+    if getattr(args, "fixed_joint", None):
+        raise UsageError("--fixed-joint needs --hand FILE")
     return hugger.Hand(fingers=args.fingers, links=args.links, link_length=args.link_length,
                        link_radius=args.link_radius, palm_radius=args.palm_radius, palm_thickness=args.palm_thickness)
 
@@ -329,7 +351,7 @@ def cmd_render(args: argparse.Namespace) -> int:
 def _hand_info(h: dict[str, Any]) -> dict[str, Any]:
     """The hand of a trajectory file as structured fields (sizes in m, angles in rad)."""
     keys = ("fingers", "links", "link_lengths", "link_radius", "palm_radius", "palm_thickness", "finger_angles",
-            "finger_roots", "finger_directions", "joint_limits", "rest_angles")
+            "finger_roots", "finger_directions", "joint_limits", "rest_angles", "name")
     return {k: h[k] for k in keys if k in h}
 
 
@@ -359,7 +381,9 @@ def cmd_info(args: argparse.Namespace) -> int:
     lo, hi = obj.bounds
     prov = traj.provenance
     info = {"file": args.file, "hand": f"{h['fingers']} fingers x {h['links']} links, link radius {h['link_radius']} m, "
-                                      f"palm radius {h['palm_radius']} m",
+                                      f"palm radius {h['palm_radius']} m"
+                    + (", general layout" if "finger_roots" in h else "")
+                    + (f" ({h['name']})" if isinstance(h.get("name"), str) else ""),
             "object": f"{prov.get('object', '(not recorded)')}: {len(obj.faces)} triangles, "
                       f"{' x '.join(f'{1000 * e:.0f}' for e in hi - lo)} mm",
             "object_sha256": traj.object_sha256(), "hugger_version": prov.get("hugger_version", "(not recorded)"),
@@ -461,6 +485,44 @@ def cmd_export_scene(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_hands(args: argparse.Namespace) -> int:
+    from .hands import PRESETS
+
+    rows = []
+    for p in PRESETS.values():
+        h = p.build()
+        rows.append({"name": p.name, "fingers": h.fingers, "links": h.links, "reach_m": round(h.reach, 4),
+                     "limits": h.has_limits, "description": p.description, "source": p.source})
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return EXIT_OK
+    for r in rows:
+        print(f"{r['name']:<16} {r['fingers']} x {r['links']}  reach {r['reach_m'] * 100:5.1f} cm  "
+              f"{'limits' if r['limits'] else 'no limits':<9}  {r['description']}")
+    return EXIT_OK
+
+
+def cmd_export_urdf(args: argparse.Namespace) -> int:
+    import hugger
+
+    from .hands.robot import grasp_joint_values, to_mjcf, to_urdf, write_text
+
+    traj = _load(args.file)
+    n = len(traj.palm_pose)
+    if not -n <= args.configuration < n:
+        raise UsageError(f"--configuration {args.configuration} is out of range for {n} configurations")
+    hand = hugger.Hand.from_dict(traj.hand)
+    angles = traj.angles[args.configuration]
+    out = _out_path(args.out, (".urdf", ".xml", ".mjcf"))
+    text = to_mjcf(hand, angles) if out.suffix.lower() in (".xml", ".mjcf") else to_urdf(hand, angles)
+    write_text(out, text)
+    if args.json:
+        print(json.dumps({"out": str(out), "joint_values": grasp_joint_values(hand, angles)}))
+    else:
+        print(f"wrote {out}")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = _Parser(prog="hugger", description="Hugging grasps for multi-finger hands (Reznik & Lumelsky, ICRA 1994).",
                  epilog="Exit status: 0 success, 2 bad input or missing optional dependency, 1 internal error "
@@ -532,6 +594,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="glTF binary to write (.glb), in an existing directory")
     p.add_argument("--all", action="store_true", help="every configuration, one group of nodes k<k>/ each")
     p.set_defaults(func=cmd_export_scene)
+    p = sub.add_parser("hands", help="list the preset hands: name, fingers x links, reach, source")
+    p.add_argument("--json", action="store_true", help="print a JSON list")
+    p.set_defaults(func=cmd_hands)
+
+    p = sub.add_parser("export-urdf", help="write the hand with a configuration's joint values as URDF (hugger[hands])")
+    p.add_argument("file", help="trajectory file (.npz)")
+    p.add_argument("--out", required=True, help="URDF file to write (.urdf; .xml writes the hand alone as MJCF)")
+    p.add_argument("--configuration", type=int, default=-1, help="configuration index (default -1, the last)")
+    p.add_argument("--json", action="store_true", help="print the file and the joint values as JSON")
+    p.set_defaults(func=cmd_export_urdf)
     return ap
 
 

@@ -122,7 +122,13 @@ class Hand:
         Radius of the capsule links (0: zero-thickness links, as in the paper).
     palm_radius, palm_thickness
         The palm disk; finger roots sit on the rim of its front face.
+
+    :meth:`from_layout` describes real hands instead: per finger a root on the palm's front
+    face and an in-plane outward direction, per joint limits, per finger rest angles; presets
+    and URDF/MJCF import are in :mod:`hugger.hands`.
     """
+
+    name: str | None = None
 
     def __init__(self, fingers: int = 5, links: int = 5, link_length: Any = 0.02, link_radius: float = 0.004,
                  palm_radius: float = 0.03, palm_thickness: float = 0.01) -> None:
@@ -136,22 +142,105 @@ class Hand:
             lengths = np.full((m, n), float(lengths))
         if lengths.shape != (m, n):
             raise ValueError(f"link_length must be a scalar or a (fingers, links) = ({m}, {n}) array, got shape {lengths.shape}")
+        radius = _size("link_radius", link_radius, allow_zero=True)
+        palm_r, palm_t = _size("palm_radius", palm_radius), _size("palm_thickness", palm_thickness)
+        self._check_lengths(lengths, palm_r, palm_t)
+        self._core = _core.HandModel(m, n, lengths, radius, palm_r, palm_t)
+        message = implausible_size("the hand", max(2.0 * palm_r, float(lengths.sum(axis=1).max())))
+        if message:
+            warnings.warn(message, UserWarning, stacklevel=2)
+
+    @classmethod
+    def from_layout(cls, roots: Any, directions: Any, link_lengths: Any, rest: Any = None, limits: Any = None,
+                    link_radius: float = 0.004, palm_radius: float | None = None, palm_thickness: float = 0.01,
+                    name: str | None = None) -> Hand:
+        """A hand of general layout (a real hand); every array in the palm frame P (metres, radians).
+
+        Parameters
+        ----------
+        roots
+            (M, 3) finger roots R_m on the palm's front face: z = 0, within ``palm_radius`` of P_o.
+        directions
+            (M, 3) in-plane outward directions u_m, z = 0 (normalised here). Finger m moves in the
+            plane through R_m spanned by u_m and the palm normal; flexion turns it toward -u_m.
+        link_lengths
+            (M, N) link lengths, or a scalar.
+        rest
+            (M, N) rest angles: the FROZEN (open) finger; default all 0, straight along the palm
+            normal. ``rest[m, 0] = -pi/2`` lays link 0 along the palm, along +u_m.
+        limits
+            (M, N, 2) [lower, upper] joint limits (rad, relative angles as in
+            :meth:`forward`); default unlimited. A bound at or beyond +-pi is no bound (angles
+            lie in [-pi, pi]); ``lower == upper`` holds a joint fixed.
+        link_radius, palm_thickness
+            As for :class:`Hand`.
+        palm_radius
+            The palm disk; default the smallest centred disk holding every root and a link's
+            radius around it (at least 1 mm).
+
+        ``ValueError`` says why a layout is refused: a root off the palm, a direction out of
+        the palm plane, limits with lower > upper, rest angles outside their limits or behind
+        the palm's front plane, fingers that intersect at rest.
+        """
+        r = _real_array("roots", roots)
+        if r.ndim != 2 or r.shape[1] != 3:
+            raise ValueError(f"roots must be an (M, 3) array, got shape {r.shape}")
+        m = r.shape[0]
+        if not 1 <= m <= MAX_FINGERS:
+            raise ValueError(f"the hand must have between 1 and {MAX_FINGERS} fingers, got {m} roots")
+        d = _real_array("directions", directions)
+        if d.shape != (m, 3):
+            raise ValueError(f"directions must be an (M, 3) = ({m}, 3) array like roots, got shape {d.shape}")
+        lengths = _real_array("link_lengths", link_lengths)
+        if lengths.ndim == 0:
+            raise ValueError("link_lengths must be an (M, N) array (a scalar does not say N)")
+        if lengths.ndim != 2 or lengths.shape[0] != m:
+            raise ValueError(f"link_lengths must be an (M, N) array with M = {m} rows, got shape {lengths.shape}")
+        n = lengths.shape[1]
+        if not 1 <= n <= MAX_LINKS:
+            raise ValueError(f"links must be between 1 and {MAX_LINKS}, got {n}")
+        for label, a in (("roots", r), ("directions", d)):
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"{label} hold non-finite numbers")
+        q = np.zeros((m, n)) if rest is None else _real_array("rest", rest)
+        if q.shape != (m, n):
+            raise ValueError(f"rest must be an (M, N) = ({m}, {n}) array, got shape {q.shape}")
+        if limits is None:
+            lo, hi = np.full((m, n), -np.inf), np.full((m, n), np.inf)
+        else:
+            lim = _real_array("limits", limits)
+            if lim.shape != (m, n, 2):
+                raise ValueError(f"limits must be an (M, N, 2) = ({m}, {n}, 2) array of [lower, upper], got shape {lim.shape}")
+            if np.any(np.isnan(lim)):
+                raise ValueError("limits hold NaN (use -inf / inf for an unlimited joint)")
+            lo, hi = lim[..., 0].copy(), lim[..., 1].copy()
+            lo[lo <= -np.pi + 1e-12] = -np.inf  # at or beyond -pi: no bound (rounding allowed)
+            hi[hi >= np.pi - 1e-12] = np.inf
+        radius = _size("link_radius", link_radius, allow_zero=True)
+        if palm_radius is None:
+            palm_radius = max(1e-3, float(np.hypot(r[:, 0], r[:, 1]).max()) + radius)
+        hand = cls.__new__(cls)
+        palm_r, palm_t = _size("palm_radius", palm_radius), _size("palm_thickness", palm_thickness)
+        cls._check_lengths(lengths, palm_r, palm_t)
+        hand._core = _core.HandModel(m, n, lengths, radius, palm_r, palm_t, roots=r, directions=d, rest=q,
+                                     lower=lo, upper=hi)
+        hand.name = None if name is None else str(name)
+        message = implausible_size("the hand", max(2.0 * palm_r, float(lengths.sum(axis=1).max())))
+        if message:
+            warnings.warn(message, UserWarning, stacklevel=2)
+        return hand
+
+    @staticmethod
+    def _check_lengths(lengths: np.ndarray, palm_r: float, palm_t: float) -> None:
         if not np.all(np.isfinite(lengths)) or not np.all(lengths > 0):
             bad = float(lengths[~(np.isfinite(lengths) & (lengths > 0))][0])
             raise ValueError(f"link_length must be a positive finite number, got {bad!r}")
-        radius = _size("link_radius", link_radius, allow_zero=True)
-        palm_r, palm_t = _size("palm_radius", palm_radius), _size("palm_thickness", palm_thickness)
-        for name, value in (("link_length", float(lengths.min())), ("palm_radius", palm_r),
-                            ("palm_thickness", palm_t)):
+        for name, value in (("link_length", float(lengths.min())), ("palm_radius", palm_r), ("palm_thickness", palm_t)):
             if value < MIN_LENGTH:
                 raise ValueError(f"{name} = {value:g} m is smaller than {MIN_LENGTH:g} m, below what the engine "
                                  f"resolves (its tolerances are absolute, about 1e-7 m)")
         if lengths.max() > MAX_LENGTH:
             raise ValueError(f"link_length = {lengths.max():g} m is larger than {MAX_LENGTH:g} m: sizes are in metres")
-        self._core = _core.HandModel(m, n, lengths, radius, palm_r, palm_t)
-        message = implausible_size("the hand", max(2.0 * palm_r, float(lengths.sum(axis=1).max())))
-        if message:
-            warnings.warn(message, UserWarning, stacklevel=2)
 
     fingers = property(lambda self: self._core.fingers, doc="M, the number of fingers")
     links = property(lambda self: self._core.links, doc="N, the number of links per finger")
@@ -159,7 +248,24 @@ class Hand:
     link_radius = property(lambda self: self._core.link_radius, doc="capsule radius of the links (m)")
     palm_radius = property(lambda self: self._core.palm_radius, doc="palm disk radius (m)")
     palm_thickness = property(lambda self: self._core.palm_thickness, doc="palm disk thickness (m)")
-    finger_angles = property(lambda self: np.asarray(self._core.finger_angles), doc="phi_m (rad) of each root")
+    finger_angles = property(lambda self: np.asarray(self._core.finger_angles),
+                             doc="phi_m (rad): the angle of each finger's direction u_m about the palm normal")
+    general = property(lambda self: bool(self._core.general),
+                       doc="True for a hand made by from_layout (roots, directions, rest angles, limits)")
+    finger_roots = property(lambda self: self._core.finger_roots, doc="(M, 3) roots R_m in the palm frame (m)")
+    finger_directions = property(lambda self: self._core.finger_directions,
+                                 doc="(M, 3) in-plane outward directions u_m in the palm frame (unit)")
+    rest_angles = property(lambda self: self._core.rest_angles, doc="(M, N) rest (FROZEN) joint angles (rad)")
+
+    @property
+    def joint_limits(self) -> np.ndarray:
+        """(M, N, 2) [lower, upper] joint limits (rad); -inf / inf where a joint is unlimited."""
+        return np.stack([self._core.lower, self._core.upper], axis=-1)
+
+    @property
+    def has_limits(self) -> bool:
+        """True when some joint has a finite limit."""
+        return bool(self._core.has_limits)
 
     @property
     def reach(self) -> float:
@@ -190,8 +296,11 @@ class Hand:
         return self._core.roots(rigid_pose(palm_pose))
 
     def to_dict(self) -> dict:
-        """The hand as in the trajectory file's ``hand_json`` (DESIGN.md section 5)."""
-        return {
+        """The hand as in the trajectory file's ``hand_json``. A general layout adds
+        ``finger_roots`` (M x 3), ``finger_directions`` (M x 3), ``rest_angles`` (M x N) and, when
+        a joint is limited, ``joint_limits`` (M x N x 2, finite: an unlimited bound is written as
+        +-pi, which no angle passes), and ``name`` when the hand has one."""
+        d = {
             "fingers": self.fingers,
             "links": self.links,
             "link_lengths": self.link_lengths.tolist(),
@@ -200,6 +309,15 @@ class Hand:
             "palm_thickness": self.palm_thickness,
             "finger_angles": self.finger_angles.tolist(),
         }
+        if self.general:
+            d["finger_roots"] = self.finger_roots.tolist()
+            d["finger_directions"] = self.finger_directions.tolist()
+            d["rest_angles"] = self.rest_angles.tolist()
+            if self.has_limits:
+                d["joint_limits"] = np.clip(self.joint_limits, -np.pi, np.pi).tolist()
+        if self.name:
+            d["name"] = self.name
+        return d
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict())
@@ -215,11 +333,73 @@ class Hand:
         if missing:
             raise ValueError(f"the hand description lacks {missing}")
         whole = lambda x: int(x) if isinstance(x, float) and x.is_integer() else x  # noqa: E731  (JSON may say 5.0)
-        return cls(fingers=whole(d["fingers"]), links=whole(d["links"]), link_length=d["link_lengths"],
-                   link_radius=d["link_radius"], palm_radius=d["palm_radius"], palm_thickness=d["palm_thickness"])
+        fingers, links = whole(d["fingers"]), whole(d["links"])
+        layout_keys = ("finger_roots", "finger_directions", "rest_angles", "joint_limits")
+        if not any(k in d for k in layout_keys):
+            hand = cls(fingers=fingers, links=links, link_length=d["link_lengths"], link_radius=d["link_radius"],
+                       palm_radius=d["palm_radius"], palm_thickness=d["palm_thickness"])
+            hand.name = d.get("name") if isinstance(d.get("name"), str) else None
+            return hand
+        m, n = _count("fingers", fingers), _count("links", links)
+        if not (1 <= m <= MAX_FINGERS and 1 <= n <= MAX_LINKS):
+            raise ValueError(f"fingers and links must be in 1..{MAX_FINGERS} and 1..{MAX_LINKS}, got {m}, {n}")
+        palm_r = _size("palm_radius", d["palm_radius"])
+        phi = np.asarray(d.get("finger_angles", 2 * np.pi * np.arange(m) / m), dtype=np.float64)
+        if phi.shape != (m,):
+            raise ValueError(f"finger_angles must hold {m} angles, got shape {phi.shape}")
+        rim = np.stack([np.cos(phi), np.sin(phi), np.zeros(m)], axis=1)
+        lengths = _real_array("link_lengths", d["link_lengths"])
+        if lengths.ndim == 0:
+            lengths = np.full((m, n), float(lengths))
+        elif lengths.size == m * n:
+            lengths = lengths.reshape(m, n)
+        return cls.from_layout(roots=d.get("finger_roots", palm_r * rim), directions=d.get("finger_directions", rim),
+                               link_lengths=lengths, rest=d.get("rest_angles"), limits=d.get("joint_limits"),
+                               link_radius=d["link_radius"], palm_radius=palm_r, palm_thickness=d["palm_thickness"],
+                               name=d.get("name") if isinstance(d.get("name"), str) else None)
+
+    def same_as(self, other: Hand, tol: float = 1e-9) -> bool:
+        """True when ``other`` describes the same hand: equal counts and, within ``tol`` (m or rad),
+        equal sizes, roots, directions, rest angles and limits (infinite limits equal)."""
+        if not isinstance(other, Hand) or (self.fingers, self.links) != (other.fingers, other.links):
+            return False
+        pairs = [(self.link_lengths, other.link_lengths), (self.finger_roots, other.finger_roots),
+                 (self.finger_directions, other.finger_directions), (self.rest_angles, other.rest_angles),
+                 (np.array([self.link_radius, self.palm_radius, self.palm_thickness]),
+                  np.array([other.link_radius, other.palm_radius, other.palm_thickness]))]
+        if not all(np.allclose(a, b, rtol=0.0, atol=tol) for a, b in pairs):
+            return False
+        la, lb = self.joint_limits, other.joint_limits
+        same_inf = np.array_equal(np.isinf(la), np.isinf(lb)) and np.array_equal(la[np.isinf(la)], lb[np.isinf(lb)])
+        return same_inf and bool(np.allclose(la[np.isfinite(la)], lb[np.isfinite(lb)], rtol=0.0, atol=tol))
+
+    @classmethod
+    def from_urdf(cls, path: Any, palm_link: str | None = None, fixed_joints: dict | None = None,
+                  link_radius: float | None = None) -> Hand:
+        """The hand of a URDF file: see :func:`hugger.hands.from_urdf` (needs ``hugger[hands]``)."""
+        from .hands import from_urdf
+        return from_urdf(path, palm_link=palm_link, fixed_joints=fixed_joints, link_radius=link_radius)
+
+    @classmethod
+    def from_mjcf(cls, path: Any, palm_body: str | None = None, fixed_joints: dict | None = None,
+                  link_radius: float | None = None) -> Hand:
+        """The hand of a MuJoCo MJCF file: see :func:`hugger.hands.from_mjcf` (needs MuJoCo)."""
+        from .hands import from_mjcf
+        return from_mjcf(path, palm_body=palm_body, fixed_joints=fixed_joints, link_radius=link_radius)
+
+    def to_urdf(self, path: Any = None, angles: Any = None) -> str:
+        """The hand as URDF text (see :func:`hugger.hands.to_urdf`), also written to ``path``."""
+        from .hands.robot import to_urdf, write_text
+        text = to_urdf(self, angles)
+        if path is not None:
+            write_text(path, text)
+        return text
 
     def __repr__(self) -> str:
         ll = self.link_lengths
         length = f"{ll[0, 0]:g}" if np.all(ll == ll[0, 0]) else "per-link"
-        return (f"Hand(fingers={self.fingers}, links={self.links}, link_length={length}, link_radius={self.link_radius:g}, "
-                f"palm_radius={self.palm_radius:g}, palm_thickness={self.palm_thickness:g})")
+        layout = ", general layout" if self.general else ""
+        name = f"{self.name!r}, " if self.name else ""
+        return (f"Hand({name}fingers={self.fingers}, links={self.links}, link_length={length}, "
+                f"link_radius={self.link_radius:g}, palm_radius={self.palm_radius:g}, "
+                f"palm_thickness={self.palm_thickness:g}{layout})")

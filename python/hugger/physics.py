@@ -279,11 +279,15 @@ def _quat(rot: np.ndarray) -> np.ndarray:
 def finger_frames(traj: Any, k: int = -1) -> tuple[np.ndarray, np.ndarray]:
     """Roots R_m (M, 3) and hinge axes a_m (M, 3), both in the *palm* frame, derived from the
     trajectory's palm pose and joints at configuration k: R_m = T_WP⁻¹ j_m0, u_m = R_m's direction
-    in the palm plane, a_m = u_m × p̂ (normal to the finger plane Π_m; positive = flexion)."""
+    in the palm plane (or the hand's ``finger_directions`` for a general layout), a_m = u_m × p̂ (normal to the finger plane Π_m; positive = flexion)."""
     traj = _trajectory(traj)
     k = _index(traj, k)
     pose = traj.palm_pose[k]
     roots = (traj.joints[k, :, 0] - pose[:3, 3]) @ pose[:3, :3]
+    dirs = traj.hand.get("finger_directions")
+    if dirs is not None:  # a general layout (hugger.Hand.from_layout) says u_m itself
+        u = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)
+        return roots, np.cross(u, [0.0, 0.0, 1.0])
     u = roots.copy()
     u[:, 2] = 0.0
     norm = np.linalg.norm(u, axis=1)

@@ -42,6 +42,8 @@ def safe_distance(obj: Object, hand: Hand, target: Any, margin: float = 0.005) -
     body = float(np.linalg.norm(obj.vertices - t, axis=1).max())
     hand_radius = max(math.hypot(hand.palm_radius, hand.reach) + hand.link_radius,
                       math.hypot(hand.palm_radius, hand.palm_thickness))
+    if hand.general:  # roots anywhere on the palm, fingers at rest in any pose
+        hand_radius = max(hand_radius, float(hand._core.extended_radius) + hand.link_radius)
     return body + hand_radius + margin
 
 

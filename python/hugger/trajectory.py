@@ -320,6 +320,17 @@ def _check_hand_sizes(hand: dict, m: int, n: int, source: str) -> None:
         lengths = np.zeros(0)
     if lengths.shape != (m, n) or not np.all(np.isfinite(lengths)) or not np.all(lengths > 0):
         raise ValueError(f"{source}: hand_json link_lengths must be a ({m}, {n}) list of positive lengths (m)")
+    # the optional general layout (hugger.Hand.from_layout): shapes and finite numbers
+    for key, shape in (("finger_roots", (m, 3)), ("finger_directions", (m, 3)), ("rest_angles", (m, n)),
+                       ("joint_limits", (m, n, 2))):
+        if key not in hand:
+            continue
+        try:
+            a = np.asarray(hand[key], dtype=np.float64)
+        except (TypeError, ValueError, OverflowError):
+            a = np.zeros(0)
+        if a.shape != shape or not np.all(np.isfinite(a)):
+            raise ValueError(f"{source}: hand_json {key} must be a {shape} list of finite numbers")
 
 
 def _version() -> str:

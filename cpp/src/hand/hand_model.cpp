@@ -1,5 +1,8 @@
 #include "hugger/hand/hand_model.hpp"
 
+#include "hugger/geometry/distance.hpp"
+
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -14,10 +17,115 @@ void check_positive(const char* name, double value) {
     throw std::invalid_argument(os.str());
   }
 }
+std::string fmt(double x) {
+  std::ostringstream os;
+  os << x;
+  return os.str();
+}
+
+void check_layout_shape(const MatrixX& a, int rows, int cols, const char* name) {
+  if (a.size() != 0 && (a.rows() != rows || a.cols() != cols)) {
+    std::ostringstream os;
+    os << name << " must be a (" << rows << ", " << cols << ") array, got (" << a.rows() << ", " << a.cols() << ")";
+    throw std::invalid_argument(os.str());
+  }
+}
+
+/// Tolerance (m, or relative for unit vectors) on z = 0 and on a root's distance from the palm
+/// centre; the independent checker allows 1e-9.
+constexpr double kLayoutTolerance = 1e-10;
+
 }  // namespace
 
 HandModel::HandModel(int fingers, int links, const MatrixX& link_lengths, double link_radius, double palm_radius,
+                     double palm_thickness, const HandLayout& layout)
+    : HandModel(fingers, links, link_lengths, link_radius, palm_radius, palm_thickness, false) {
+  // The base constructor checked the sizes and the rim layout; a general layout replaces the
+  // rim and is checked on its own.
+  const int M = fingers, N = links;
+  check_layout_shape(layout.roots, M, 3, "finger_roots");
+  check_layout_shape(layout.directions, M, 3, "finger_directions");
+  check_layout_shape(layout.rest, M, N, "rest_angles");
+  check_layout_shape(layout.lower, M, N, "lower joint limits");
+  check_layout_shape(layout.upper, M, N, "upper joint limits");
+  general_ = true;
+  roots_.resize(M, 3);
+  dirs_.resize(M, 3);
+  for (int m = 0; m < M; ++m) {
+    const double phi = finger_angles_[m];
+    Vec3 r = layout.roots.size() ? Vec3(layout.roots.row(m).transpose())
+                                 : Vec3(palm_radius * std::cos(phi), palm_radius * std::sin(phi), 0.0);
+    Vec3 d = layout.directions.size() ? Vec3(layout.directions.row(m).transpose())
+                                      : Vec3(std::cos(phi), std::sin(phi), 0.0);
+    const std::string f = "finger " + std::to_string(m);
+    if (!r.allFinite()) throw std::invalid_argument("the root of " + f + " holds non-finite numbers");
+    if (std::abs(r.z()) > kLayoutTolerance)
+      throw std::invalid_argument("the root of " + f + " must lie on the palm's front face (z = 0 in the palm frame), got z = " +
+                                  fmt(r.z()) + " m");
+    const double rho = std::hypot(r.x(), r.y());
+    if (rho > palm_radius + kLayoutTolerance)
+      throw std::invalid_argument("the root of " + f + " is " + fmt(rho) + " m from the palm centre: off the palm (palm_radius " +
+                                  fmt(palm_radius) + " m)");
+    if (!d.allFinite()) throw std::invalid_argument("the direction of " + f + " holds non-finite numbers");
+    const double dl = std::hypot(d.x(), d.y());
+    if (!(dl > 1e-12) || std::abs(d.z()) > kLayoutTolerance * std::max(1.0, d.norm()))
+      throw std::invalid_argument("the direction of " + f + " must be a non-zero vector in the palm plane (z = 0), got (" +
+                                  fmt(d.x()) + ", " + fmt(d.y()) + ", " + fmt(d.z()) + ")");
+    r.z() = 0.0;
+    d = Vec3(d.x() / dl, d.y() / dl, 0.0);
+    roots_.row(m) = r.transpose();
+    dirs_.row(m) = d.transpose();
+    finger_angles_[m] = std::atan2(d.y(), d.x());
+  }
+  rest_ = layout.rest.size() ? layout.rest : MatrixX::Zero(M, N);
+  lower_ = layout.lower.size() ? layout.lower : MatrixX::Constant(M, N, -kInf);
+  upper_ = layout.upper.size() ? layout.upper : MatrixX::Constant(M, N, kInf);
+  for (int m = 0; m < M; ++m)
+    for (int n = 0; n < N; ++n) {
+      const std::string j = "joint " + std::to_string(n) + " of finger " + std::to_string(m);
+      const double lo = lower_(m, n), hi = upper_(m, n), q = rest_(m, n);
+      if (std::isnan(lo) || std::isnan(hi) || !(lo <= hi) || lo == kInf || hi == -kInf)
+        throw std::invalid_argument("the limits of " + j + " must be lower <= upper (rad, +-inf: unlimited), got [" +
+                                    fmt(lo) + ", " + fmt(hi) + "]");
+      if (!std::isfinite(q) || std::abs(q) > kPi)
+        throw std::invalid_argument("the rest angle of " + j + " must be a finite angle in [-pi, pi] rad, got " + fmt(q));
+      if (q < lo || q > hi)
+        throw std::invalid_argument("the rest angle of " + j + " (" + fmt(q) + " rad) is outside its limits [" + fmt(lo) +
+                                    ", " + fmt(hi) + "]");
+      if (std::isfinite(lo) || std::isfinite(hi)) has_limits_ = true;
+    }
+  // At rest: no joint behind the palm's front plane, no finger through another or itself.
+  std::vector<std::vector<Vec3>> rest3(M);
+  for (int m = 0; m < M; ++m) {
+    const std::vector<Vec2> c = rest_chain(m);
+    const Vec3 o = roots_.row(m).transpose() - root2d(m).x() * direction_palm(m);
+    for (int n = 0; n <= N; ++n) {
+      if (c[n].y() < -1e-12)
+        throw std::invalid_argument("at rest, joint " + std::to_string(n) + " of finger " + std::to_string(m) + " lies " +
+                                    fmt(-c[n].y()) + " m behind the palm's front plane: the rest angles bend it too far");
+      rest3[m].push_back(o + c[n].x() * direction_palm(m) + c[n].y() * Vec3::UnitZ());
+    }
+  }
+  const double sep = std::max(2.0 * link_radius, 1e-7), sep2 = sep * sep;
+  for (int m = 0; m < M; ++m)
+    for (int k = m; k < M; ++k)
+      for (int a = 0; a < N; ++a)
+        for (int b = (k == m ? a + 2 : 0); b < N; ++b)
+          if (segment_segment_squared(rest3[m][a], rest3[m][a + 1], rest3[k][b], rest3[k][b + 1]) < sep2) {
+            std::ostringstream os;
+            os << "at rest, link " << a << " of finger " << m << " and link " << b << " of finger " << k << " are "
+               << std::sqrt(segment_segment_squared(rest3[m][a], rest3[m][a + 1], rest3[k][b], rest3[k][b + 1]))
+               << " m apart (axis to axis), less than " << sep << ": the fingers intersect";
+            throw std::invalid_argument(os.str());
+          }
+}
+
+HandModel::HandModel(int fingers, int links, const MatrixX& link_lengths, double link_radius, double palm_radius,
                      double palm_thickness)
+    : HandModel(fingers, links, link_lengths, link_radius, palm_radius, palm_thickness, true) {}
+
+HandModel::HandModel(int fingers, int links, const MatrixX& link_lengths, double link_radius, double palm_radius,
+                     double palm_thickness, bool rim)
     : fingers_(fingers),
       links_(links),
       lengths_(link_lengths),
@@ -57,7 +165,7 @@ HandModel::HandModel(int fingers, int links, const MatrixX& link_lengths, double
     os << "link_radius (" << link_radius << ") must be smaller than palm_radius (" << palm_radius << ")";
     throw std::invalid_argument(os.str());
   }
-  if (fingers > 1) {
+  if (rim && fingers > 1) {
     const double gap = 2.0 * palm_radius * std::sin(kPi / fingers);
     if (gap <= 2.0 * link_radius) {
       std::ostringstream os;
@@ -67,6 +175,9 @@ HandModel::HandModel(int fingers, int links, const MatrixX& link_lengths, double
     }
   }
   for (int m = 0; m < fingers; ++m) finger_angles_.push_back(2.0 * kPi * m / fingers);
+  rest_ = MatrixX::Zero(fingers, links);
+  lower_ = MatrixX::Constant(fingers, links, -kInf);
+  upper_ = MatrixX::Constant(fingers, links, kInf);
 }
 
 HandModel HandModel::uniform(int fingers, int links, double link_length, double link_radius, double palm_radius,
@@ -79,20 +190,44 @@ HandModel HandModel::uniform(int fingers, int links, double link_length, double 
 
 double HandModel::extended_radius() const {
   double r = std::hypot(palm_radius_, palm_thickness_);
-  for (int m = 0; m < fingers_; ++m) r = std::max(r, std::hypot(palm_radius_, finger_length(m)));
+  if (!general_) {
+    for (int m = 0; m < fingers_; ++m) r = std::max(r, std::hypot(palm_radius_, finger_length(m)));
+    return r;
+  }
+  for (int m = 0; m < fingers_; ++m) {
+    const std::vector<Vec2> c = rest_chain(m);
+    const Vec3 o = root_palm(m) - c[0].x() * direction_palm(m);
+    for (const Vec2& x : c) r = std::max(r, (o + x.x() * direction_palm(m) + x.y() * Vec3::UnitZ()).norm());
+  }
   return r;
 }
 
-Vec3 HandModel::root(const Pose& palm, int m) const {
+Vec3 HandModel::root_palm(int m) const {
+  if (general_) return roots_.row(m).transpose();
   const double phi = finger_angles_[m];
-  return palm * Vec3(palm_radius_ * std::cos(phi), palm_radius_ * std::sin(phi), 0.0);
+  return Vec3(palm_radius_ * std::cos(phi), palm_radius_ * std::sin(phi), 0.0);
 }
 
-FingerPlane HandModel::plane(const Pose& palm, int m) const {
+Vec3 HandModel::direction_palm(int m) const {
+  if (general_) return dirs_.row(m).transpose();
   const double phi = finger_angles_[m];
+  return Vec3(std::cos(phi), std::sin(phi), 0.0);
+}
+
+Vec2 HandModel::root2d(int m) const {
+  if (!general_) return Vec2(palm_radius_, 0.0);
+  return Vec2(roots_.row(m).dot(dirs_.row(m)), 0.0);
+}
+
+std::vector<Vec2> HandModel::rest_chain(int m) const { return forward_planar(m, root2d(m), rest_.row(m).data()); }
+
+Vec3 HandModel::root(const Pose& palm, int m) const { return palm * root_palm(m); }
+
+FingerPlane HandModel::plane(const Pose& palm, int m) const {
   FingerPlane pl;
-  pl.origin = palm.translation();
-  pl.u = palm.linear() * Vec3(std::cos(phi), std::sin(phi), 0.0);
+  const Vec3 u = direction_palm(m);
+  pl.origin = general_ ? Vec3(palm * (root_palm(m) - root2d(m).x() * u)) : Vec3(palm.translation());
+  pl.u = palm.linear() * u;
   pl.p = palm.linear().col(2);
   return pl;
 }
@@ -128,7 +263,7 @@ std::vector<Vec3> HandModel::forward(const Pose& palm, const MatrixX& angles) co
   for (int m = 0; m < fingers_; ++m) {
     const FingerPlane pl = plane(palm, m);
     std::vector<double> a(angles.row(m).data(), angles.row(m).data() + links_);
-    for (const Vec2& x : forward_planar(m, Vec2(palm_radius_, 0.0), a.data())) out.push_back(pl.to_world(x));
+    for (const Vec2& x : forward_planar(m, root2d(m), a.data())) out.push_back(pl.to_world(x));
   }
   return out;
 }

@@ -96,12 +96,12 @@ void Planner::check_clear(const Configuration& c, const char* when) const {
 }
 
 void Planner::plan_phase1(const Pose& start) {
-  const MatrixX zero = MatrixX::Zero(hand_.fingers(), hand_.links());
+  const MatrixX& rest = hand_.rest();  // FROZEN = at rest (all 0: straight along the palm normal)
   auto extended = [&](const Pose& palm, int phase) {
     Configuration c;
     c.palm = palm;
-    c.joints = hand_.forward(palm, zero);
-    c.angles = zero;
+    c.joints = hand_.forward(palm, rest);
+    c.angles = rest;
     c.tip_state.assign(hand_.fingers(), TipState::kFrozen);
     c.phase = phase;
     c.iteration = static_cast<long>(history_.size());
@@ -131,10 +131,14 @@ void Planner::plan_phase1(const Pose& start) {
   palm2_ = history_.back().palm;
   for (int m = 0; m < hand_.fingers(); ++m) {
     planes_.push_back(hand_.plane(palm2_, m));
-    Chain c(hand_.links() + 1);
-    c[0] = Vec2(hand_.palm_radius(), 0.0);
-    for (int n = 0; n < hand_.links(); ++n) c[n + 1] = c[n] + Vec2(0.0, hand_.link_length(m, n));
-    chains_.push_back(std::move(c));
+    if (hand_.general()) {
+      chains_.push_back(hand_.rest_chain(m));
+    } else {
+      Chain c(hand_.links() + 1);
+      c[0] = Vec2(hand_.palm_radius(), 0.0);
+      for (int n = 0; n < hand_.links(); ++n) c[n + 1] = c[n] + Vec2(0.0, hand_.link_length(m, n));
+      chains_.push_back(std::move(c));
+    }
   }
   states_.assign(hand_.fingers(), TipState::kFrozen);
   anchors_.assign(hand_.fingers(), Vec2(kInf, kInf));
@@ -188,6 +192,10 @@ SnakeRequest Planner::snake_request(int m, double front) const {
   // rotate_until_touch) or the old tip; the root is the old root or one moved by sigma, which
   // is clipped to the root's sensed free distance.
   req.start_outside = true;
+  if (hand_.has_limits()) {
+    req.lower = hand_.lower().row(m).data();
+    req.upper = hand_.upper().row(m).data();
+  }
   return req;
 }
 
@@ -255,9 +263,10 @@ void Planner::phase2_iteration() {
   // (b) FollowBoundary and Head2Tail for every CONTACT finger.
   const std::vector<Chain> old = chains_;
   std::vector<Chain> cand = chains_;
-  const Vec2 root(hand_.palm_radius(), eta_);
+  auto root_at = [&](int m, double eta) { return Vec2(hand_.root2d(m).x(), eta); };
   for (int m = 0; m < M; ++m) {
     if (states_[m] != TipState::kContact) continue;
+    const Vec2 root = root_at(m, eta_);
     const Vec2 tip = old[m][N];
     Vec2 head = tip;
     if (link_gap(m, tip, tip, delta) <= delta) {
@@ -284,7 +293,9 @@ void Planner::phase2_iteration() {
       const Vec2 d1 = old[m][N] - old[m][N - 1];
       const Vec2 d0 = N >= 2 ? Vec2(old[m][N - 1] - old[m][N - 2]) : Vec2(0.0, 1.0);
       const double flexion = std::atan2(d0.x() * d1.y() - d0.y() * d1.x(), d0.dot(d1));
-      rr.max_angle = std::clamp(kMaxSwingFlexion - flexion, 0.0, s / hand_.link_length(m, N - 1));
+      // ... and never beyond the distal joint's upper limit.
+      const double reach = std::min(kMaxSwingFlexion, hand_.upper()(m, N - 1));
+      rr.max_angle = std::clamp(reach - flexion, 0.0, s / hand_.link_length(m, N - 1));
       rr.touch_gap = delta;
       rr.level = level;
       head = sensing_->rotate_until_touch(rr).end;
@@ -315,7 +326,7 @@ void Planner::phase2_iteration() {
           // Bounds above the cap change nothing: sigma <= s < cap - level.
           for (int n = 0; n <= N; ++n) free = std::min(free, frozen_gap(m, n, cap));
         } else {
-          free = std::min(free, link_gap(m, root, root, cap));
+          free = std::min(free, link_gap(m, root_at(m, eta_), root_at(m, eta_), cap));
         }
       }
       sigma = std::min(sigma, std::max(0.0, free - level));
@@ -327,8 +338,8 @@ void Planner::phase2_iteration() {
   auto attempt = [&](double sig, bool last, std::vector<Chain>& out, std::vector<TipState>& st) {
     out = old;
     st = states_;
-    const Vec2 new_root(hand_.palm_radius(), eta_ + sig);
     for (int m = 0; m < M; ++m) {
+      const Vec2 new_root = root_at(m, eta_ + sig);
       Chain c;
       switch (st[m]) {
         case TipState::kFrozen:

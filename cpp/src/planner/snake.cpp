@@ -1,18 +1,58 @@
 #include "hugger/planner/snake.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace hugger {
+
+double relative_angle(const Chain& chain, int joint, const Vec2& dir) {
+  const Vec2 prev = joint == 0 ? Vec2(0.0, 1.0) : Vec2(chain[joint] - chain[joint - 1]);
+  return std::atan2(prev.x() * dir.y() - prev.y() * dir.x(), prev.dot(dir));
+}
+
+bool angle_within_limits(double lo, double hi, const Vec2& base, Vec2& dir, bool clamp) {
+  if (lo == -kInf && hi == kInf) return true;
+  const double q = std::atan2(base.x() * dir.y() - base.y() * dir.x(), base.dot(dir));
+  if (q >= lo - kLimitSlack && q <= hi + kLimitSlack) return true;
+  if (!clamp) return false;
+  const double target = q < lo ? lo : hi;
+  const Vec2 b = base.normalized();
+  const double c = std::cos(target), s = std::sin(target);
+  dir = dir.norm() * Vec2(c * b.x() - s * b.y(), s * b.x() + c * b.y());
+  return true;
+}
+
+bool joint_within_limits(const SnakeRequest& req, const Chain& chain, int joint, Vec2& dir, bool clamp) {
+  if (req.lower == nullptr || req.upper == nullptr) return true;
+  const Vec2 prev = joint == 0 ? Vec2(0.0, 1.0) : Vec2(chain[joint] - chain[joint - 1]);
+  return angle_within_limits(req.lower[joint], req.upper[joint], prev, dir, clamp);
+}
 
 namespace {
 
 /// Place chain[to] at distance L from chain[from], toward the old position of `to`; cling if needed.
 /// `pivot_outside`: chain[from] is known to lie outside O.
+/// `limited`: Tail2Head (to == from + 1) holds the joint at `from` within its limits, turning
+/// the ray onto a limit it breaks and refusing a freeing rotation that ends beyond one;
+/// Head2Tail (to == from - 1) turns the ray of link `to` so that joint `from` (between it and
+/// the link placed before it) is within its limits, and leaves the freeing rotation free:
+/// Tail2Head, whose chain is the one emitted, enforces them.
 bool place(const Sensing& sensing, const SnakeRequest& req, const Chain& old, int from, int to, double L,
-           bool pivot_outside, Chain& chain) {
+           bool pivot_outside, bool limited, Chain& chain) {
   Vec2 dir = old[to] - chain[from];
   if (dir.norm() < 1e-15) dir = old[to] - old[from];
-  chain[to] = chain[from] + L * dir.normalized();
+  dir.normalize();
+  const int N = static_cast<int>(chain.size()) - 1;
+  if (limited && to > from) {
+    joint_within_limits(req, chain, from, dir, true);
+  } else if (limited && req.lower != nullptr && req.upper != nullptr && from < N) {
+    // theta_from is the angle from link `to` (= -dir) to link `from`: within [lo, hi] exactly
+    // when the angle from link `from` to -dir is within [-hi, -lo].
+    Vec2 e = -dir;
+    angle_within_limits(-req.upper[from], -req.lower[from], chain[from + 1] - chain[from], e, true);
+    dir = -e;
+  }
+  chain[to] = chain[from] + L * dir;
   if (sensing.link_free(req.plane, chain[from], chain[to], req.radius, req.front, pivot_outside)) return true;
   RotateRequest rr;
   rr.plane = req.plane;
@@ -24,6 +64,8 @@ bool place(const Sensing& sensing, const SnakeRequest& req, const Chain& old, in
   rr.sample_angle = req.sample_angle;
   const RotateResult r = sensing.rotate_until_free(rr);
   if (!r.ok) return false;
+  Vec2 freed = r.end - chain[from];
+  if (limited && to > from && !joint_within_limits(req, chain, from, freed, false)) return false;
   chain[to] = r.end;
   return true;
 }
@@ -36,7 +78,7 @@ bool head_to_tail(const Sensing& sensing, const SnakeRequest& req, const Vec2& h
   chain[N] = head;
   for (int n = N - 1; n >= 0; --n)
     // Every pivot after the first is the end of a link just placed free: outside O.
-    if (!place(sensing, req, old, n + 1, n, req.lengths[n], req.start_outside || n + 1 < N, chain)) return false;
+    if (!place(sensing, req, old, n + 1, n, req.lengths[n], req.start_outside || n + 1 < N, true, chain)) return false;
   return true;
 }
 
@@ -45,7 +87,7 @@ bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& r
   const int N = static_cast<int>(chain.size()) - 1;
   chain[0] = root;
   for (int n = 0; n < N; ++n)
-    if (!place(sensing, req, old, n, n + 1, req.lengths[n], req.start_outside || n > 0, chain)) return false;
+    if (!place(sensing, req, old, n, n + 1, req.lengths[n], req.start_outside || n > 0, true, chain)) return false;
   return true;
 }
 

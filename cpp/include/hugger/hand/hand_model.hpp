@@ -19,6 +19,16 @@ struct FingerPlane {
   Vec3 normal() const { return p.cross(u); }
 };
 
+/// A general finger layout (real hands). Every matrix has one row per finger; all in the palm
+/// frame P. Empty matrices select the defaults: the rim layout, rest all 0, no limits.
+struct HandLayout {
+  MatrixX roots;       ///< M x 3 finger roots R_m on the palm's front face (z = 0, within palm_radius)
+  MatrixX directions;  ///< M x 3 in-plane outward directions u_m (z = 0; normalised here)
+  MatrixX rest;        ///< M x N rest (FROZEN) joint angles (rad); 0 = straight along the palm normal
+  MatrixX lower;       ///< M x N lower joint limits (rad); -inf = unlimited
+  MatrixX upper;       ///< M x N upper joint limits (rad); +inf = unlimited
+};
+
 /// Immutable description of the hand. Sizes in metres.
 class HandModel {
  public:
@@ -26,6 +36,13 @@ class HandModel {
   /// or a `link_lengths` matrix that is not fingers x links.
   HandModel(int fingers, int links, const MatrixX& link_lengths, double link_radius, double palm_radius,
             double palm_thickness);
+  /// A general layout (roots, directions, rest angles, joint limits). Throws
+  /// std::invalid_argument, saying why, for what the planner cannot handle: a root off the
+  /// palm's front face, a direction not in the palm plane, a limit pair with lower > upper, rest
+  /// angles outside their limits or behind the palm's front plane, fingers that intersect
+  /// (each other, or themselves) at rest.
+  HandModel(int fingers, int links, const MatrixX& link_lengths, double link_radius, double palm_radius,
+            double palm_thickness, const HandLayout& layout);
   /// All links of equal length.
   static HandModel uniform(int fingers, int links, double link_length, double link_radius, double palm_radius,
                            double palm_thickness);
@@ -41,12 +58,30 @@ class HandModel {
   /// phi_m = 2 pi m / M, the angle of finger m's root about the palm normal.
   double finger_angle(int m) const { return finger_angles_[m]; }
   const std::vector<double>& finger_angles() const { return finger_angles_; }
-  /// Largest distance from P_o of any joint of the extended hand.
+  /// Largest distance from P_o of any joint of the hand at rest, or of the palm's rim.
   double extended_radius() const;
+
+  /// True when the hand was given a general layout (roots, directions, rest or limits).
+  bool general() const { return general_; }
+  /// Root R_m in the palm frame (z = 0).
+  Vec3 root_palm(int m) const;
+  /// In-plane outward direction u_m in the palm frame (unit, z = 0).
+  Vec3 direction_palm(int m) const;
+  /// Root R_m in its finger plane's (xi, eta) coordinates (eta = 0: the palm's front face).
+  Vec2 root2d(int m) const;
+  /// Rest (FROZEN) joint angles, M x N (rad).
+  const MatrixX& rest() const { return rest_; }
+  /// Finger m at rest in its plane (N + 1 joints, tail first, the tail at root2d(m)).
+  std::vector<Vec2> rest_chain(int m) const;
+  /// Joint limits, M x N each (rad; +-inf: unlimited). has_limits(): any finite limit.
+  const MatrixX& lower() const { return lower_; }
+  const MatrixX& upper() const { return upper_; }
+  bool has_limits() const { return has_limits_; }
 
   /// Root R_m in the world for palm pose T_WP.
   Vec3 root(const Pose& palm, int m) const;
-  /// Finger m's plane for palm pose T_WP, with its origin at P_o.
+  /// Finger m's plane for palm pose T_WP. Its origin is the point of the plane nearest P_o
+  /// (P_o itself for the rim layout), so that root2d(m) = (R_m . u_m, 0).
   FingerPlane plane(const Pose& palm, int m) const;
 
   /// Forward kinematics: joints (M*(N+1) points, finger-major) from angles (M x N).
@@ -59,10 +94,17 @@ class HandModel {
   MatrixX angles_from_joints(const Pose& palm, const std::vector<Vec3>& joints) const;
 
  private:
+  /// The sizes' checks, and with `rim` the rim layout's root spacing.
+  HandModel(int fingers, int links, const MatrixX& link_lengths, double link_radius, double palm_radius,
+            double palm_thickness, bool rim);
+
   int fingers_, links_;
   MatrixX lengths_;
   double link_radius_, palm_radius_, palm_thickness_;
   std::vector<double> finger_angles_;
+  bool general_ = false, has_limits_ = false;
+  MatrixX roots_, dirs_;      ///< M x 3 each, palm frame (general layouts only)
+  MatrixX rest_, lower_, upper_;
 };
 
 }  // namespace hugger

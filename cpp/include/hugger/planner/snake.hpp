@@ -23,16 +23,41 @@ struct SnakeRequest {
   /// The chain's first pivot (the head for Head2Tail, the root for Tail2Head) is known to lie
   /// outside O. Every later pivot is the end of a link just placed free, so outside as well.
   bool start_outside = false;
+  /// Joint limits (rad), N each, of the relative angles theta_n (theta_0 from the palm normal);
+  /// nullptr: unlimited. Tail2Head holds each joint within them (see joint_within_limits).
+  const double* lower = nullptr;
+  const double* upper = nullptr;
 };
 
+/// Slack (rad) on the joint limits: rounding of angles recomputed from joint positions.
+constexpr double kLimitSlack = 1e-12;
+
+/// Joint `joint`'s angle (rad, positive = flexion = counter-clockwise in (xi, eta)) when link
+/// `joint` points along `dir`: relative to link joint - 1 of `chain`, or to the palm normal.
+double relative_angle(const Chain& chain, int joint, const Vec2& dir);
+
+/// The limit test both propagations use: true when the angle from `base` to `dir` (rad,
+/// counter-clockwise) lies within [lo, hi] (beyond kLimitSlack: false); with `clamp`, instead
+/// turns `dir` (keeping its length) onto the nearer limit and returns true.
+bool angle_within_limits(double lo, double hi, const Vec2& base, Vec2& dir, bool clamp);
+
+/// Tail2Head's limit test. With `dir` the direction wanted for link `joint` (its tail
+/// joint already placed in `chain`), returns false when the angle lies outside [lower, upper]
+/// of that joint (beyond kLimitSlack); with `clamp`, instead turns `dir` onto the nearer limit
+/// and returns true. Always true without limits.
+bool joint_within_limits(const SnakeRequest& req, const Chain& chain, int joint, Vec2& dir, bool clamp);
+
 /// Head2Tail (DESIGN.md decision 6): tip to `head`, then each joint on the ray toward its old
-/// position at the link's length; a link that would hit O is rotated about its distal joint by
+/// position at the link's length (turned, with joint limits, so that the joint just passed is
+/// within them); a link that would hit O is rotated about its distal joint by
 /// a small angle that frees it (Sensing::rotate_until_free). Returns false (chain partly
 /// updated) if none frees it.
 bool head_to_tail(const Sensing& sensing, const SnakeRequest& req, const Vec2& head, Chain& chain);
 
 /// Tail2Head (decision 7): tail to `root`, then each joint toward its old position, rotating
-/// about the proximal joint when a link would hit O. Returns false if no free position exists.
+/// about the proximal joint when a link would hit O. With joint limits, a link whose ray
+/// breaks a limit is turned onto it first, and a freeing rotation that ends beyond a limit
+/// fails. Returns false if no free position within the limits exists.
 bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& root, Chain& chain);
 
 }  // namespace hugger

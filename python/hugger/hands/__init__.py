@@ -1,0 +1,43 @@
+"""Real hands: presets with manufacturers' dimensions, URDF and MJCF import and export.
+
+``hugger.hands.load("barrett_bh8")`` (a preset), ``load("hand.urdf")``, ``load("hand.xml")``
+(MJCF) or ``load("hand.json")`` (a hand as in a trajectory file's ``hand_json``) give a
+:class:`hugger.Hand`; see docs/hands.md.
+"""
+from __future__ import annotations
+
+import json
+import os
+from typing import Any
+
+from ..hand import Hand
+from .presets import PRESETS, Preset, preset
+from .robot import from_mjcf, from_urdf, grasp_joint_values, to_mjcf, to_urdf
+
+__all__ = ["PRESETS", "Preset", "preset", "from_urdf", "from_mjcf", "to_urdf", "to_mjcf", "grasp_joint_values",
+           "load"]
+
+
+def load(spec: str | os.PathLike, fixed_joints: dict[str, float] | None = None, **kwargs: Any) -> Hand:
+    """A hand from a preset name, or a ``.urdf``, ``.xml``/``.mjcf`` (MJCF) or ``.json`` file.
+    ``fixed_joints`` and other keywords go to :func:`from_urdf` / :func:`from_mjcf`.
+    ``ValueError`` for an unknown preset, a missing file or an unknown extension."""
+    text = os.fspath(spec)
+    if text in PRESETS:
+        return preset(text)
+    ext = os.path.splitext(text)[1].lower()
+    if ext not in (".urdf", ".xml", ".mjcf", ".json"):
+        raise ValueError(f"hand {text!r} is neither a preset ({', '.join(PRESETS)}) nor a .urdf, .xml/.mjcf or "
+                         f".json file")
+    if not os.path.isfile(text):
+        raise ValueError(f"hand file {text!r} does not exist")
+    if ext == ".urdf":
+        return from_urdf(text, fixed_joints=fixed_joints, **kwargs)
+    if ext in (".xml", ".mjcf"):
+        return from_mjcf(text, fixed_joints=fixed_joints, **kwargs)
+    try:
+        with open(text, encoding="utf-8") as fh:
+            d = json.load(fh)
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"hand file {text!r} is not readable JSON ({exc})") from None
+    return Hand.from_dict(d)

@@ -1,0 +1,534 @@
+"""Hands from robot description files (URDF through yourdfpy, MJCF through MuJoCo) and back.
+
+Both importers reduce the file to finger chains in the palm frame at the reference
+configuration (every joint at 0, the joints named in ``fixed_joints`` at their given values):
+per finger its revolute joints (name, anchor point, axis, limits) and its fingertip. A chain
+becomes a hugger finger when it is planar with its plane containing the palm normal (the palm
+link's z axis): every joint axis parallel to the first and normal to z, every anchor and the tip
+in the plane through the first anchor normal to that axis. The reference configuration is the
+finger's rest (FROZEN) pose; a joint value q maps to the hugger angle theta = rest + q (or rest
+- q where an axis points the other way).
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..hand import Hand
+
+#: Planarity tolerance: metres for points off the finger plane, and sine of the angle for axes.
+PLANAR_TOLERANCE = 1e-6
+
+
+@dataclass
+class _Chain:
+    joints: list[str] = field(default_factory=list)
+    anchors: list[np.ndarray] = field(default_factory=list)  # palm frame
+    axes: list[np.ndarray] = field(default_factory=list)     # palm frame, unit
+    limits: list[tuple[float, float]] = field(default_factory=list)
+    tip: np.ndarray | None = None
+    radii: list[float] = field(default_factory=list)
+
+
+def _need(module: str):
+    try:
+        return __import__(module)
+    except ImportError:
+        raise ImportError(f"reading robot files needs {module}: pip install 'hugger[hands]'") from None
+
+
+_EMBED = "hugger-hand "
+
+
+def _embed(text: str, hand: Hand) -> str:
+    """``text`` (XML) with the hand's exact description as a comment after the XML declaration."""
+    comment = f"<!-- {_EMBED}{hand.to_json()} -->\n"
+    head, sep, rest = text.partition("?>")
+    return head + sep + "\n" + comment + rest.lstrip("\n") if sep and head.lstrip().startswith("<?xml") else comment + text
+
+
+def _exact(source: str, hand: Hand) -> Hand:
+    """The hand embedded by to_urdf / to_mjcf in ``source`` when it agrees with ``hand`` (read from
+    the file's geometry) within 1e-9 m / rad: the same numbers bit for bit, so that a round trip
+    plans identically. Otherwise (no comment, or the file was edited) ``hand`` itself."""
+    import json
+    try:
+        with open(source, encoding="utf-8") as fh:
+            text = fh.read(1 << 20)
+    except OSError:
+        return hand
+    start = text.find("<!-- " + _EMBED)
+    if start < 0:
+        return hand
+    end = text.find("-->", start)
+    try:
+        embedded = Hand.from_dict(json.loads(text[start + 5 + len(_EMBED):end]))
+    except (ValueError, TypeError):
+        return hand
+    return embedded if embedded.same_as(hand, 1e-9) else hand
+
+
+def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | None, palm_radius: float | None,
+                      palm_thickness: float | None) -> Hand:
+    if not chains:
+        raise ValueError(f"{source}: no finger found (no revolute joint below the palm)")
+    n = len(chains[0].joints)
+    for c in chains:
+        if len(c.joints) != n:
+            raise ValueError(f"{source}: every finger must have the same number of revolute joints; the finger of "
+                             f"joint {c.joints[0]!r} has {len(c.joints)}, that of {chains[0].joints[0]!r} has {n} "
+                             f"(hold extra joints with fixed_joints)")
+    roots, dirs, lengths, rest, limits = [], [], [], [], []
+    z = np.array([0.0, 0.0, 1.0])
+    for c in chains:
+        a0 = c.axes[0]
+        if abs(float(a0 @ z)) > PLANAR_TOLERANCE:
+            raise ValueError(f"{source}: joint {c.joints[0]!r} has axis {np.round(a0, 6).tolist()} (palm frame), not "
+                             f"normal to the palm normal z: its finger plane does not contain the palm normal")
+        signs = []
+        for name, a in zip(c.joints, c.axes):
+            if np.linalg.norm(np.cross(a, a0)) > PLANAR_TOLERANCE:
+                raise ValueError(f"{source}: joint {name!r} breaks planarity: its axis {np.round(a, 6).tolist()} is "
+                                 f"not parallel to {c.joints[0]!r}'s {np.round(a0, 6).tolist()} (palm frame); hold it "
+                                 f"with fixed_joints={{{name!r}: value}}")
+            signs.append(1.0 if float(a @ a0) > 0 else -1.0)
+        points = c.anchors + [c.tip]
+        names = c.joints + ["the fingertip"]
+        for name, p in zip(names, points):
+            off = abs(float((p - c.anchors[0]) @ a0))
+            if off > PLANAR_TOLERANCE:
+                raise ValueError(f"{source}: joint {name!r} breaks planarity: it lies {off:.3g} m off the plane of "
+                                 f"{c.joints[0]!r} (normal to its axis)")
+        root = c.anchors[0]
+        if abs(float(root[2])) > PLANAR_TOLERANCE:
+            raise ValueError(f"{source}: joint {c.joints[0]!r} (a finger root) is at z = {root[2]:.6g} m in the palm "
+                             f"frame, not on the palm's front face (z = 0)")
+        u = np.cross(z, a0)
+        u[2] = 0.0
+        u /= np.linalg.norm(u)
+        xi = [float((p - root) @ u) for p in points]
+        eta = [float(p[2] - root[2]) for p in points]
+        seg = np.diff(np.stack([xi, eta], axis=1), axis=0)
+        ll = np.linalg.norm(seg, axis=1)
+        if np.any(ll <= 0):
+            k = int(np.argmin(ll))
+            raise ValueError(f"{source}: joint {names[k]!r} and {names[k + 1]!r} coincide: a link of zero length")
+        absolute = np.arctan2(-seg[:, 0], seg[:, 1])
+        rel = np.diff(absolute, prepend=0.0)
+        rel = np.remainder(rel + math.pi, 2 * math.pi) - math.pi
+        lim = []
+        for q, s, (lo, hi) in zip(rel, signs, c.limits):
+            a, b = q + s * lo, q + s * hi
+            lim.append([min(a, b), max(a, b)])
+        roots.append([root[0], root[1], 0.0])
+        dirs.append(u)
+        lengths.append(ll)
+        rest.append(rel)
+        limits.append(lim)
+    radii = [r for c in chains for r in c.radii]
+    if link_radius is None:
+        link_radius = max(radii) if radii else 0.0
+    kwargs = {}
+    if palm_thickness is not None:
+        kwargs["palm_thickness"] = palm_thickness
+    return Hand.from_layout(np.array(roots), np.array(dirs), np.array(lengths), rest=np.array(rest),
+                            limits=np.array(limits), link_radius=link_radius, palm_radius=palm_radius,
+                            name=os.path.splitext(os.path.basename(source))[0], **kwargs)
+
+
+def write_text(path: str | os.PathLike, text: str) -> None:
+    """Write ``text`` to ``path`` atomically (a temporary file beside it, then a rename)."""
+    from .._files import write_atomic
+
+    write_atomic(path, text)
+
+
+# ------------------------------------------------------------------------------------- URDF
+def from_urdf(path: str | os.PathLike, palm_link: str | None = None, fixed_joints: dict[str, float] | None = None,
+              link_radius: float | None = None) -> Hand:
+    """The hand of a URDF file (read with yourdfpy).
+
+    ``palm_link`` (default the root link) is the palm: its frame is the palm frame P (z the palm
+    normal, the front face at z = 0); a collision cylinder on it gives ``palm_radius`` and
+    ``palm_thickness``. Links joined to it by fixed joints belong to the palm. Every revolute (or
+    continuous) joint leaving the palm starts a finger, followed link by link to its end; the
+    fingertip is the origin of a fixed child link of the last finger link, or else the far end of
+    its collision cylinder. ``fixed_joints`` holds joints at the given values (rad): a spread
+    joint, say, or a joint whose axis breaks planarity. ``link_radius`` defaults to the largest
+    collision-cylinder radius of the finger links. ``ValueError`` names the joint that breaks
+    planarity, or what else is missing.
+    """
+    yourdfpy = _need("yourdfpy")
+    source = os.fspath(path)
+    try:
+        urdf = yourdfpy.URDF.load(source, build_scene_graph=False, load_meshes=False, load_collision_meshes=False)
+    except (OSError, ValueError, KeyError, AttributeError, TypeError) as exc:
+        raise ValueError(f"{source}: cannot read the URDF ({exc})") from None
+    except Exception as exc:  # noqa: BLE001 - lxml and yourdfpy raise their own error types
+        raise ValueError(f"{source}: cannot read the URDF ({type(exc).__name__}: {exc})") from None
+    robot = urdf.robot
+    fixed = {} if fixed_joints is None else {str(k): float(v) for k, v in dict(fixed_joints).items()}
+    names = {j.name for j in robot.joints}
+    unknown = sorted(set(fixed) - names)
+    if unknown:
+        raise ValueError(f"{source}: fixed_joints names joints the file does not have: {unknown}")
+    links = {lk.name: lk for lk in robot.links}
+    child_links = {j.child for j in robot.joints}
+    roots = [lk.name for lk in robot.links if lk.name not in child_links]
+    if palm_link is None and len(roots) != 1:
+        raise ValueError(f"{source}: the URDF has {len(roots)} root links ({roots}); pass palm_link")
+    palm = palm_link if palm_link is not None else roots[0]
+    if palm not in links:
+        raise ValueError(f"{source}: no link called {palm!r} (links: {sorted(links)})")
+    children: dict[str, list] = {}
+    for j in robot.joints:
+        children.setdefault(j.parent, []).append(j)
+
+    def motion(j, value):
+        origin = np.eye(4) if j.origin is None else np.asarray(j.origin, dtype=np.float64)
+        if j.type in ("revolute", "continuous") and value != 0.0:
+            axis = np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0], dtype=np.float64)
+            axis = axis / np.linalg.norm(axis)
+            c, s = math.cos(value), math.sin(value)
+            k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+            rot = np.eye(4)
+            rot[:3, :3] = np.eye(3) + s * k + (1 - c) * (k @ k)
+            return origin @ rot
+        return origin
+
+    def is_fixed(j):
+        return j.type == "fixed" or j.name in fixed
+
+    def cylinders(link, frame):
+        out = []
+        for col in links[link].collisions:
+            g = col.geometry
+            if g is not None and g.cylinder is not None:
+                o = np.eye(4) if col.origin is None else np.asarray(col.origin, dtype=np.float64)
+                out.append((frame @ o, float(g.cylinder.radius), float(g.cylinder.length)))
+        return out
+
+    # the palm group: links reached from the palm link through fixed joints
+    frames = {palm: np.eye(4)}
+    stack, starts = [palm], []
+    while stack:  # breadth first: the fingers in the order of the file
+        link = stack.pop(0)
+        for j in children.get(link, []):
+            if is_fixed(j):
+                frames[j.child] = frames[link] @ motion(j, fixed.get(j.name, 0.0))
+                stack.append(j.child)
+            elif j.type in ("revolute", "continuous"):
+                starts.append((frames[link], j))
+            else:
+                raise ValueError(f"{source}: joint {j.name!r} is {j.type}: a finger has revolute joints only")
+    chains = []
+    for frame, j in starts:
+        c = _Chain()
+        while j is not None:
+            f = frame @ motion(j, 0.0)
+            c.joints.append(j.name)
+            c.anchors.append(f[:3, 3].copy())
+            axis = np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0], dtype=np.float64)
+            c.axes.append(f[:3, :3] @ (axis / np.linalg.norm(axis)))
+            lim = j.limit
+            if j.type == "continuous" or lim is None or lim.lower is None or lim.upper is None:
+                c.limits.append((-math.inf, math.inf))
+            else:
+                c.limits.append((float(lim.lower), float(lim.upper)))
+            c.radii += [r for _, r, _ in cylinders(j.child, f)]
+            # follow the finger: through fixed joints to its next revolute joint
+            nxt, tip, group, walk = None, None, [(j.child, f)], [(j.child, f)]
+            while walk:
+                link, lf = walk.pop()
+                for k in children.get(link, []):
+                    kf = lf @ motion(k, fixed.get(k.name, 0.0))
+                    if is_fixed(k):
+                        if tip is None:
+                            tip = kf[:3, 3].copy()
+                        walk.append((k.child, kf))
+                        group.append((k.child, kf))
+                    elif k.type in ("revolute", "continuous"):
+                        if nxt is not None:
+                            raise ValueError(f"{source}: the finger branches below joint {j.name!r} (joints "
+                                             f"{nxt[1].name!r} and {k.name!r}): a finger is a single chain")
+                        nxt = (lf, k)
+                    else:
+                        raise ValueError(f"{source}: joint {k.name!r} is {k.type}: a finger has revolute joints only")
+            if nxt is None:
+                if tip is None:
+                    cyl = [x for link, lf in group for x in cylinders(link, lf)]
+                    if not cyl:
+                        raise ValueError(f"{source}: cannot find the fingertip after joint {j.name!r}: give its last "
+                                         f"link a fixed child link at the tip, or a collision cylinder")
+                    ends = [o[:3, 3] + s * o[:3, 2] * length / 2 for o, _, length in cyl for s in (1, -1)]
+                    tip = max(ends, key=lambda e: float(np.linalg.norm(e - c.anchors[-1])))
+                c.tip = tip
+                j = None
+            else:
+                frame, j = nxt
+        chains.append(c)
+    palm_cyl = [x for link, lf in frames.items() for x in cylinders(link, lf)]
+    palm_r = palm_t = None
+    if palm_cyl:
+        palm_r, palm_t = max(r for _, r, _ in palm_cyl), max(length for _, _, length in palm_cyl)
+    return _exact(source, _hand_from_chains(chains, source, link_radius, palm_r, palm_t))
+
+
+def _finger_geometry(hand: Hand):
+    """Per finger: anchors (N + 1, 3) of the rest pose in the palm frame and the joint axis a_m."""
+    z = np.array([0.0, 0.0, 1.0])
+    out = []
+    for m in range(hand.fingers):
+        u = hand.finger_directions[m]
+        theta = np.cumsum(hand.rest_angles[m])
+        d = -np.sin(theta)[:, None] * u + np.cos(theta)[:, None] * z
+        pts = np.vstack([hand.finger_roots[m], hand.finger_roots[m] + np.cumsum(hand.link_lengths[m][:, None] * d, axis=0)])
+        out.append((pts, np.cross(u, z)))
+    return out
+
+
+def _general(hand: Hand) -> Hand:
+    if hand.general:
+        return hand
+    phi = hand.finger_angles
+    rim = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=1)
+    return Hand.from_layout(hand.palm_radius * rim, rim, hand.link_lengths, link_radius=hand.link_radius,
+                            palm_radius=hand.palm_radius, palm_thickness=hand.palm_thickness, name=hand.name)
+
+
+def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
+    """The hand as URDF text (written with yourdfpy): a palm link ``palm`` (frame P, collision
+    cylinder of the palm disk behind the front face), per finger links ``f{m}_l{n}`` on revolute
+    joints ``f{m}_j{n}`` and a fixed tip link ``f{m}_tip``. Every joint frame is parallel to the
+    palm frame; joint value 0 is the rest pose, so the URDF's joint value is q = theta - rest
+    (rad) and its limits are the hand's less the rest angles (``continuous`` where unlimited).
+    ``angles`` (M, N), hugger angles, adds a comment giving the joint values of that
+    configuration (a grasp). :func:`from_urdf` reads the file back to the same hand."""
+    yourdfpy = _need("yourdfpy")
+    from yourdfpy import urdf as U
+
+    g = _general(hand)
+    def tf(xyz, rot=None):
+        t = np.eye(4)
+        t[:3, 3] = xyz
+        if rot is not None:
+            t[:3, :3] = rot
+        return t
+
+    def along(d):  # a rotation taking z onto the unit vector d
+        d = d / np.linalg.norm(d)
+        v = np.cross([0.0, 0.0, 1.0], d)
+        s, c = np.linalg.norm(v), float(d[2])
+        if s < 1e-15:
+            return np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
+        k = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]]) / s
+        ang = math.atan2(s, c)
+        return np.eye(3) + math.sin(ang) * k + (1 - math.cos(ang)) * (k @ k)
+
+    links = [U.Link(name="palm", collisions=[U.Collision(name="palm", origin=tf([0, 0, -g.palm_thickness / 2]),
+                                                         geometry=U.Geometry(cylinder=U.Cylinder(
+                                                             radius=g.palm_radius, length=g.palm_thickness)))])]
+    joints = []
+    lim = g.joint_limits
+    for m, (pts, axis) in enumerate(_finger_geometry(g)):
+        parent = "palm"
+        for n in range(g.links):
+            child = f"f{m}_l{n}"
+            d = pts[n + 1] - pts[n]
+            links.append(U.Link(name=child, collisions=[U.Collision(
+                name=child, origin=tf(d / 2, along(d)),
+                geometry=U.Geometry(cylinder=U.Cylinder(radius=g.link_radius, length=float(g.link_lengths[m, n]))))]))
+            lo, hi = np.clip(lim[m, n], -math.pi, math.pi) - g.rest_angles[m, n]  # +-pi: no bound
+            finite = bool(np.isfinite(lim[m, n]).any())
+            xyz = pts[0] if n == 0 else pts[n] - pts[n - 1]
+            joints.append(U.Joint(name=f"f{m}_j{n}", type="revolute" if finite else "continuous", parent=parent,
+                                  child=child, origin=tf(xyz), axis=axis,
+                                  limit=U.Limit(effort=10.0, velocity=2.0, lower=float(lo), upper=float(hi))
+                                  if finite else None))
+            parent = child
+        links.append(U.Link(name=f"f{m}_tip"))
+        joints.append(U.Joint(name=f"f{m}_tip", type="fixed", parent=parent, child=f"f{m}_tip",
+                              origin=tf(pts[-1] - pts[-2])))
+    robot = U.Robot(name=name, links=links, joints=joints)
+    text = yourdfpy.URDF(robot=robot, build_scene_graph=False, load_meshes=False).write_xml_string()
+    text = text.decode() if isinstance(text, bytes) else str(text)
+    if angles is not None:
+        a = np.asarray(angles, dtype=np.float64)
+        if a.shape != (g.fingers, g.links):
+            raise ValueError(f"angles must have shape ({g.fingers}, {g.links}), got {a.shape}")
+        q = a - g.rest_angles
+        values = " ".join(f"f{m}_j{n}={q[m, n]!r}" for m in range(g.fingers) for n in range(g.links))
+        comment = f"<!-- hugger grasp joint values (rad): {values} -->\n"
+        head, sep, rest = text.partition("?>")
+        text = head + sep + "\n" + comment + rest.lstrip("\n") if sep else comment + text
+    return _embed(text, hand)
+
+
+def grasp_joint_values(hand: Hand, angles: Any) -> dict[str, float]:
+    """URDF/MJCF joint values ``{f{m}_j{n}: q}`` (rad) of hugger angles (M, N): q = theta - rest."""
+    a = np.asarray(angles, dtype=np.float64)
+    q = a - hand.rest_angles
+    return {f"f{m}_j{n}": float(q[m, n]) for m in range(hand.fingers) for n in range(hand.links)}
+
+
+# ------------------------------------------------------------------------------------- MJCF
+def from_mjcf(path: str | os.PathLike, palm_body: str | None = None, fixed_joints: dict[str, float] | None = None,
+              link_radius: float | None = None) -> Hand:
+    """The hand of a MuJoCo MJCF file (compiled by MuJoCo itself), as :func:`from_urdf`:
+    ``palm_body`` (default the first body below the world that has child bodies) is the palm,
+    its frame the palm frame; each hinge below it starts a finger, one hinge per body; the
+    fingertip is a site or child body of the last finger body, or else the far end of its capsule
+    or cylinder geom, whose radius gives ``link_radius``. Joint ranges are read where
+    ``limited``. Free, ball and slide joints are refused with their names."""
+    mujoco = _need("mujoco")
+    source = os.fspath(path)
+    try:
+        model = mujoco.MjModel.from_xml_path(source)
+    except (ValueError, OSError) as exc:
+        raise ValueError(f"{source}: cannot read the MJCF ({exc})") from None
+    data = mujoco.MjData(model)
+    fixed = {} if fixed_joints is None else {str(k): float(v) for k, v in dict(fixed_joints).items()}
+    jname = lambda j: mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)  # noqa: E731
+    bname = lambda b: mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b)  # noqa: E731
+    names = {jname(j): j for j in range(model.njnt)}
+    unknown = sorted(set(fixed) - set(names))
+    if unknown:
+        raise ValueError(f"{source}: fixed_joints names joints the file does not have: {unknown}")
+    qpos = np.zeros(model.nq)
+    for nm, v in fixed.items():
+        qpos[model.jnt_qposadr[names[nm]]] = v
+    data.qpos[:] = qpos
+    mujoco.mj_kinematics(model, data)
+    kids: dict[int, list[int]] = {}
+    for b in range(1, model.nbody):
+        kids.setdefault(int(model.body_parentid[b]), []).append(b)
+    if palm_body is None:
+        palm = next((b for b in kids.get(0, []) if b in kids), None)
+        if palm is None:
+            raise ValueError(f"{source}: no palm found (a body below the world with child bodies)")
+    else:
+        palm = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, palm_body)
+        if palm < 0:
+            raise ValueError(f"{source}: no body called {palm_body!r}")
+    rot_p, pos_p = data.xmat[palm].reshape(3, 3), data.xpos[palm]
+    to_palm = lambda x: rot_p.T @ (np.asarray(x) - pos_p)  # noqa: E731
+    body_joints = {b: [j for j in range(model.njnt) if model.jnt_bodyid[j] == b] for b in range(model.nbody)}
+
+    def moving(b):
+        out = []
+        for j in body_joints[b]:
+            t = model.jnt_type[j]
+            if jname(j) in fixed:
+                continue
+            if int(t) != int(mujoco.mjtJoint.mjJNT_HINGE):
+                raise ValueError(f"{source}: joint {jname(j)!r} of body {bname(b)!r} is not a hinge: a finger has "
+                                 f"revolute joints only")
+            out.append(j)
+        if len(out) > 1:
+            raise ValueError(f"{source}: body {bname(b)!r} has several hinges ({[jname(j) for j in out]}): hold all "
+                             f"but one with fixed_joints")
+        return out
+
+    def geoms(b):
+        out = []
+        for g in range(model.ngeom):
+            if model.geom_bodyid[g] == b and int(model.geom_type[g]) in (int(mujoco.mjtGeom.mjGEOM_CAPSULE),
+                                                                    int(mujoco.mjtGeom.mjGEOM_CYLINDER)):
+                mat = data.geom_xmat[g].reshape(3, 3)
+                half = float(model.geom_size[g][1])
+                c = data.geom_xpos[g]
+                out.append((float(model.geom_size[g][0]), to_palm(c + half * mat[:, 2]), to_palm(c - half * mat[:, 2])))
+        return out
+
+    palm_group, stack, starts = {palm}, [palm], []
+    while stack:
+        b = stack.pop(0)
+        for k in kids.get(b, []):
+            if moving(k):
+                starts.append(k)
+            else:
+                palm_group.add(k)
+                stack.append(k)
+    chains = []
+    for b in starts:
+        c = _Chain()
+        while b is not None:
+            j = moving(b)[0]
+            c.joints.append(jname(j))
+            c.anchors.append(to_palm(data.xanchor[j]))
+            c.axes.append(rot_p.T @ data.xaxis[j])
+            lo, hi = model.jnt_range[j] if model.jnt_limited[j] else (-math.inf, math.inf)
+            c.limits.append((float(lo), float(hi)))
+            c.radii += [r for r, _, _ in geoms(b)]
+            nxt = [k for k in kids.get(b, []) if moving(k)]
+            if len(nxt) > 1:
+                raise ValueError(f"{source}: the finger branches below body {bname(b)!r}: a finger is a single chain")
+            if nxt:
+                b = nxt[0]
+                continue
+            sites = [s for s in range(model.nsite) if model.site_bodyid[s] == b]
+            still = [k for k in kids.get(b, [])]
+            if sites:
+                c.tip = to_palm(data.site_xpos[sites[0]])
+            elif still:
+                c.tip = to_palm(data.xpos[still[0]])
+            else:
+                ends = [e for _, e1, e2 in geoms(b) for e in (e1, e2)]
+                if not ends:
+                    raise ValueError(f"{source}: cannot find the fingertip of body {bname(b)!r}: add a site at the tip "
+                                     f"or a capsule geom")
+                c.tip = max(ends, key=lambda e: float(np.linalg.norm(e - c.anchors[-1])))
+            b = None
+        chains.append(c)
+    palm_r = palm_t = None
+    for g in range(model.ngeom):
+        if model.geom_bodyid[g] in palm_group and int(model.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_CYLINDER):
+            palm_r, palm_t = float(model.geom_size[g][0]), 2.0 * float(model.geom_size[g][1])
+    return _exact(source, _hand_from_chains(chains, source, link_radius, palm_r, palm_t))
+
+
+def to_mjcf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
+    """The hand alone as MJCF text: a palm body (frame P, a cylinder geom behind the front face),
+    per finger bodies ``f{m}_l{n}`` with hinges ``f{m}_j{n}`` (qpos 0 = rest, ranges the limits
+    less the rest angles, unlimited joints without a range), capsule geoms and a tip site.
+    ``angles`` (M, N) adds a keyframe ``grasp`` with those hugger angles. :func:`from_mjcf`
+    reads it back to the same hand. (``hugger export-mjcf`` writes hand and object for
+    simulation.)"""
+    import xml.etree.ElementTree as ET
+
+    g = _general(hand)
+    f = lambda v: " ".join(repr(float(x)) for x in np.ravel(v))  # noqa: E731
+    root = ET.Element("mujoco", model=name)
+    ET.SubElement(root, "compiler", angle="radian", autolimits="true")
+    world = ET.SubElement(root, "worldbody")
+    palm = ET.SubElement(world, "body", name="palm")
+    ET.SubElement(palm, "geom", name="palm", type="cylinder", pos=f([0, 0, -g.palm_thickness / 2]),
+                  size=f([g.palm_radius, g.palm_thickness / 2]))
+    lim = g.joint_limits
+    for m, (pts, axis) in enumerate(_finger_geometry(g)):
+        parent, base = palm, np.zeros(3)
+        for n in range(g.links):
+            body = ET.SubElement(parent, "body", name=f"f{m}_l{n}", pos=f(pts[n] - base))
+            attrs = {"name": f"f{m}_j{n}", "type": "hinge", "axis": f(axis)}
+            if np.isfinite(lim[m, n]).any():
+                lo, hi = np.clip(lim[m, n], -math.pi, math.pi) - g.rest_angles[m, n]
+                attrs["range"] = f([lo, max(hi, lo + 1e-12)])  # MuJoCo needs lower < upper: a held joint
+                attrs["limited"] = "true"
+            ET.SubElement(body, "joint", attrs)
+            if g.link_radius > 0:  # zero-thickness links: no geom (the tip site ends the finger)
+                ET.SubElement(body, "geom", name=f"f{m}_l{n}", type="capsule",
+                              fromto=f(np.r_[0, 0, 0, pts[n + 1] - pts[n]]), size=f([g.link_radius]))
+            parent, base = body, pts[n]
+        ET.SubElement(parent, "site", name=f"f{m}_tip", pos=f(pts[-1] - pts[-2]))
+    if angles is not None:
+        a = np.asarray(angles, dtype=np.float64)
+        if a.shape != (g.fingers, g.links):
+            raise ValueError(f"angles must have shape ({g.fingers}, {g.links}), got {a.shape}")
+        key = ET.SubElement(root, "keyframe")
+        ET.SubElement(key, "key", name="grasp", qpos=f(a - g.rest_angles))
+    ET.indent(root)
+    return _embed(ET.tostring(root, encoding="unicode") + "\n", hand)
