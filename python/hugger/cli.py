@@ -221,13 +221,18 @@ def cmd_render(args: argparse.Namespace) -> int:
 def cmd_info(args: argparse.Namespace) -> int:
     traj = _load(args.file)
     h, prm = traj.hand, traj.params
-    obj = traj.object()
-    lo, hi = obj.bounds
     info = {"file": args.file, "hand": f"{h['fingers']} fingers x {h['links']} links, link radius {h['link_radius']} m, "
-                                      f"palm radius {h['palm_radius']} m",
-            "object": f"{len(obj.faces)} triangles, {' x '.join(f'{1000 * e:.0f}' for e in hi - lo)} mm",
-            "target": [float(x) for x in traj.target],
-            "step_m": prm.get("step"), "tip_epsilon_m": prm.get("epsilon"), **_report(traj, obj=obj)}
+                                      f"palm radius {h['palm_radius']} m"}
+    if traj.has_object:
+        obj = traj.object()
+        lo, hi = obj.bounds
+        info["object"] = f"{len(obj.faces)} triangles, {' x '.join(f'{1000 * e:.0f}' for e in hi - lo)} mm"
+        report = _report(traj, obj=obj)
+    else:  # planned with a skin that has no mesh: the motion only
+        info["object"] = "none recorded (planned with a skin that has no mesh)"
+        report = {"status": traj.status, "configurations": len(traj), "phase1_configurations": int((traj.phase == 1).sum())}
+    info.update({"target": [float(x) for x in traj.target], "step_m": prm.get("step"),
+                 "tip_epsilon_m": prm.get("epsilon"), **report})
     if args.json:
         print(json.dumps(info))
     else:
