@@ -14,12 +14,13 @@ this package holds the Python API::
 """
 from __future__ import annotations
 
-from . import objects, scenarios
+from . import objects, scenarios, skins
 from .batch import CaseError, PlanManyError, plan_many
 from .hand import Hand
 from .planner import FROZEN, CONTACT, DONE, Configuration, Planner, look_at, plan
 from .trajectory import FORMAT_VERSION, Trajectory
 from .world import Object
+from .skins import Sensing, Touch
 
 __version__ = "0.1.0"
 
@@ -46,11 +47,14 @@ __all__ = [
     "Object",
     "PlanManyError",
     "Planner",
+    "Sensing",
+    "Touch",
     "Trajectory",
     "look_at",
     "objects",
     "plan",
     "plan_many",
     "scenarios",
+    "skins",
     "__version__",
 ]

@@ -167,8 +167,11 @@ class Planner:
         configuration planned so far (a valid, collision-free partial plan). A timed-out plan has
         ended; Phase 1, done when the planner was made, is not counted.
         """
-        self._core.plan(_timeout(timeout))
-        self._emitted = None
+        limit = _timeout(timeout)
+        try:
+            self._core.plan(limit)
+        finally:  # after an exception from a skin too: the configurations completed before it
+            self._emitted = None
         return self.trajectory()
 
     def trajectory(self) -> Trajectory:

@@ -162,16 +162,15 @@ def _closest_subsimplex(points: list[np.ndarray]):
         idx = [i for i in range(n) if mask >> i & 1]
         k = len(idx)
         Q = P[idx]
-        A = np.zeros((k + 1, k + 1))
-        A[:k, :k] = Q @ Q.T
-        A[:k, k] = 1.0
-        A[k, :k] = 1.0
-        rhs = np.zeros(k + 1)
-        rhs[k] = 1.0
-        try:
-            lam = np.linalg.solve(A, rhs)[:k]
-        except np.linalg.LinAlgError:
-            continue
+        if k == 1:
+            lam = np.ones(1)
+        else:  # x = q0 + D^T mu nearest the origin: (D D^T) mu = -D q0, D the edges from q0
+            D = Q[1:] - Q[0]
+            G = D @ D.T
+            if np.linalg.cond(G) > 1e12:
+                continue  # a degenerate face: its points are covered by its smaller faces
+            mu = np.linalg.solve(G, -D @ Q[0])
+            lam = np.concatenate(([1.0 - mu.sum()], mu))
         if np.any(lam < -1e-12) or not np.all(np.isfinite(lam)):
             continue
         x = lam @ Q
@@ -257,7 +256,9 @@ class BoxSkin(Sensing):
             uz = float(u @ z)
             perp = u - uz * z
             norm = math.sqrt(float(perp @ perp))
-            s_cyl = centre + math.copysign(0.5 * thickness, uz) * z + (radius / norm * perp if norm > 1e-300 else 0.0)
+            # Along the axis (perp is rounding noise) any point of the face supports: its centre.
+            radial = radius / norm * perp if norm > 1e-9 * math.sqrt(float(u @ u)) else 0.0
+            s_cyl = centre + math.copysign(0.5 * thickness, uz) * z + radial
             s_box = c + R @ (np.where(-u @ R >= 0.0, h, -h))
             return s_cyl - s_box
 
