@@ -1,0 +1,57 @@
+"""Analytic skins against the mesh world: plan each random case twice, with the analytic skin and on a
+fine mesh of the same shape, and compare (status; links in contact within +-2; final palm within 1 mm);
+run the independent checker on both plans against the mesh.
+
+    .venv/bin/python bench/skins_agreement.py [--cases 34] [--json out.json]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+import numpy as np  # noqa: E402
+
+import hugger  # noqa: E402
+from helpers import CHECKER, load_checker  # noqa: E402
+from test_skins import HAND, _agreement  # noqa: E402
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cases", type=int, default=34, help="random cases per shape (default 34)")
+    ap.add_argument("--json", help="write the per-case results here")
+    args = ap.parse_args()
+    if not CHECKER.exists():
+        print("the checker (../shared/tools/check_trajectory.py) is missing", file=sys.stderr)
+        return 2
+    checker = load_checker()
+    hand = hugger.Hand(**HAND)
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for kind in ("sphere", "box", "spheres"):
+            for seed in range(100, 100 + args.cases):
+                r = _agreement(hand, checker, Path(tmp), seed, kind)
+                r.update(kind=kind, seed=seed, agree=bool(r["status"][0] == r["status"][1] and abs(r["links"][0] - r["links"][1]) <= 2
+                                                         and r["palm"] <= 1e-3))
+                rows.append(r)
+    print(f"{'shape':8s} {'cases':>5s} {'agree':>6s} {'skin plan passes checker':>25s} {'mesh plan passes checker':>25s}")
+    for kind in ("sphere", "box", "spheres"):
+        k = [r for r in rows if r["kind"] == kind]
+        print(f"{kind:8s} {len(k):5d} {sum(r['agree'] for r in k):6d} {sum(r['ok'][0] for r in k):25d} {sum(r['ok'][1] for r in k):25d}")
+    if args.json:
+        tmp = args.json + ".tmp"
+        with open(tmp, "w") as fh:
+            json.dump(rows, fh, default=str)
+        os.replace(tmp, args.json)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
