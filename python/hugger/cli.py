@@ -7,6 +7,8 @@
     hugger objects                                the built-in objects
     hugger validate plan.npz [--json]             hold test in MuJoCo (extra: physics)
     hugger export-mjcf plan.npz --out hand.xml    the hand and object as MJCF
+    hugger simulate OBJECT [--push N] [--offset DX DY DZ] [--open-loop] [--json]
+                                                  closed-loop hugging in MuJoCo (extra: physics)
 
 Exit status: 0 success, 2 bad input or a missing optional dependency (one line on standard
 error, no traceback), 1 an internal error.
@@ -278,6 +280,50 @@ def cmd_export_mjcf(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_simulate(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from . import mujoco_skin
+    from .scenarios import default_case
+
+    hand = _hand(args)
+    case = default_case(args.object, hand, scale=args.scale, target=args.target, start=args.start, normal=args.normal,
+                        turn_deg=args.turn)
+    if args.push < 0 or not np.isfinite(args.push):
+        raise UsageError(f"--push must be a force >= 0 (N), got {args.push}")
+    if args.latency < 0:
+        raise UsageError(f"--latency must be >= 0 control periods, got {args.latency}")
+    offset = np.asarray(args.offset, dtype=np.float64)
+    if not np.all(np.isfinite(offset)):
+        raise UsageError("--offset must be finite (m)")
+    params = {k: v for k, v in _params(args).items() if v is not None}
+    runs = {}
+    with Progress(f"closed-loop hugging of {case.name} in MuJoCo"):
+        runs["closed"] = mujoco_skin.simulate(hand, case.obj, case.target, case.palm_pose, offset=offset,
+                                              push=args.push, latency=args.latency, **params)
+    if args.open_loop:
+        with Progress(f"open-loop replay on {case.name}"):
+            runs["open"] = mujoco_skin.replay(hand, case.obj, case.target, case.palm_pose, offset=offset,
+                                              push=args.push, **params)
+    if args.out:
+        out = Path(args.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = out.with_name(out.name + ".tmp.npz")
+        runs["closed"].trajectory.save(tmp)
+        os.replace(tmp, out)
+    report = {"object": case.name, "offset_m": offset.tolist(), "push_N": args.push, "latency": args.latency,
+              **{mode: r.as_dict() for mode, r in runs.items()}}
+    if args.json:
+        print(json.dumps(report))
+    else:
+        for mode, r in runs.items():
+            d = r.as_dict()
+            print(f"{mode:6s} status {d['status']:14s} configurations {d['configurations']:5d}  object moved "
+                  f"{1000 * d['object_moved_m']:6.2f} mm  links in contact {d['links_in_contact']:2d}  "
+                  f"{'held' if d['held'] else 'NOT held'} in the six-direction test")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = _Parser(prog="hugger", description="Hugging grasps for multi-finger hands (Reznik & Lumelsky, ICRA 1994).",
                  epilog="Exit status: 0 success, 2 bad input or missing optional dependency, 1 internal error.")
@@ -315,6 +361,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("file", help="trajectory file (.npz)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_validate)
+
+    p = sub.add_parser("simulate", help="closed-loop hugging in MuJoCo: plan from what a MuJoCo skin feels (hugger[physics])")
+    p.add_argument("object", help="a built-in object name or a mesh file")
+    p.add_argument("--offset", type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=("DX", "DY", "DZ"),
+                   help="the planner is told T off by this much (m): the object is not where T was assumed")
+    p.add_argument("--push", type=float, default=0.0, metavar="N",
+                   help="push the object with N newtons across the approach for 0.1 s at the first touch")
+    p.add_argument("--latency", type=int, default=0, help="the skin reads the object as it was this many control periods ago")
+    p.add_argument("--open-loop", action="store_true", help="also replay a plan made on the static mesh, for comparison")
+    p.add_argument("--out", help="write the closed-loop trajectory here (.npz, the object where the simulation left it)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    _hand_options(p)
+    _planner_options(p)
+    _case_options(p)
+    p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser("export-mjcf", help="write the hand and object at a configuration as MJCF (hugger[physics])")
     p.add_argument("file", help="trajectory file (.npz)")
