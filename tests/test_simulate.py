@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -13,6 +14,8 @@ mujoco = pytest.importorskip("mujoco", reason="the physics extra is not installe
 
 from hugger import mujoco_skin  # noqa: E402
 
+#: Long runs (minutes): with HUGGER_SLOW=1 (bench/closed_loop.py prints the same figures).
+LONG = pytest.mark.skipif(not os.environ.get("HUGGER_SLOW"), reason="long run: set HUGGER_SLOW=1")
 HAND = dict(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
 
 
@@ -80,6 +83,7 @@ def test_hugger_simulate_bad_input(capsys):
 
 
 @pytest.mark.slow
+@LONG
 @pytest.mark.parametrize("name", ["sphere", "ellipsoid", "cylinder", "curvy"])
 @pytest.mark.parametrize("offset_mm", [0.0, 5.0])
 def test_closed_loop_holds_in_the_six_direction_test(hand, name, offset_mm):

@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import gc
 import math
-import subprocess
-import sys
+import os
 
 import numpy as np
 import pytest
@@ -14,6 +13,8 @@ import hugger
 from hugger import skins
 from helpers import SHARED_MISSING, CHECKER, check_file, random_rotation
 
+#: Long runs (minutes): with HUGGER_SLOW=1 (bench/skins_agreement.py prints the same figures).
+LONG = pytest.mark.skipif(not os.environ.get("HUGGER_SLOW"), reason="long run: set HUGGER_SLOW=1")
 HAND = dict(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
 
 
@@ -259,6 +260,7 @@ def test_analytic_skin_plans_agree_with_the_mesh_world(hand, checker, tmp_path, 
 
 
 @pytest.mark.slow
+@LONG
 @pytest.mark.skipif(not CHECKER.exists(), reason=SHARED_MISSING)
 @pytest.mark.parametrize("kind", ["sphere", "box", "spheres"])
 def test_analytic_skin_plans_agree_many(hand, checker, tmp_path, kind):
