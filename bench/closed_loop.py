@@ -21,7 +21,7 @@ from hugger.scenarios import default_case
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--objects", nargs="+", default=["sphere", "ellipsoid", "cylinder", "curvy"])
-    ap.add_argument("--offsets", nargs="+", type=float, default=[0.0, 0.005, 0.01], help="T offsets (m)")
+    ap.add_argument("--offsets", nargs="*", type=float, default=[0.0, 0.005, 0.01], help="T offsets (m)")
     ap.add_argument("--push", type=float, default=0.5, help="push (N) of the pushed case (default 0.5)")
     ap.add_argument("--json", help="write the rows here")
     args = ap.parse_args()

@@ -41,6 +41,7 @@ def main() -> int:
                 r.update(kind=kind, seed=seed, agree=bool(r["status"][0] == r["status"][1] and abs(r["links"][0] - r["links"][1]) <= 2
                                                          and r["palm"] <= 1e-3))
                 rows.append(r)
+                print(json.dumps({k: r[k] for k in ("kind", "seed", "agree", "status", "links", "palm", "ok")}), flush=True)
     print(f"{'shape':8s} {'cases':>5s} {'agree':>6s} {'skin plan passes checker':>25s} {'mesh plan passes checker':>25s}")
     for kind in ("sphere", "box", "spheres"):
         k = [r for r in rows if r["kind"] == kind]
