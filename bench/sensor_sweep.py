@@ -27,6 +27,7 @@ from hugger import analysis, physics, skins  # noqa: E402
 from hugger.scenarios import default_case  # noqa: E402
 from helpers import CHECKER, check_file, load_checker  # noqa: E402
 
+STEP = 0.001  # the default step of the 5 x 5 hand of 2 cm links (link / 20)
 SWEEPS = {
     "range_mm": [math.inf, 10.0, 3.0, 1.5, 0.5],
     "gap_noise_um": [0.0, 20.0, 50.0, 100.0, 200.0],
@@ -50,7 +51,10 @@ def main() -> int:
     ap.add_argument("--objects", nargs="+", default=["sphere", "ellipsoid", "cylinder", "curvy"])
     ap.add_argument("--json", help="write the rows here")
     ap.add_argument("--plot", help="draw success against each setting here (.png; needs hugger[viz])")
+    ap.add_argument("--compare", help="with --plot: also draw the rows of this --json file of a --matched run, dashed")
     ap.add_argument("--no-physics", action="store_true", help="skip the MuJoCo hold test")
+    ap.add_argument("--matched", action="store_true",
+                    help="contact tolerance matched to the sensor: min(0.9 step, max(1e-4, 4 x its uncertainty))")
     args = ap.parse_args()
     if not CHECKER.exists():
         print("the checker (../shared/tools/check_trajectory.py) is missing", file=sys.stderr)
@@ -70,14 +74,18 @@ def main() -> int:
                         continue
                     t0 = time.perf_counter()
                     skin = skins.SensorModel(case.obj, seed=0, **kw)
+                    delta = None
+                    if args.matched:  # a contact tolerance matched to the sensor (default 1e-4 m)
+                        delta = min(0.9 * STEP, max(1e-4, 4.0 * skin.uncertainty(hand.link_radius)))
                     traj = hugger.Planner(hand, skin, case.target, case.palm_pose, record_object=case.obj,
-                                          max_iterations=4000).plan()
+                                          max_iterations=4000, contact_tolerance=delta).plan()
                     path = Path(tmp) / "plan.npz"
                     traj.save(path)
                     ok, failures, _ = check_file(checker, path, every=2)
                     a = analysis.analyze(traj, obj=case.obj)
                     held = None if args.no_physics else bool(physics.validate(traj)["held"])
                     row = {"object": name, "sweep": sweep, "value": value, "status": traj.status,
+                           "contact_tolerance": traj.params["contact_tolerance"],
                            "links_in_contact": int(a["links_in_contact"]), "force_closure": bool(a["force_closure"]),
                            "held": held, "collision_free": bool(ok), "failures": failures[:2],
                            "queries": skin.queries, "seconds": round(time.perf_counter() - t0, 2)}
@@ -104,11 +112,17 @@ def main() -> int:
             json.dump(rows, fh)
         os.replace(tmp, args.json)
     if args.plot:
-        plot(rows, args.plot, not args.no_physics)
+        matched = None
+        if args.compare:
+            with open(args.compare) as fh:
+                matched = json.load(fh)
+        plot(rows, args.plot, not args.no_physics, matched)
     return 0 if all(r["collision_free"] for r in rows) else 1
 
 
-def plot(rows: list[dict], path: str, physics_done: bool) -> None:
+def plot(rows: list[dict], path: str, physics_done: bool, matched: list[dict] | None = None) -> None:
+    """Success against each setting; with ``matched`` (rows of a --matched run) dashed lines for
+    the contact tolerance matched to the sensor."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -119,19 +133,24 @@ def plot(rows: list[dict], path: str, physics_done: bool) -> None:
               "normal_noise_deg": "normal noise sd (deg)", "taxel_spacing_mm": "taxel spacing (mm, 0 = exact)"}
     for ax, (sweep, values) in zip(axes, SWEEPS.items()):
         xs = list(range(len(values)))
-        def frac(key):
-            return [np.mean([bool(r[key]) for r in rows if r["sweep"] == sweep and r["value"] == v]) for v in values]
-        links = [np.mean([r["links_in_contact"] for r in rows if r["sweep"] == sweep and r["value"] == v]) / 25 for v in values]
-        ax.plot(xs, links, "o-", label="links in contact / 25")
-        ax.plot(xs, frac("force_closure"), "s-", label="force closure")
-        if physics_done:
-            ax.plot(xs, frac("held"), "^-", label="held (6 directions)")
+        for data, style, note in ((rows, "-", ""), (matched, "--", ", matched delta")):
+            if not data:
+                continue
+
+            def pick(key, data=data):
+                return [[r[key] for r in data if r["sweep"] == sweep and r["value"] == v] for v in values]
+
+            ax.plot(xs, [np.mean(x) / 25 for x in pick("links_in_contact")], "o" + style, color="C0",
+                    label="links in contact / 25" + note)
+            ax.plot(xs, [np.mean(x) for x in pick("force_closure")], "s" + style, color="C1", label="force closure" + note)
+            if physics_done:
+                ax.plot(xs, [np.mean(x) for x in pick("held")], "^" + style, color="C2", label="held (6 directions)" + note)
         ax.set_xticks(xs, ["inf" if math.isinf(v) else f"{v:g}" for v in values])
         ax.set_xlabel(titles[sweep])
         ax.set_ylim(-0.05, 1.05)
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("fraction of the 4 objects")
-    axes[0].legend(fontsize=8, loc="lower left")
+    axes[0].legend(fontsize=7, loc="lower left")
     fig.tight_layout()
     tmp = path + ".tmp.png"
     fig.savefig(tmp, dpi=90)

@@ -64,6 +64,17 @@ class SensorModel(Sensing):
         self._rng = np.random.default_rng(seed)
         self.queries = 0
 
+    def uncertainty(self, radius: float) -> float:
+        """How much a reading may under-report the true gap of a link of ``radius`` (m), within
+        the range: 6 standard deviations of gap noise plus, with taxels, how far a taxel's ball
+        reaches beyond the capsule. The planner needs a ``contact_tolerance`` of a few times this
+        (``bench/sensor_sweep.py`` uses 4x): below it, readings that scatter by more than the
+        clinging tolerance (contact_tolerance / 8) stop the fingers early."""
+        excess = 0.0
+        if self.taxel_spacing is not None:
+            excess = math.hypot(radius, 0.5 * self.taxel_spacing) - radius
+        return 6.0 * self.gap_noise + excess
+
     def _noise(self, sigma: float) -> float:
         if sigma == 0.0:
             return 0.0
