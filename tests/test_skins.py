@@ -305,7 +305,8 @@ def test_sensor_model_is_a_lower_bound_of_the_true_gap():
         assert t.gap <= ref.gap + 1e-12
         assert t.gap <= 0.005
         assert abs(np.linalg.norm(t.normal) - 1) < 1e-9
-        if ref.gap > 0.005 + 1e-3:
+        assert t.gap >= min(ref.gap, 0.005) - model.uncertainty(r) - 1e-12  # never lower than its uncertainty
+        if ref.gap > 0.005 + model.uncertainty(r):
             assert t.gap == 0.005  # nothing within range
     pose = start()
     assert model.palm(pose, 0.03, 0.01, np.inf) == 0.005

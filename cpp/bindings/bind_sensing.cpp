@@ -31,16 +31,15 @@ Vec3 vec3_of(const py::handle& h, const char* name) {
   return to_vec3(a, name);
 }
 
-/// A skin's answer, checked: a gap that is a number (not NaN; +inf means "nothing sensed"),
+/// A skin's answer, checked: a gap that is a number (not NaN; +inf: nothing sensed within the cap;
+/// -inf: inside, depth not measured),
 /// finite points, a finite non-zero normal (normalised here).
 Touch checked_touch(const py::object& r) {
   if (!py::isinstance<Touch>(r))
     throw py::type_error("Sensing.capsule must return a hugger.Touch, got " +
                          py::str(py::type::of(r).attr("__name__")).cast<std::string>());
   Touch t = r.cast<Touch>();
-  if (std::isnan(t.gap) || t.gap == -kInf)
-    throw py::value_error("Sensing.capsule returned a gap of " + std::to_string(t.gap) +
-                          "; expected a number (m), or +inf for nothing sensed");
+  if (std::isnan(t.gap)) throw py::value_error("Sensing.capsule returned a gap of nan; expected a number (m) or +-inf");
   if (!t.on_hand.allFinite() || !t.on_object.allFinite() || !t.normal.allFinite() || !(t.normal.norm() > 0.0))
     throw py::value_error("Sensing.capsule returned non-finite points or a zero or non-finite normal");
   t.normal.normalize();
@@ -69,9 +68,7 @@ class PySensing : public Sensing {
       throw py::type_error("Sensing.palm must return a float (the gap in m), got " +
                            py::str(py::type::of(r).attr("__name__")).cast<std::string>());
     }
-    if (std::isnan(g) || g == -kInf)
-      throw py::value_error("Sensing.palm returned a gap of " + std::to_string(g) +
-                            "; expected a number (m), or +inf for nothing sensed");
+    if (std::isnan(g)) throw py::value_error("Sensing.palm returned a gap of nan; expected a number (m) or +-inf");
     return g;
   }
 
