@@ -27,6 +27,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", type=int, default=34, help="random cases per shape (default 34)")
     ap.add_argument("--json", help="write the per-case results here")
+    ap.add_argument("--kinds", nargs="+", default=["sphere", "box", "spheres"], help="shapes (default all three)")
+    ap.add_argument("--first-seed", type=int, default=100, help="seed of the first case (default 100)")
     args = ap.parse_args()
     if not CHECKER.exists():
         print("the checker (../shared/tools/check_trajectory.py) is missing", file=sys.stderr)
@@ -35,15 +37,15 @@ def main() -> int:
     hand = hugger.Hand(**HAND)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for kind in ("sphere", "box", "spheres"):
-            for seed in range(100, 100 + args.cases):
+        for kind in args.kinds:
+            for seed in range(args.first_seed, args.first_seed + args.cases):
                 r = _agreement(hand, checker, Path(tmp), seed, kind)
                 r.update(kind=kind, seed=seed)
                 rows.append(r)
                 print(json.dumps({k: r[k] for k in ("kind", "seed", "agree", "mesh_unstable", "status", "links", "palm", "ok")}), flush=True)
     print("| shape | cases | agree | disagree, two meshes disagree too | skin plan passes checker | mesh plan passes checker |")
     print("|---|---|---|---|---|---|")
-    for kind in ("sphere", "box", "spheres"):
+    for kind in args.kinds:
         k = [r for r in rows if r["kind"] == kind]
         print(f"| {kind} | {len(k)} | {sum(r['agree'] for r in k)} | {sum(r['mesh_unstable'] for r in k)} | "
               f"{sum(r['ok'][0] for r in k)} | {sum(r['ok'][1] for r in k)} |")

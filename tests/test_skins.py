@@ -226,12 +226,16 @@ def _case(rng, kind):
     return skin, target, pose
 
 
+#: Phase 2 iterations of one agreement case (the same bound for both plans; most end by 500).
+AGREEMENT_ITERATIONS = 3000
+
+
 def _agreement(hand, checker, tmp_path, seed, kind):
     rng = np.random.default_rng(seed)
     skin, target, pose = _case(rng, kind)
     mesh = skin.mesh()
-    a = hugger.Planner(hand, skin, target, pose, record_object=mesh).plan()
-    m = hugger.Planner(hand, mesh, target, pose).plan()
+    a = hugger.Planner(hand, skin, target, pose, record_object=mesh, max_iterations=AGREEMENT_ITERATIONS).plan()
+    m = hugger.Planner(hand, mesh, target, pose, max_iterations=AGREEMENT_ITERATIONS).plan()
     path = tmp_path / f"{kind}-{seed}.npz"
     a.save(path)
     ok_a, fail_a, _ = check_file(checker, path, every=2)
@@ -246,7 +250,7 @@ def _agreement(hand, checker, tmp_path, seed, kind):
         # (finer, or the box with other triangles): if the two mesh plans disagree as well, the
         # outcome hangs on micrometres (a discrete rule flips), not on the skin.
         other = skin.mesh(7) if kind != "box" else skin.mesh(divisions=7)
-        o = hugger.Planner(hand, other, target, pose).plan()
+        o = hugger.Planner(hand, other, target, pose, max_iterations=AGREEMENT_ITERATIONS).plan()
         r["mesh_unstable"] = not _agree(dict(status=(o.status, m.status), links=_links(o, m, mesh), palm=_palm(o, m)))
     return r
 
