@@ -217,7 +217,10 @@ def _case(rng, kind):
         c0 = rng.uniform(-0.01, 0.01, 3)
         k = int(rng.integers(2, 4))
         radii = rng.uniform(0.022, 0.035, k)
-        centers = [c0] + [c0 + rng.normal(size=3) / math.sqrt(3) * rng.uniform(0.0, 0.8 * r) for r in radii[1:]]
+        directions = rng.normal(size=(k - 1, 3))
+        directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+        # every ball contains c0, so that the union is star-shaped about it (SpheresSkin.mesh)
+        centers = [c0] + [c0 + u * rng.uniform(0.0, 0.8 * r) for u, r in zip(directions, radii[1:])]
         skin = skins.SpheresSkin(np.array(centers), radii)
         target = c0
     d = rng.normal(size=3)
