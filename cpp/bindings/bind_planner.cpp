@@ -15,9 +15,25 @@ namespace {
 /// A planner with a lock: one thread at a time may advance it; others get a clear error.
 struct PyPlanner {
   std::unique_ptr<Planner> planner;
-  std::shared_ptr<const Object> object;
+  py::object skin;  ///< the Object or Sensing given: keeps a Python skin (and its overrides) alive
   std::mutex busy;
+  /// An exception left the planner in the middle of an iteration (a skin's callback raised): the
+  /// plan has ended with status "error"; history() holds every configuration completed before.
+  bool failed = false;
 };
+
+/// Runs f (planner work); an exception ends the plan (status "error") and propagates unchanged.
+template <class F>
+auto guarded(PyPlanner& p, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (...) {
+    p.failed = true;
+    throw;
+  }
+}
+
+std::string status_of(const PyPlanner& p) { return p.failed ? "error" : to_string(p.planner->status()); }
 
 class Busy {
  public:
@@ -104,11 +120,21 @@ double optional_param(const py::object& value, const char* name) {
 
 void bind_planner(py::module_& m) {
   py::class_<PyPlanner>(m, "Planner", "The Hugger planner (DESIGN.md section 3) over a simulated world.")
-      .def(py::init([](const HandModel& hand, std::shared_ptr<Object> object, const ArrayD& target,
+      .def(py::init([](const HandModel& hand, const py::object& skin, const ArrayD& target,
                        const ArrayD& palm_pose, const py::object& step, const py::object& epsilon,
                        const py::object& contact_tolerance, const py::object& max_iterations) {
              auto out = std::make_unique<PyPlanner>();
-             if (!object) throw py::value_error("object must not be None");
+             if (skin.is_none()) throw py::value_error("the object or skin must not be None");
+             std::shared_ptr<Object> object;
+             std::shared_ptr<Sensing> sensing;
+             if (py::isinstance<Object>(skin)) {
+               object = skin.cast<std::shared_ptr<Object>>();
+             } else if (py::isinstance<Sensing>(skin)) {
+               sensing = skin.cast<std::shared_ptr<Sensing>>();
+             } else {
+               throw py::type_error("expected a hugger Object or Sensing skin, got " +
+                                    py::str(py::type::of(skin).attr("__name__")).cast<std::string>());
+             }
              const Vec3 t = to_vec3(target, "target");
              if (!t.allFinite()) throw py::value_error("target must be finite");
              const Pose pose = to_pose(palm_pose, "palm_pose");
@@ -121,8 +147,12 @@ void bind_planner(py::module_& m) {
                if (mi < 1) throw py::value_error("max_iterations must be at least 1, got " + std::to_string(mi));
                params.max_iterations = mi;
              }
-             out->object = object;
+             out->skin = skin;
              py::gil_scoped_release release;
+             if (sensing) {  // a skin that need not have a mesh: T is taken as given
+               out->planner = std::make_unique<Planner>(hand, std::move(sensing), t, pose, params);
+               return out;
+             }
              const double depth = object->nearest(t, t).signed_distance;
              if (!(depth < 0.0)) {
                std::ostringstream os;
@@ -133,7 +163,7 @@ void bind_planner(py::module_& m) {
              out->planner = std::make_unique<Planner>(hand, std::make_shared<SimulatedWorld>(object), t, pose, params);
              return out;
            }),
-           py::arg("hand"), py::arg("object"), py::arg("target"), py::arg("palm_pose"), py::arg("step") = py::none(),
+           py::arg("hand"), py::arg("sensing"), py::arg("target"), py::arg("palm_pose"), py::arg("step") = py::none(),
            py::arg("epsilon") = py::none(), py::arg("contact_tolerance") = py::none(),
            py::arg("max_iterations") = py::none())
       .def(
@@ -142,13 +172,15 @@ void bind_planner(py::module_& m) {
             Busy busy(p);
             std::optional<Configuration> c;
             {
+              if (p.failed) return py::none();
               py::gil_scoped_release release;
-              c = p.planner->step();
+              c = guarded(p, [&] { return p.planner->step(); });
             }
             if (!c) return py::none();
             return configuration_dict(*c, p.planner->hand().fingers(), p.planner->hand().links());
           },
-          "Advance by one configuration; a dict of arrays, or None when the plan has ended.")
+          "Advance by one configuration; a dict of arrays, or None when the plan has ended. An exception "
+          "raised by the skin propagates unchanged and ends the plan (status 'error').")
       .def(
           "plan",
           [](PyPlanner& p, const py::object& timeout) {
@@ -162,12 +194,17 @@ void bind_planner(py::module_& m) {
                                       py::repr(timeout).cast<std::string>());
             }
             Busy busy(p);
-            py::gil_scoped_release release;
-            return to_string(p.planner->plan(limit));
+            if (p.failed) return status_of(p);
+            {
+              py::gil_scoped_release release;
+              guarded(p, [&] { return p.planner->plan(limit); });
+            }
+            return status_of(p);
           },
           py::arg("timeout") = py::none(),
           "Run to the end (GIL released); returns the status. With ``timeout`` (seconds, positive finite) the "
-          "plan stops with status 'timeout' once that much wall-clock time has passed.")
+          "plan stops with status 'timeout' once that much wall-clock time has passed. An exception raised by the "
+          "skin propagates unchanged and ends the plan (status 'error').")
       .def("history", [](PyPlanner& p, std::size_t start, std::size_t stop) {
             Busy busy(p);
             return history_arrays(*p.planner, start, stop);
@@ -176,7 +213,7 @@ void bind_planner(py::module_& m) {
           "Configurations [start, stop) so far as arrays: palm_pose (K,4,4), joints (K,M,N+1,3), "
           "angles (K,M,N), tip_state (K,M) int8, phase (K,) int8.")
       .def_property_readonly("size", [](PyPlanner& p) { return p.planner->history().size(); })
-      .def_property_readonly("status", [](PyPlanner& p) { return to_string(p.planner->status()); })
+      .def_property_readonly("status", [](PyPlanner& p) { return status_of(p); })
       .def_property_readonly("params", [](PyPlanner& p) {
         const PlannerParams& q = p.planner->params();
         py::dict d;

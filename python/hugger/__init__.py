@@ -14,12 +14,13 @@ this package holds the Python API::
 """
 from __future__ import annotations
 
-from . import hands, objects, scenarios
+from . import hands, objects, scenarios, skins
 from .batch import CaseError, PlanManyError, plan_many
 from .hand import Hand
 from .planner import FROZEN, CONTACT, DONE, Configuration, Planner, look_at, plan
 from .trajectory import FORMAT_VERSION, Trajectory
 from .world import Object
+from .skins import Sensing, Touch
 
 __version__ = "0.1.0"
 
@@ -46,6 +47,8 @@ __all__ = [
     "Object",
     "PlanManyError",
     "Planner",
+    "Sensing",
+    "Touch",
     "Trajectory",
     "hands",
     "look_at",
@@ -53,5 +56,6 @@ __all__ = [
     "plan",
     "plan_many",
     "scenarios",
+    "skins",
     "__version__",
 ]

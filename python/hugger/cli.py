@@ -11,6 +11,8 @@
     hugger export-scene plan.npz --out grasp.glb  the grasp as a glTF scene (extra: view)
     hugger export-urdf plan.npz --out hand.urdf   the hand and its grasp's joint values as URDF
     hugger hands                                  the preset hands (plan ... --hand PRESET|FILE)
+    hugger simulate OBJECT [--push N] [--offset DX DY DZ] [--open-loop] [--json]
+                                                  closed-loop hugging in MuJoCo (extra: physics)
 
 Exit status: 0 success, 2 bad input or a missing optional dependency (one line on standard
 error, no traceback), 1 an internal error (or, for ``validate``, a grasp that is not held).
@@ -222,17 +224,17 @@ def _provenance(args: argparse.Namespace, argv: Sequence[str] | None) -> dict[st
             "arguments": options}
 
 
-def cmd_plan(args: argparse.Namespace) -> int:
+def _case(args: argparse.Namespace, hand):
+    """The scene of ``plan`` and ``simulate``: the object (built-in or mesh file, --scale only for
+    files, an implausible size refused unless --force), T and the start pose."""
     import warnings
 
     from .hand import implausible_size
     from .objects import BUILTINS
     from .scenarios import default_case
 
-    out = _out_path(args.out, (".npz",))
     if args.scale is not None and os.fspath(args.object) in BUILTINS:
         raise UsageError(f"--scale applies to mesh files only; {args.object!r} is a built-in object, sized in metres")
-    hand = _hand(args)
     with warnings.catch_warnings():  # the size is judged below, with --force
         warnings.filterwarnings("ignore", message=r".*implausibly", category=UserWarning)
         case = default_case(args.object, hand, scale=1.0 if args.scale is None else args.scale, target=args.target,
@@ -245,6 +247,13 @@ def cmd_plan(args: argparse.Namespace) -> int:
         _note(f"warning: {message} (planning it anyway: --force)")
     for r in case.repairs:
         _note(f"repaired {case.name}: {r}")
+    return case
+
+
+def cmd_plan(args: argparse.Namespace) -> int:
+    out = _out_path(args.out, (".npz",))
+    hand = _hand(args)
+    case = _case(args, hand)
     traj, elapsed = _plan(case, hand, _params(args), case.name, args.timeout)
     traj = traj.with_provenance(**_provenance(args, getattr(args, "_argv", None)))
     traj.save(out)
@@ -356,10 +365,12 @@ def _hand_info(h: dict[str, Any]) -> dict[str, Any]:
 
 
 def _object_info(traj, obj) -> dict[str, Any]:
-    lo, hi = obj.bounds
     prov = traj.provenance
+    if obj is None:  # planned with a skin that has no mesh
+        return {"name": prov.get("object"), "source": prov.get("object_source"), "recorded": False}
+    lo, hi = obj.bounds
     return {"name": prov.get("object"), "source": prov.get("object_source"), "sha256": traj.object_sha256(),
-            "triangles": int(len(obj.faces)), "vertices": int(len(obj.vertices)),
+            "recorded": True, "triangles": int(len(obj.faces)), "vertices": int(len(obj.vertices)),
             "extent_m": [float(e) for e in hi - lo], "bounds_m": [[float(x) for x in lo], [float(x) for x in hi]],
             "volume_m3": float(obj.volume)}
 
@@ -369,26 +380,35 @@ def cmd_info(args: argparse.Namespace) -> int:
 
     traj = _load(args.file)
     prm = traj.params
-    obj = traj.object()
+    obj = traj.object() if traj.has_object else None
+    if obj is not None:
+        report = _report(traj, obj=obj)
+    else:  # planned with a skin that has no mesh: the motion only
+        report = {"status": traj.status, "configurations": len(traj), "phase1_configurations": int((traj.phase == 1).sum())}
     if args.json:
         info = {"file": args.file, "format_version": FORMAT_VERSION, "hand": _hand_info(traj.hand),
                 "object": _object_info(traj, obj),
                 "target": [float(x) for x in traj.target], "params": prm, "provenance": traj.provenance,
-                "step_m": prm.get("step"), "planner_epsilon_m": prm.get("epsilon"), **_report(traj, obj=obj)}
+                "step_m": prm.get("step"), "planner_epsilon_m": prm.get("epsilon"), **report}
         print(json.dumps(info))
         return EXIT_OK
     h = traj.hand
-    lo, hi = obj.bounds
     prov = traj.provenance
+    if obj is not None:
+        lo, hi = obj.bounds
+        what = f"{prov.get('object', '(not recorded)')}: {len(obj.faces)} triangles, " \
+               f"{' x '.join(f'{1000 * e:.0f}' for e in hi - lo)} mm"
+    else:
+        what = "none recorded (planned with a skin that has no mesh)"
     info = {"file": args.file, "hand": f"{h['fingers']} fingers x {h['links']} links, link radius {h['link_radius']} m, "
                                       f"palm radius {h['palm_radius']} m"
                     + (", general layout" if "finger_roots" in h else "")
                     + (f" ({h['name']})" if isinstance(h.get("name"), str) else ""),
-            "object": f"{prov.get('object', '(not recorded)')}: {len(obj.faces)} triangles, "
-                      f"{' x '.join(f'{1000 * e:.0f}' for e in hi - lo)} mm",
-            "object_sha256": traj.object_sha256(), "hugger_version": prov.get("hugger_version", "(not recorded)"),
+            "object": what,
+            "object_sha256": traj.object_sha256() if obj is not None else None,
+            "hugger_version": prov.get("hugger_version", "(not recorded)"),
             "target": [float(x) for x in traj.target],
-            "step_m": prm.get("step"), "planner_epsilon_m": prm.get("epsilon"), **_report(traj, obj=obj)}
+            "step_m": prm.get("step"), "planner_epsilon_m": prm.get("epsilon"), **report}
     _print_table(info)
     return EXIT_OK
 
@@ -523,6 +543,45 @@ def cmd_export_urdf(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_simulate(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from . import mujoco_skin
+
+    out = _out_path(args.out, (".npz",)) if args.out else None
+    hand = _hand(args)
+    case = _case(args, hand)
+    if args.push < 0 or not np.isfinite(args.push):
+        raise UsageError(f"--push must be a force >= 0 (N), got {args.push}")
+    if args.latency < 0:
+        raise UsageError(f"--latency must be >= 0 control periods, got {args.latency}")
+    offset = np.asarray(args.offset, dtype=np.float64)
+    if not np.all(np.isfinite(offset)):
+        raise UsageError("--offset must be finite (m)")
+    params = {k: v for k, v in _params(args).items() if v is not None}
+    runs = {}
+    with Progress(f"closed-loop hugging of {case.name} in MuJoCo"):
+        runs["closed"] = mujoco_skin.simulate(hand, case.obj, case.target, case.palm_pose, offset=offset,
+                                              push=args.push, latency=args.latency, **params)
+    if args.open_loop:
+        with Progress(f"open-loop replay on {case.name}"):
+            runs["open"] = mujoco_skin.replay(hand, case.obj, case.target, case.palm_pose, offset=offset,
+                                              push=args.push, **params)
+    if out is not None:
+        runs["closed"].trajectory.save(out)  # atomically
+    report = {"object": case.name, "offset_m": offset.tolist(), "push_N": args.push, "latency": args.latency,
+              **{mode: r.as_dict() for mode, r in runs.items()}}
+    if args.json:
+        print(json.dumps(report))
+    else:
+        for mode, r in runs.items():
+            d = r.as_dict()
+            print(f"{mode:6s} status {d['status']:14s} configurations {d['configurations']:5d}  object moved "
+                  f"{1000 * d['object_moved_m']:6.2f} mm  links in contact {d['links_in_contact']:2d}  "
+                  f"{'held' if d['held'] else 'NOT held'} in the six-direction test")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = _Parser(prog="hugger", description="Hugging grasps for multi-finger hands (Reznik & Lumelsky, ICRA 1994).",
                  epilog="Exit status: 0 success, 2 bad input or missing optional dependency, 1 internal error "
@@ -573,6 +632,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("file", help="trajectory file (.npz)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_validate)
+
+    p = sub.add_parser("simulate", help="closed-loop hugging in MuJoCo: plan from what a MuJoCo skin feels (hugger[physics])")
+    p.add_argument("object", help="a built-in object name or a mesh file")
+    p.add_argument("--offset", type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=("DX", "DY", "DZ"),
+                   help="the planner is told T off by this much (m): the object is not where T was assumed")
+    p.add_argument("--push", type=float, default=0.0, metavar="N",
+                   help="push the object with N newtons across the approach for 0.1 s at the first touch")
+    p.add_argument("--latency", type=int, default=0, help="the skin reads the object as it was this many control periods ago")
+    p.add_argument("--open-loop", action="store_true", help="also replay a plan made on the static mesh, for comparison")
+    p.add_argument("--out", help="write the closed-loop trajectory here (.npz, the object where the simulation left it)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    _hand_options(p)
+    _planner_options(p)
+    _case_options(p)
+    p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser("export-mjcf", help="write the hand and object at a configuration as MJCF (hugger[physics])")
     p.add_argument("file", help="trajectory file (.npz)")

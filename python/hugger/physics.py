@@ -547,5 +547,15 @@ def load_model(traj: Any, k: int = -1, **kwargs: Any):
     return model, data
 
 
-__all__ = ["export_mjcf", "validate", "load_model", "convex_pieces", "mass_properties", "hull_volume",
+def __getattr__(name: str):
+    """``MujocoSkin``, ``Simulation``, ``simulate`` and ``replay`` live in :mod:`hugger.mujoco_skin`
+    (the skin that senses through MuJoCo, and closed-loop hugging)."""
+    if name in ("MujocoSkin", "Simulation", "simulate", "replay"):
+        from . import mujoco_skin
+
+        return getattr(mujoco_skin, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = ["MujocoSkin", "Simulation", "simulate", "replay", "export_mjcf", "validate", "load_model", "convex_pieces", "mass_properties", "hull_volume",
            "finger_frames", "joint_ranges", "touching_fingers", "default_cache_dir"]

@@ -81,6 +81,14 @@ def _timeout(value: Any) -> float | None:
 class Planner:
     """Plans a hugging grasp of ``obj`` by ``hand``, told only the point ``target`` inside it.
 
+    ``obj`` is a :class:`hugger.Object` (the planner senses it through the simulated mesh world)
+    or any skin, a :class:`hugger.skins.Sensing` (docs/skins.md): an analytic shape, a sensor
+    model, a simulator, a real tactile hand. A skin need not have a mesh; ``record_object`` (a
+    :class:`hugger.Object`) is then the mesh saved with the plan for the record and the checker
+    (without it the trajectory is object-free). An exception raised by a skin reaches the caller
+    of ``step()``/``plan()`` unchanged and ends the plan (status ``error``; the configurations
+    completed before it stay valid).
+
     ``palm_pose`` (4, 4) is the initial palm pose T_WP (fingers extended). Defaults:
     ``step`` = shortest link / 20, ``epsilon`` = step / 10, ``contact_tolerance`` = 1e-4 m,
     ``max_iterations`` = 20000 Phase 2 iterations. Raises ``ValueError`` for bad input, T
@@ -91,24 +99,32 @@ class Planner:
     :class:`Trajectory`.
     """
 
-    def __init__(self, hand: Hand, obj: Object, target: Any, palm_pose: Any, step: float | None = None,
+    def __init__(self, hand: Hand, obj: Any, target: Any, palm_pose: Any, step: float | None = None,
                  epsilon: float | None = None, contact_tolerance: float | None = None,
-                 max_iterations: int | None = None) -> None:
+                 max_iterations: int | None = None, record_object: Object | None = None) -> None:
         if not isinstance(hand, Hand):
             raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
-        if not isinstance(obj, Object):
-            raise ValueError(f"obj must be a hugger.Object, got {type(obj).__name__}")
+        skin = None
+        if isinstance(obj, _core.Sensing):
+            skin, obj = obj, record_object
+        elif not isinstance(obj, Object):
+            raise ValueError(f"obj must be a hugger.Object or a hugger.skins.Sensing skin, got {type(obj).__name__}")
+        elif record_object is not None:
+            raise ValueError("record_object is for a skin without a mesh; with an Object the plan records that object")
+        if obj is not None and not isinstance(obj, Object):
+            raise ValueError(f"record_object must be a hugger.Object or None, got {type(obj).__name__}")
         t = _real_array("target", target)
         if t.shape != (3,) or not np.all(np.isfinite(t)):
             raise ValueError(f"target must be a finite 3-vector, got {target!r}")
         pose = rigid_pose(palm_pose)
         delta = _optional_size("contact_tolerance", contact_tolerance)
-        extent = max(1.0, float(np.abs(obj.vertices).max()), float(np.abs(pose[:3, 3]).max()))
+        extent = max(1.0, float(np.abs(obj.vertices).max()) if obj is not None else 0.0,
+                     float(np.abs(pose[:3, 3]).max()), float(np.abs(t).max()))
         if delta is not None and delta < MIN_RELATIVE_TOLERANCE * extent:
             raise ValueError(f"contact_tolerance {delta:g} m is below the resolution this scene allows "
                              f"({MIN_RELATIVE_TOLERANCE:g} x its largest coordinate, {extent:g} m)")
-        self.hand, self.object, self.target = hand, obj, t
-        self._core = _core.Planner(hand._core, obj._core, t, pose, _optional_size("step", step),
+        self.hand, self.object, self.skin, self.target = hand, obj, skin, t
+        self._core = _core.Planner(hand._core, obj._core if skin is None else skin, t, pose, _optional_size("step", step),
                                    _optional_size("epsilon", epsilon),
                                    delta,
                                    _optional_count("max_iterations", max_iterations))
@@ -116,7 +132,8 @@ class Planner:
 
     @property
     def status(self) -> str:
-        """``running`` until the plan ends, then ``done``, ``max_iterations`` or ``timeout``."""
+        """``running`` until the plan ends, then ``done``, ``max_iterations``, ``timeout``, or ``error``
+        (a skin raised an exception)."""
         return self._core.status
 
     @property
@@ -150,8 +167,11 @@ class Planner:
         configuration planned so far (a valid, collision-free partial plan). A timed-out plan has
         ended; Phase 1, done when the planner was made, is not counted.
         """
-        self._core.plan(_timeout(timeout))
-        self._emitted = None
+        limit = _timeout(timeout)
+        try:
+            self._core.plan(limit)
+        finally:  # after an exception from a skin too: the configurations completed before it
+            self._emitted = None
         return self.trajectory()
 
     def trajectory(self) -> Trajectory:
@@ -164,8 +184,8 @@ class Planner:
         return Trajectory(
             hand_json=self.hand.to_json(),
             params_json=json.dumps(params),
-            object_vertices=self.object.vertices,
-            object_faces=self.object.faces,
+            object_vertices=self.object.vertices if self.object is not None else np.zeros((0, 3)),
+            object_faces=self.object.faces if self.object is not None else np.zeros((0, 3), dtype=np.int64),
             target=self.target,
             palm_pose=h["palm_pose"],
             joints=h["joints"],

@@ -214,10 +214,11 @@ class Trajectory:
             if arrays[key].shape != shape:
                 raise ValueError(f"{source}: {key} has shape {arrays[key].shape}, expected {shape}")
         verts, faces = arrays["object_vertices"], arrays["object_faces"]
-        if verts.shape[1:] != (3,) or faces.shape[1:] != (3,) or len(verts) == 0 or len(faces) == 0:
+        object_free = verts.shape == (0, 3) and faces.shape == (0, 3)  # planned with a skin, no mesh recorded
+        if not object_free and (verts.shape[1:] != (3,) or faces.shape[1:] != (3,) or len(verts) == 0 or len(faces) == 0):
             raise ValueError(f"{source}: object_vertices and object_faces must be non-empty (V, 3) and (F, 3), "
-                             f"got {verts.shape} and {faces.shape}")
-        if faces.min() < 0 or faces.max() >= len(verts):
+                             f"or both empty (0, 3) for an object-free plan, got {verts.shape} and {faces.shape}")
+        if not object_free and (faces.min() < 0 or faces.max() >= len(verts)):
             raise ValueError(f"{source}: object_faces index vertices outside 0..{len(verts) - 1}")
         for key, allowed in (("tip_state", "0 FROZEN, 1 CONTACT, 2 DONE"), ("phase", "0, 1 or 2")):
             a = arrays[key]
@@ -239,14 +240,23 @@ class Trajectory:
         return Configuration(palm_pose=self.palm_pose[k], joints=self.joints[k], angles=self.angles[k],
                              tip_state=self.tip_state[k], phase=int(self.phase[k]), iteration=k)
 
+    @property
+    def has_object(self) -> bool:
+        """False for an object-free plan (made with a skin that has no mesh, none given for the
+        record): it holds the hand's motion only, and nothing can judge its contacts."""
+        return len(self.object_vertices) > 0
+
     def object(self):
-        """The grasped object as a :class:`hugger.Object`: built (validation and BVH) on the first
+        """The grasped object as a :class:`hugger.Object` (``ValueError`` for an object-free plan): built (validation and BVH) on the first
         call from ``object_vertices``/``object_faces`` as they are then, and kept for later calls,
         so that reports, figures and checks of one trajectory share it. The arrays are the plan's
         record; edit a copy (``dataclasses.replace``), not the arrays in place."""
         if self._object is None:
             from .world import Object
 
+            if not self.has_object:
+                raise ValueError("this plan is object-free (made with a skin that has no mesh): give the planner "
+                                 "record_object= to judge its contacts")
             obj = Object(self.object_vertices, self.object_faces, warn_size=False)  # warned when it was made
             object.__setattr__(self, "_object", obj)  # a cache on a frozen dataclass
         return self._object
