@@ -106,7 +106,8 @@ void bind_planner(py::module_& m) {
   py::class_<PyPlanner>(m, "Planner", "The Hugger planner (DESIGN.md section 3) over a simulated world.")
       .def(py::init([](const HandModel& hand, std::shared_ptr<Object> object, const ArrayD& target,
                        const ArrayD& palm_pose, const py::object& step, const py::object& epsilon,
-                       const py::object& contact_tolerance, const py::object& max_iterations) {
+                       const py::object& contact_tolerance, const py::object& max_iterations,
+                       const std::string& rules) {
              auto out = std::make_unique<PyPlanner>();
              if (!object) throw py::value_error("object must not be None");
              const Vec3 t = to_vec3(target, "target");
@@ -121,6 +122,7 @@ void bind_planner(py::module_& m) {
                if (mi < 1) throw py::value_error("max_iterations must be at least 1, got " + std::to_string(mi));
                params.max_iterations = mi;
              }
+             params.rules = rules_from_string(rules);  // std::invalid_argument -> ValueError
              out->object = object;
              py::gil_scoped_release release;
              const double depth = object->nearest(t, t).signed_distance;
@@ -135,7 +137,7 @@ void bind_planner(py::module_& m) {
            }),
            py::arg("hand"), py::arg("object"), py::arg("target"), py::arg("palm_pose"), py::arg("step") = py::none(),
            py::arg("epsilon") = py::none(), py::arg("contact_tolerance") = py::none(),
-           py::arg("max_iterations") = py::none())
+           py::arg("max_iterations") = py::none(), py::arg("rules") = "hug")
       .def(
           "step",
           [](PyPlanner& p) -> py::object {
@@ -184,6 +186,7 @@ void bind_planner(py::module_& m) {
         d["epsilon"] = q.epsilon;
         d["contact_tolerance"] = q.contact_tolerance;
         d["max_iterations"] = q.max_iterations;
+        d["rules"] = to_string(q.rules);
         return d;
       })
       .def_property_readonly("stats", [](PyPlanner& p) {
@@ -196,6 +199,8 @@ void bind_planner(py::module_& m) {
         d["sigma_retries"] = s.sigma_retries;
         d["finger_collisions"] = s.finger_collisions;
         d["clinging_failures"] = s.clinging_failures;
+        d["motion_rejections"] = s.motion_rejections;
+        d["approach_configurations"] = s.approach_configurations;
         return d;
       });
 }
