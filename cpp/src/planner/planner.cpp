@@ -44,9 +44,7 @@ constexpr double kMaxJointSteps = 4.0 * (1.0 - 1e-6);
 constexpr double kMaxClingSteps = 8.0;
 /// Hug rule: a joint closing until contact flexes at most to this angle (rad).
 constexpr double kMaxCloseFlexion = kPi / 2.0;
-/// Hug rule: a tip touches a face that faces the palm when the object's outward normal there
-/// makes at least 60 degrees with p (its component along -p is at least cos 60 degrees).
-constexpr double kFacingPalm = 0.5;
+
 
 [[noreturn]] void invalid(const std::string& what) { throw std::invalid_argument(what); }
 
@@ -160,6 +158,7 @@ void Planner::plan_phase1(const Pose& start) {
   stalled_.assign(hand_.fingers(), 0);
   frozen_lb_.assign(static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1), -kInf);
   closing_.assign(hand_.fingers(), 0);
+  closed_.assign(hand_.fingers(), 0);
 }
 
 Vec2 Planner::root2d(int m, double eta) const {
@@ -318,8 +317,8 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next) const {
 bool Planner::close_step(int m, Chain& chain) const {
   const int N = hand_.links();
   const double s = params_.step, delta = params_.contact_tolerance, r = hand_.link_radius();
-  int first = 0;  // the first joint that may flex: distal to the proximal-most touching link
-  for (int n = 0; n < N; ++n)
+  int first = 0;  // the first joint that may flex: distal to the distal-most touching link
+  for (int n = N - 1; n >= 0; --n)
     if (link_gap(m, chain[n], chain[n + 1], delta) <= delta) {
       first = n + 1;
       break;
@@ -419,6 +418,7 @@ void Planner::phase2_iteration() {
       if (states_[m] == TipState::kFrozen) {
         states_[m] = TipState::kContact;
         closing_[m] = hug;  // hug rule: it never touched O, so it closes all its joints
+        closed_[m] = hug;
       }
   for (auto st : states_)
     if (st != TipState::kFrozen && !any_contact_) {
@@ -430,7 +430,6 @@ void Planner::phase2_iteration() {
   // touched closes until it touches instead).
   const std::vector<Chain> old = chains_;
   std::vector<Chain> cand = chains_;
-  std::vector<double> push(M, 0.0);  // hug rule: the palm step a finger asks for beyond its tail gap
   std::vector<char> touching(M, 0);  // the finger touches O (not closing)
   for (int m = 0; m < M; ++m) {
     if (states_[m] != TipState::kContact) continue;
@@ -441,8 +440,7 @@ void Planner::phase2_iteration() {
     touching[m] = 1;
     const Vec2 tip = old[m][N];
     Vec2 head = tip;
-    const Touch at_tip = link_gap(m, tip, tip, delta) <= delta ? sensing_->link(planes_[m], tip, tip, r, delta) : Touch();
-    if (at_tip.gap <= delta) {
+    if (link_gap(m, tip, tip, delta) <= delta) {
       FollowRequest fr;
       fr.plane = planes_[m];
       fr.tip = tip;
@@ -455,9 +453,6 @@ void Planner::phase2_iteration() {
       fr.reach = hand_.finger_length(m);
       fr.front = eta_;
       head = sensing_->follow_boundary(fr).head;
-      // Hug rule: a tip resting on a face that faces the palm yields, so the palm keeps advancing.
-      const double facing = -at_tip.normal.dot(planes_[m].p);
-      if (hug && facing >= kFacingPalm) push[m] = s * facing;
     } else {
       RotateRequest rr;
       rr.plane = planes_[m];
@@ -490,12 +485,12 @@ void Planner::phase2_iteration() {
     if (none_in_contact) {
       sigma = s;  // decision 1: approach until a touch (also once every touching finger is DONE)
     } else if (hug) {
-      // The mean over the fingers that touch (not diluted by the others), each asking for its
-      // tail gap or, when its tip rests on a face facing the palm, for its yield.
+      // Every touching finger yields (it bends, clinging, as the palm advances), so the palm
+      // advances a full step, clipped below like the paper's (and by the fingers' motion).
       int count = 0;
       for (int m = 0; m < M; ++m)
         if (states_[m] == TipState::kContact && touching[m]) {
-          sigma += std::max(cand[m][0].y() - eta_, push[m]);
+          sigma += s;
           ++count;
         }
       sigma = count > 0 ? std::clamp(sigma / count, 0.0, s) : 0.0;
@@ -540,12 +535,19 @@ void Planner::phase2_iteration() {
           for (Vec2& x : c) x.y() += sig;
           break;
         case TipState::kContact: {
-          c = cand[m];
-          bool ok = tail_to_head(*sensing_, snake_request(m, new_eta), root2d(m, new_eta), c);
-          if (!ok) ++stats_.clinging_failures;
-          if (ok && !motion_ok(m, old[m], c)) {
-            ok = false;
-            ++stats_.motion_rejections;
+          // Its Head2Tail chain re-attached to the moved root; failing that (clinging finds no
+          // free position, a joint would jump, the swept motion collides), the old chain
+          // re-attached: the finger only yields to the palm step this iteration.
+          bool ok = false;
+          for (int pass = 0; pass < 2 && !ok; ++pass) {
+            if (pass == 1 && (sig == 0.0 || cand[m] == old[m])) break;  // the same chain again
+            c = pass == 0 ? cand[m] : old[m];
+            ok = tail_to_head(*sensing_, snake_request(m, new_eta), root2d(m, new_eta), c);
+            if (!ok) ++stats_.clinging_failures;
+            if (ok && !motion_ok(m, old[m], c)) {
+              ok = false;
+              ++stats_.motion_rejections;
+            }
           }
           if (!ok) {
             if (!last) return false;
@@ -581,13 +583,29 @@ void Planner::phase2_iteration() {
   for (int m = 0; m < M; ++m) {
     if (next_states[m] != TipState::kContact) continue;
     if (closing_[m]) continue;  // a closing finger ends when it can flex no more (above)
-    if ((next[m][N] - old[m][N]).norm() < params_.epsilon) next_states[m] = TipState::kDone;
+    // Paper: the tip moved less than epsilon. Hug: the hand is at rest (sigma = 0: while the
+    // palm advances, no touching finger is done) and no joint of the finger moved epsilon.
+    double moved = (next[m][N] - old[m][N]).norm();
+    if (hug)
+      for (int n = 0; n < N; ++n) moved = std::max(moved, (next[m][n] - old[m][n]).norm());
+    bool rest = moved < params_.epsilon && !(hug && sigma > 0.0);
     // Overextension over a window: a tip that oscillates (pulled off by Tail2Head, swung back)
     // without getting farther than 2 s from where it was kStallWindow iterations ago is DONE.
     if ((next[m][N] - anchors_[m]).norm() > 2.0 * s) {
       anchors_[m] = next[m][N];
       stalled_[m] = 0;
     } else if (++stalled_[m] >= kStallWindow) {
+      rest = true;
+    }
+    if (!rest) continue;
+    if (hug && palm_touched_ && !closed_[m]) {
+      // Hug rule: before it is DONE, a finger closes the joints beyond its distal-most touching
+      // link until they touch too (close-until-contact, clinging), once.
+      closing_[m] = 1;
+      closed_[m] = 1;
+      stalled_[m] = 0;
+      anchors_[m] = next[m][N];
+    } else {
       next_states[m] = TipState::kDone;
     }
   }
@@ -600,6 +618,7 @@ void Planner::phase2_iteration() {
       if (next_states[m] == TipState::kFrozen) {
         next_states[m] = TipState::kContact;
         closing_[m] = hug;
+        closed_[m] = hug;
       }
   ++stats_.phase2_iterations;
   // Never emit an unchanged configuration: when nothing moved and no state changed, nothing

@@ -145,7 +145,8 @@ class Planner {
   double eta_ = 0.0;
   bool palm_touched_ = false;
   bool any_contact_ = false;
-  std::vector<char> closing_;  ///< hug rule: per finger, closing until contact (never touched O)
+  std::vector<char> closing_;  ///< hug rule: per finger, closing until contact
+  std::vector<char> closed_;   ///< hug rule: per finger, has closed (or is closing) once
 };
 
 }  // namespace hugger
