@@ -580,9 +580,17 @@ void Planner::phase2_iteration() {
     sigma = 0.0;
     attempt(0.0, true, next, next_states);
   }
+  bool starts_closing = false;  // a finger starts closing: the next iteration moves it
   for (int m = 0; m < M; ++m) {
     if (next_states[m] != TipState::kContact) continue;
-    if (closing_[m]) continue;  // a closing finger ends when it can flex no more (above)
+    if (closing_[m]) {  // a closing finger ends when it can flex no more (above)
+      double moved = 0.0;
+      for (int n = 0; n <= N; ++n) moved = std::max(moved, (next[m][n] - old[m][n]).norm());
+      if (moved >= 1e-3 * params_.epsilon) continue;
+      closing_[m] = 0;  // closing in steps this small is rounding, not motion: it has closed
+      next_states[m] = TipState::kDone;
+      continue;
+    }
     // Paper: the tip moved less than epsilon. Hug: the hand is at rest (sigma = 0: while the
     // palm advances, no touching finger is done) and no joint of the finger moved epsilon.
     double moved = (next[m][N] - old[m][N]).norm();
@@ -603,6 +611,7 @@ void Planner::phase2_iteration() {
       // link until they touch too (close-until-contact, clinging), once.
       closing_[m] = 1;
       closed_[m] = 1;
+      starts_closing = true;
       stalled_[m] = 0;
       anchors_[m] = next[m][N];
     } else {
@@ -623,7 +632,7 @@ void Planner::phase2_iteration() {
   ++stats_.phase2_iterations;
   // Never emit an unchanged configuration: when nothing moved and no state changed, nothing
   // can move any more.
-  const bool unchanged = sigma == 0.0 && next == old && next_states == states_before;
+  const bool unchanged = sigma == 0.0 && !starts_closing && next == old && next_states == states_before;
   chains_ = std::move(next);
   states_ = std::move(next_states);
   eta_ += sigma;
