@@ -175,7 +175,12 @@ Configuration Planner::make_configuration(int phase) const {
   c.angles.resize(M, N);
   for (int m = 0; m < M; ++m) {
     for (const Vec2& x : chains_[m]) c.joints.push_back(planes_[m].to_world(x));
-    HandModel::planar_angles(chains_[m], c.angles.row(m).data());
+    // A DONE finger moves only rigidly: its angles are those it had when it became DONE, bit
+    // for bit (recomputed from the translated joints they could differ by rounding).
+    if (states_[m] == TipState::kDone && !history_.empty() && history_.back().tip_state[m] == TipState::kDone)
+      c.angles.row(m) = history_.back().angles.row(m);
+    else
+      HandModel::planar_angles(chains_[m], c.angles.row(m).data());
   }
   c.tip_state = states_;
   c.phase = phase;
@@ -394,7 +399,6 @@ void Planner::phase2_iteration() {
   }
   Pose palm = palm2_;
   palm.translation() += eta_ * palm2_.linear().col(2);
-  const std::vector<TipState> states_before = states_;
 
   // (a) contact sensing: a FROZEN finger touched anywhere becomes CONTACT (decision 4).
   for (int m = 0; m < M; ++m) {
@@ -632,17 +636,24 @@ void Planner::phase2_iteration() {
   ++stats_.phase2_iterations;
   // Never emit an unchanged configuration: when nothing moved and no state changed, nothing
   // can move any more.
-  const bool unchanged = sigma == 0.0 && !starts_closing && next == old && next_states == states_before;
   chains_ = std::move(next);
   states_ = std::move(next_states);
   eta_ += sigma;
   for (double& lb : frozen_lb_) lb -= sigma + 1e-12;  // a picometre for rounding
   const bool all_done = std::all_of(states_.begin(), states_.end(), [](TipState t) { return t == TipState::kDone; });
+  Configuration c = make_configuration(2);
+  const Configuration& last = history_.back();
+  const bool unchanged = c.palm.matrix() == last.palm.matrix() && c.joints == last.joints && c.tip_state == last.tip_state;
   if (unchanged) {
-    status_ = all_done ? Status::kDone : Status::kStalled;
+    // Nothing to emit. A finger that starts closing moves in the next iteration (at most once
+    // per finger); otherwise nothing can move any more.
+    if (starts_closing)
+      status_ = stats_.phase2_iterations >= params_.max_iterations ? Status::kMaxIterations : Status::kRunning;
+    else
+      status_ = all_done ? Status::kDone : Status::kStalled;
     return;
   }
-  history_.push_back(make_configuration(2));
+  history_.push_back(std::move(c));
   if (all_done)
     status_ = Status::kDone;
   else if (stats_.phase2_iterations >= params_.max_iterations)
