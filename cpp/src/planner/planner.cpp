@@ -302,11 +302,20 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next) const {
   // How far any joint can move along the straight line in joint space (as the checker bounds it).
   const double d_root = (next[0] - old[0]).norm();
   double cum = 0.0, reach = 0.0, bound = d_root;
+  // Link n moves no farther than its distal joint, by at most D_n; a link whose gap at the new
+  // configuration is at least D_n is clear all along (the gap shrinks no faster than the link
+  // moves), and is not sampled.
+  std::vector<char> sample(N, 0);
+  bool any = false;
   for (int n = 0; n < N; ++n) {
     cum += a1[n] - a0[n];
     reach += hand_.link_length(m, n) * std::abs(cum);
-    bound = std::max(bound, d_root + reach);
+    const double D = d_root + reach;
+    bound = std::max(bound, D);
+    sample[n] = link_gap(m, next[n], next[n + 1], D) < D;
+    any = any || sample[n];
   }
+  if (!any) return true;
   const double h = std::max(r, s) / 4.0;
   const int S = std::clamp(static_cast<int>(std::ceil(bound / h - 1e-9)), 1, 128);
   for (int i = 1; i < S; ++i) {
@@ -314,7 +323,7 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next) const {
     for (int n = 0; n < N; ++n) a[n] = a0[n] + t * (a1[n] - a0[n]);
     const Chain c = hand_.forward_planar(m, old[0] + t * (next[0] - old[0]), a.data());
     for (int n = 0; n < N; ++n)
-      if (!swept_link_ok(m, c[n], c[n + 1])) return false;
+      if (sample[n] && !swept_link_ok(m, c[n], c[n + 1])) return false;
   }
   return true;
 }
