@@ -23,9 +23,10 @@ std::string to_string(Status s);
 
 /// The rule set of Phase 2 (docs/algorithm.md). kPaper: the paper's rules with the documented
 /// decisions, nothing more (the reference of the 1994 method). kHug: those plus extensions for
-/// firmer grasps (a tip on a face that faces the palm yields so the palm keeps advancing; the
-/// palm step is the mean over the touching fingers; fingers that never touched close all their
-/// joints until they touch, clinging).
+/// firmer grasps: touching fingers yield, so the palm advances a full (clipped) step while any
+/// finger touches; no finger is DONE while the hand moves; after palm contact, fingers close the
+/// joints beyond their distal-most contact (all joints, for a finger that never touched) until
+/// they touch, clinging.
 enum class Rules : std::int8_t { kPaper = 0, kHug = 1 };
 std::string to_string(Rules r);
 /// "paper" or "hug"; throws std::invalid_argument for any other name.
