@@ -1,9 +1,10 @@
 """The README's per-object table: `hugger plan OBJECT` with default options on every built-in
-object and every mesh in ../shared/data/objects/, each plan checked by the independent checker.
+object and every mesh in ../shared/data/objects/, with both rule sets (`--rules paper` and the
+default `--rules hug`), each plan checked by the independent checker (motion check included).
 
-    python bench/objects_table.py [--out bench/results/objects.md] [--check]
+    python bench/objects_table.py [--out bench/results/objects.md] [--check] [--rules paper,hug]
 
-Columns: triangles, status, configurations, links in contact (of 25) and palm contact (gap
+Columns: triangles, rules, status, configurations, links in contact (of 25) and palm contact (gap
 <= 1 mm), Ferrari-Canny epsilon (mu 0.5, torques about T over the object's radius), the whole
 plan time (object loading excluded; planner construction, i.e. setup, included) and, with
 --check, the checker's verdict.
@@ -39,6 +40,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, help="also write the markdown table here")
     ap.add_argument("--check", action="store_true", help="run ../shared/tools/check_trajectory.py on every plan")
+    ap.add_argument("--rules", default="paper,hug", help="comma-separated rule sets (default paper,hug)")
     args = ap.parse_args(argv)
     specs = list(hugger.objects.names())
     meshes = sorted((SHARED / "data" / "objects").glob("*.obj"))
@@ -46,25 +48,27 @@ def main(argv: list[str] | None = None) -> int:
         print("note: ../shared/data/objects is absent; built-in objects only", file=sys.stderr)
     specs += [str(p) for p in meshes]
     hand = hugger.Hand()
-    rows = ["| object | triangles | status | configurations | links in contact | palm | ε | plan (ms) |"
+    rule_sets = [r.strip() for r in args.rules.split(",") if r.strip()]
+    rows = ["| object | triangles | rules | status | configurations | links in contact | palm | ε | plan (ms) |"
             + (" checker |" if args.check else ""),
-            "|---|---:|---|---:|---:|---|---:|---:|" + ("---|" if args.check else "")]
+            "|---|---:|---|---|---:|---:|---|---:|---:|" + ("---|" if args.check else "")]
     for spec in specs:
         case = scenarios.default_case(spec, hand)
-        t0 = time.perf_counter()
-        traj = hugger.Planner(hand, case.obj, case.target, case.palm_pose).plan()
-        ms = 1000 * (time.perf_counter() - t0)
-        a = analysis.analyze(traj)
-        row = (f"| {Path(case.name).stem} | {len(case.obj.faces)} | {traj.status} | {len(traj)} | "
-               f"{a['links_in_contact']}/{a['links']} | {'yes' if a['palm_contact'] else 'no'} | {a['epsilon']:.3f} | "
-               f"{ms:.1f} |")
-        if args.check:
-            with tempfile.TemporaryDirectory() as d:
-                path = Path(d) / "plan.npz"
-                traj.save(path)
-                row += f" {checker_verdict(path)} |"
-        rows.append(row)
-        print(row, flush=True)
+        for rules in rule_sets:
+            t0 = time.perf_counter()
+            traj = hugger.Planner(hand, case.obj, case.target, case.palm_pose, rules=rules).plan()
+            ms = 1000 * (time.perf_counter() - t0)
+            a = analysis.analyze(traj)
+            row = (f"| {Path(case.name).stem} | {len(case.obj.faces)} | {rules} | {traj.status} | {len(traj)} | "
+                   f"{a['links_in_contact']}/{a['links']} | {'yes' if a['palm_contact'] else 'no'} | "
+                   f"{a['epsilon']:.3f} | {ms:.1f} |")
+            if args.check:
+                with tempfile.TemporaryDirectory() as d:
+                    path = Path(d) / "plan.npz"
+                    traj.save(path)
+                    row += f" {checker_verdict(path)} |"
+            rows.append(row)
+            print(row, flush=True)
     if args.out:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text("\n".join(rows) + "\n")

@@ -23,8 +23,11 @@ def load_checker():
     return mod
 
 
-def check_file(checker, path: Path, every: int = 1) -> tuple[bool, list[str], dict]:
-    """Run the independent checker on a saved trajectory; (ok, failures, figures)."""
+def check_file(checker, path: Path, every: int = 1, motion: bool = False,
+               swept_every: int = 1) -> tuple[bool, list[str], dict]:
+    """Run the independent checker on a saved trajectory; (ok, failures, figures). With ``motion``
+    also its motion check (DONE angles, joint steps <= 4 s, swept collision every ``swept_every``
+    steps)."""
     d = checker.load(str(path))
     rep = checker.Report()
     if checker.check_structure(d, rep):
@@ -35,7 +38,11 @@ def check_file(checker, path: Path, every: int = 1) -> tuple[bool, list[str], di
         tol = max(0.02 * r, 5e-5)
         checker.check_kinematics(d, rep, 1e-7)
         checker.check_algorithm(d, rep, 1e-7)
-        checker.check_collision(d, rep, tol, every)
+        cache = checker.check_collision(d, rep, tol, every)
+        if motion:
+            mq = checker.MeshQuery(d["object_vertices"].astype(float), d["object_faces"].astype(np.int32),
+                                   checker.hand_layout(d), tol)
+            checker.check_motion(d, rep, 1e-7, tol, mq, cache, 4.0, swept_every)
     return rep.ok(), rep.failures, rep.figures
 
 

@@ -127,7 +127,9 @@ def test_defaults_are_resolved(hand, sphere):
 
 def test_max_iterations_gives_a_valid_partial_plan(hand, sphere):
     traj = hugger.Planner(hand, sphere, [0, 0, 0], start(), max_iterations=5).plan()
-    assert traj.status == "max_iterations" and np.sum(traj.phase == 2) == 5
+    # the approach before the first contact is one iteration of several configurations
+    assert traj.status == "max_iterations" and traj.stats["phase2_iterations"] == 5
+    assert np.sum(traj.phase == 2) >= traj.stats["approach_configurations"] >= 5
 
 
 @pytest.mark.parametrize("target, pose, match", [

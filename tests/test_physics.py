@@ -328,5 +328,5 @@ def test_compare_script_writes_a_table(tmp_path, capsys):
     out = tmp_path / "table.md"
     assert mod.main(["--objects", "sphere", "--out", str(out), "--no-validate"]) == 0
     text = out.read_text()
-    assert "| sphere | hugger | done |" in text and "| sphere | baseline | done |" in text
+    assert "| sphere | hug | done |" in text and "| sphere | paper | done |" in text and "| sphere | baseline | done |" in text
     assert "sphere" in capsys.readouterr().out

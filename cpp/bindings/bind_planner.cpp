@@ -122,7 +122,8 @@ void bind_planner(py::module_& m) {
   py::class_<PyPlanner>(m, "Planner", "The Hugger planner (DESIGN.md section 3) over a simulated world.")
       .def(py::init([](const HandModel& hand, const py::object& skin, const ArrayD& target,
                        const ArrayD& palm_pose, const py::object& step, const py::object& epsilon,
-                       const py::object& contact_tolerance, const py::object& max_iterations) {
+                       const py::object& contact_tolerance, const py::object& max_iterations,
+                       const std::string& rules) {
              auto out = std::make_unique<PyPlanner>();
              if (skin.is_none()) throw py::value_error("the object or skin must not be None");
              std::shared_ptr<Object> object;
@@ -147,6 +148,7 @@ void bind_planner(py::module_& m) {
                if (mi < 1) throw py::value_error("max_iterations must be at least 1, got " + std::to_string(mi));
                params.max_iterations = mi;
              }
+             params.rules = rules_from_string(rules);  // std::invalid_argument -> ValueError
              out->skin = skin;
              py::gil_scoped_release release;
              if (sensing) {  // a skin that need not have a mesh: T is taken as given
@@ -165,7 +167,7 @@ void bind_planner(py::module_& m) {
            }),
            py::arg("hand"), py::arg("sensing"), py::arg("target"), py::arg("palm_pose"), py::arg("step") = py::none(),
            py::arg("epsilon") = py::none(), py::arg("contact_tolerance") = py::none(),
-           py::arg("max_iterations") = py::none())
+           py::arg("max_iterations") = py::none(), py::arg("rules") = "hug")
       .def(
           "step",
           [](PyPlanner& p) -> py::object {
@@ -221,6 +223,7 @@ void bind_planner(py::module_& m) {
         d["epsilon"] = q.epsilon;
         d["contact_tolerance"] = q.contact_tolerance;
         d["max_iterations"] = q.max_iterations;
+        d["rules"] = to_string(q.rules);
         return d;
       })
       .def_property_readonly("stats", [](PyPlanner& p) {
@@ -233,6 +236,8 @@ void bind_planner(py::module_& m) {
         d["sigma_retries"] = s.sigma_retries;
         d["finger_collisions"] = s.finger_collisions;
         d["clinging_failures"] = s.clinging_failures;
+        d["motion_rejections"] = s.motion_rejections;
+        d["approach_configurations"] = s.approach_configurations;
         return d;
       });
 }

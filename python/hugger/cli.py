@@ -76,6 +76,9 @@ def _planner_options(p: argparse.ArgumentParser) -> None:
                         "Ferrari-Canny epsilon of the grasp quality")
     g.add_argument("--contact-tolerance", type=float, help="sensing distance delta, m (default 1e-4)")
     g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
+    g.add_argument("--rules", choices=("hug", "paper"), default="hug",
+                   help="Phase 2 rule set: 'hug' (default; the paper's rules plus extensions for firmer "
+                        "grasps) or 'paper' (the 1994 method with the documented decisions only)")
     g.add_argument("--timeout", type=float, metavar="SECONDS",
                    help="stop planning after this long, with status 'timeout' and a valid partial plan")
 
@@ -120,7 +123,7 @@ def _hand(args: argparse.Namespace):
 def _params(args: argparse.Namespace) -> dict[str, Any]:
     from .batch import _PARAMS
 
-    return {k: getattr(args, k) for k in _PARAMS}
+    return {k: getattr(args, k) for k in _PARAMS} | {"rules": args.rules}
 
 
 def _load(path: str):

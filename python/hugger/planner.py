@@ -45,6 +45,10 @@ def look_at(position: Any, target: Any, up: Any = None) -> np.ndarray:
     return pose
 
 
+#: The rule sets of Phase 2 (docs/algorithm.md): the paper's rules with the documented decisions,
+#: and those plus the extensions for firmer hugs (the default).
+RULES = ("paper", "hug")
+
 #: Largest ``max_iterations`` accepted (a plan that long would take hours).
 MAX_ITERATIONS = 10**9
 #: Smallest ``contact_tolerance`` relative to the scene's largest coordinate (m / m): below it the
@@ -91,7 +95,8 @@ class Planner:
 
     ``palm_pose`` (4, 4) is the initial palm pose T_WP (fingers extended). Defaults:
     ``step`` = shortest link / 20, ``epsilon`` = step / 10, ``contact_tolerance`` = 1e-4 m,
-    ``max_iterations`` = 20000 Phase 2 iterations. Raises ``ValueError`` for bad input, T
+    ``max_iterations`` = 20000 Phase 2 iterations, ``rules`` = ``"hug"`` (``"paper"``: the 1994
+    method with the documented decisions only; see docs/algorithm.md). Raises ``ValueError`` for bad input, T
     outside O, or a hand that touches O at the start or while turning in Phase 1.
 
     ``step()`` returns the next :class:`Configuration` (or None at the end), so a plan can
@@ -101,7 +106,8 @@ class Planner:
 
     def __init__(self, hand: Hand, obj: Any, target: Any, palm_pose: Any, step: float | None = None,
                  epsilon: float | None = None, contact_tolerance: float | None = None,
-                 max_iterations: int | None = None, record_object: Object | None = None) -> None:
+                 max_iterations: int | None = None, rules: str = "hug",
+                 record_object: Object | None = None) -> None:
         if not isinstance(hand, Hand):
             raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
         skin = None
@@ -117,6 +123,8 @@ class Planner:
         if t.shape != (3,) or not np.all(np.isfinite(t)):
             raise ValueError(f"target must be a finite 3-vector, got {target!r}")
         pose = rigid_pose(palm_pose)
+        if not isinstance(rules, str) or rules not in RULES:
+            raise ValueError(f"rules must be one of {', '.join(map(repr, RULES))}, got {rules!r}")
         delta = _optional_size("contact_tolerance", contact_tolerance)
         extent = max(1.0, float(np.abs(obj.vertices).max()) if obj is not None else 0.0,
                      float(np.abs(pose[:3, 3]).max()), float(np.abs(t).max()))
@@ -127,13 +135,15 @@ class Planner:
         self._core = _core.Planner(hand._core, obj._core if skin is None else skin, t, pose, _optional_size("step", step),
                                    _optional_size("epsilon", epsilon),
                                    delta,
-                                   _optional_count("max_iterations", max_iterations))
+                                   _optional_count("max_iterations", max_iterations), rules)
         self._emitted: int | None = 0  # configurations handed out by step(); None after plan()
 
     @property
     def status(self) -> str:
-        """``running`` until the plan ends, then ``done``, ``max_iterations``, ``timeout``, or ``error``
-        (a skin raised an exception)."""
+        """``running`` until the plan ends, then ``done`` (every finger DONE), ``stalled`` (nothing
+        can move any more although some finger is not DONE: the plan ends rather than repeat an
+        unchanged configuration), ``max_iterations``, ``timeout``, or ``error`` (a skin raised an
+        exception)."""
         return self._core.status
 
     @property

@@ -18,8 +18,17 @@ std::string to_string(Status s) {
     case Status::kDone: return "done";
     case Status::kMaxIterations: return "max_iterations";
     case Status::kTimeout: return "timeout";
+    case Status::kStalled: return "stalled";
   }
   return "unknown";
+}
+
+std::string to_string(Rules r) { return r == Rules::kPaper ? "paper" : "hug"; }
+
+Rules rules_from_string(const std::string& name) {
+  if (name == "paper") return Rules::kPaper;
+  if (name == "hug") return Rules::kHug;
+  throw std::invalid_argument("rules must be 'paper' or 'hug', got '" + name + "'");
 }
 
 namespace {
@@ -28,6 +37,14 @@ namespace {
 constexpr double kMaxSwingFlexion = kPi / 2.0;
 /// Iterations a CONTACT tip may stay within 2 steps of one place before it counts as overextended.
 constexpr int kStallWindow = 20;
+/// No joint may move more than this many steps s in one Phase 2 iteration (a little under the
+/// checker's 4, for rounding).
+constexpr double kMaxJointSteps = 4.0 * (1.0 - 1e-6);
+/// A clinging rotation turns a link by at most this many s / L (radians): larger turns are jumps.
+constexpr double kMaxClingSteps = 8.0;
+/// Hug rule: a joint closing until contact flexes at most to this angle (rad).
+constexpr double kMaxCloseFlexion = kPi / 2.0;
+
 
 [[noreturn]] void invalid(const std::string& what) { throw std::invalid_argument(what); }
 
@@ -144,6 +161,12 @@ void Planner::plan_phase1(const Pose& start) {
   anchors_.assign(hand_.fingers(), Vec2(kInf, kInf));
   stalled_.assign(hand_.fingers(), 0);
   frozen_lb_.assign(static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1), -kInf);
+  closing_.assign(hand_.fingers(), 0);
+  closed_.assign(hand_.fingers(), 0);
+}
+
+Vec2 Planner::root2d(int m, double eta) const {
+  return Vec2(hand_.root2d(m).x(), eta);  // the root on the palm's front face, moved eta along p
 }
 
 Configuration Planner::make_configuration(int phase) const {
@@ -155,7 +178,12 @@ Configuration Planner::make_configuration(int phase) const {
   c.angles.resize(M, N);
   for (int m = 0; m < M; ++m) {
     for (const Vec2& x : chains_[m]) c.joints.push_back(planes_[m].to_world(x));
-    HandModel::planar_angles(chains_[m], c.angles.row(m).data());
+    // A DONE finger moves only rigidly: its angles are those it had when it became DONE, bit
+    // for bit (recomputed from the translated joints they could differ by rounding).
+    if (states_[m] == TipState::kDone && !history_.empty() && history_.back().tip_state[m] == TipState::kDone)
+      c.angles.row(m) = history_.back().angles.row(m);
+    else
+      HandModel::planar_angles(chains_[m], c.angles.row(m).data());
   }
   c.tip_state = states_;
   c.phase = phase;
@@ -188,6 +216,7 @@ SnakeRequest Planner::snake_request(int m, double front) const {
   double shortest = kInf;
   for (int n = 0; n < hand_.links(); ++n) shortest = std::min(shortest, hand_.link_length(m, n));
   req.sample_angle = std::min(0.1, params_.step / (2.0 * shortest));
+  req.max_rotation = std::min(kPi, kMaxClingSteps * params_.step / shortest);
   // Both chains start outside O: the head is a point whose gap was sensed (follow_boundary,
   // rotate_until_touch) or the old tip; the root is the old root or one moved by sigma, which
   // is clipped to the root's sensed free distance.
@@ -226,11 +255,165 @@ bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>&
   return true;
 }
 
+double Planner::translation_free(int m, const Chain& chain, double sigma) const {
+  if (!(sigma > 0.0)) return 0.0;
+  const int N = hand_.links();
+  const double r = hand_.link_radius(), level = 0.5 * params_.contact_tolerance;
+  // Samples no farther apart than a quarter of max(r, s): between two clear samples a link
+  // sliding on O can dip into it only by a sagitta far below the collision tolerance.
+  const double h = std::max(r, params_.step) / 4.0;
+  const int S = std::max(1, static_cast<int>(std::ceil(sigma / h - 1e-9)));
+  double best = sigma;
+  for (int n = 0; n < N && best > 0.0; ++n) {
+    // A link whose gap exceeds the translation (plus the sensing level) cannot reach O.
+    if (link_gap(m, chain[n], chain[n + 1], sigma + params_.contact_tolerance) - level >= best) continue;
+    for (int i = 1; i <= S; ++i) {
+      const double t = sigma * static_cast<double>(i) / S;
+      if (t > best) break;
+      const Vec2 d(0.0, t);
+      if (!sensing_->link_free(planes_[m], chain[n] + d, chain[n + 1] + d, r, -kInf, false)) {
+        best = sigma * static_cast<double>(i - 1) / S;
+        break;
+      }
+    }
+  }
+  return best;
+}
+
+bool Planner::swept_link_ok(int m, const Vec2& a, const Vec2& b) const {
+  const double r = hand_.link_radius();
+  // A straight line in joint space between two configurations that rest on O dips into it by
+  // a sagitta of micrometres; a quarter of the collision tolerance (DESIGN section 6:
+  // max(2% of r, 0.05 mm)) is allowed there, and no more.
+  const double allow = 0.25 * std::max(0.02 * r, 5e-5);
+  const double g = link_gap(m, a, b, allow);
+  if (g >= 0.0) return true;
+  if (g > -r) return g >= -allow;  // the axis is outside O: the depth is measured
+  // The axis crosses O (depth not measured): the deepest of points along it.
+  constexpr int kPoints = 16;
+  for (int i = 0; i <= kPoints; ++i) {
+    const Vec2 x = a + (b - a) * (static_cast<double>(i) / kPoints);
+    if (link_gap(m, x, x, allow) < -allow) return false;
+  }
+  return true;
+}
+
+bool Planner::motion_ok(int m, const Chain& old, const Chain& next) const {
+  const int N = hand_.links();
+  const double s = params_.step, r = hand_.link_radius();
+  for (int n = 0; n <= N; ++n)
+    if ((next[n] - old[n]).norm() > kMaxJointSteps * s) return false;
+  std::vector<double> a0(N), a1(N), a(N);
+  HandModel::planar_angles(old, a0.data());
+  HandModel::planar_angles(next, a1.data());
+  // How far any joint can move along the straight line in joint space (as the checker bounds it).
+  const double d_root = (next[0] - old[0]).norm();
+  double cum = 0.0, reach = 0.0, bound = d_root;
+  // Link n moves no farther than its distal joint, by at most D_n; a link whose gap at the new
+  // configuration is at least D_n is clear all along (the gap shrinks no faster than the link
+  // moves), and is not sampled.
+  std::vector<char> sample(N, 0);
+  bool any = false;
+  for (int n = 0; n < N; ++n) {
+    cum += a1[n] - a0[n];
+    reach += hand_.link_length(m, n) * std::abs(cum);
+    const double D = d_root + reach;
+    bound = std::max(bound, D);
+    sample[n] = link_gap(m, next[n], next[n + 1], D) < D;
+    any = any || sample[n];
+  }
+  if (!any) return true;
+  const double h = std::max(r, s) / 4.0;
+  const int S = std::clamp(static_cast<int>(std::ceil(bound / h - 1e-9)), 1, 128);
+  for (int i = 1; i < S; ++i) {
+    const double t = static_cast<double>(i) / S;
+    for (int n = 0; n < N; ++n) a[n] = a0[n] + t * (a1[n] - a0[n]);
+    const Chain c = hand_.forward_planar(m, old[0] + t * (next[0] - old[0]), a.data());
+    for (int n = 0; n < N; ++n)
+      if (sample[n] && !swept_link_ok(m, c[n], c[n + 1])) return false;
+  }
+  return true;
+}
+
+bool Planner::close_step(int m, Chain& chain) const {
+  const int N = hand_.links();
+  const double s = params_.step, delta = params_.contact_tolerance, r = hand_.link_radius();
+  int first = 0;  // the first joint that may flex: distal to the distal-most touching link
+  for (int n = N - 1; n >= 0; --n)
+    if (link_gap(m, chain[n], chain[n + 1], delta) <= delta) {
+      first = n + 1;
+      break;
+    }
+  if (first >= N) return false;  // the distal link touches: closing is over
+  std::vector<double> a(N);
+  HandModel::planar_angles(chain, a.data());
+  // Flexing joints first..N-1 by d moves the tip by at most d * sum_k L_k (k - first + 1).
+  double lever = 0.0;
+  for (int k = first; k < N; ++k) lever += hand_.link_length(m, k) * (k - first + 1);
+  double d = 2.0 * s / lever;
+  for (int tries = 0; tries < 8; ++tries, d *= 0.5) {
+    std::vector<double> b = a;
+    bool moved = false;
+    for (int k = first; k < N; ++k) {
+      // Flex at most to kMaxCloseFlexion and to the joint's upper limit.
+      const double inc = std::clamp(std::min(kMaxCloseFlexion, hand_.upper()(m, k)) - a[k], 0.0, d);
+      b[k] += inc;
+      moved = moved || inc > 1e-12;
+    }
+    if (!moved) return false;
+    const Chain c = hand_.forward_planar(m, chain[0], b.data());
+    bool free = true;
+    for (int n = first; n < N && free; ++n) free = sensing_->link_free(planes_[m], c[n], c[n + 1], r, chain[0].y(), false);
+    if (free) {
+      chain = c;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool Planner::approach() {
+  const int M = hand_.fingers(), N = hand_.links();
+  const double s = params_.step, level = 0.5 * params_.contact_tolerance;
+  Pose palm = palm2_;
+  palm.translation() += eta_ * palm2_.linear().col(2);
+  // The exact free distance of the palm and the extended fingers (each gap bounds how far that
+  // part can translate before it touches O).
+  double free = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), kInf);
+  for (int m = 0; m < M; ++m) {
+    const Chain& c = chains_[m];
+    for (int n = 0; n < N; ++n) free = std::min(free, link_gap(m, c[n], c[n + 1], kInf));
+  }
+  const double total = free - level;
+  if (!(total >= s) || !std::isfinite(total)) return false;  // within a step of O: the regular iteration lands
+  const long pieces = static_cast<long>(std::ceil(total / s - 1e-12));
+  const double eta0 = eta_;
+  for (long k = 1; k <= pieces; ++k) {
+    const double eta = k == pieces ? eta0 + total : eta0 + total * static_cast<double>(k) / static_cast<double>(pieces);
+    const double d = eta - eta_;
+    for (Chain& c : chains_)
+      for (Vec2& x : c) x.y() += d;
+    eta_ = eta;
+    history_.push_back(make_configuration(2));
+  }
+  for (double& lb : frozen_lb_) lb -= total + 1e-12;
+  stats_.approach_configurations += pieces;
+  return true;
+}
+
 void Planner::phase2_iteration() {
   const int M = hand_.fingers(), N = hand_.links();
   const double s = params_.step, delta = params_.contact_tolerance, level = 0.5 * delta;
   const double r = hand_.link_radius();
+  const bool hug = params_.rules == Rules::kHug;
   const long it = stats_.phase2_iterations;
+
+  // Decision 1: before any contact the hand advances by its free distance in one iteration.
+  if (!any_contact_ && !palm_touched_ && approach()) {
+    ++stats_.phase2_iterations;
+    if (stats_.phase2_iterations >= params_.max_iterations) status_ = Status::kMaxIterations;
+    return;
+  }
   Pose palm = palm2_;
   palm.translation() += eta_ * palm2_.linear().col(2);
 
@@ -252,21 +435,30 @@ void Planner::phase2_iteration() {
     }
   }
   if (palm_touched_)  // decision 3: the palm stops for good; every finger closes
-    for (auto& st : states_)
-      if (st == TipState::kFrozen) st = TipState::kContact;
+    for (int m = 0; m < M; ++m)
+      if (states_[m] == TipState::kFrozen) {
+        states_[m] = TipState::kContact;
+        closing_[m] = hug;  // hug rule: it never touched O, so it closes all its joints
+        closed_[m] = hug;
+      }
   for (auto st : states_)
     if (st != TipState::kFrozen && !any_contact_) {
       any_contact_ = true;
       stats_.first_contact_iteration = it;
     }
 
-  // (b) FollowBoundary and Head2Tail for every CONTACT finger.
+  // (b) FollowBoundary and Head2Tail for every CONTACT finger (hug rule: a finger that never
+  // touched closes until it touches instead).
   const std::vector<Chain> old = chains_;
   std::vector<Chain> cand = chains_;
-  auto root_at = [&](int m, double eta) { return Vec2(hand_.root2d(m).x(), eta); };
+  std::vector<char> touching(M, 0);  // the finger touches O (not closing)
   for (int m = 0; m < M; ++m) {
     if (states_[m] != TipState::kContact) continue;
-    const Vec2 root = root_at(m, eta_);
+    if (closing_[m]) {
+      if (close_step(m, cand[m])) continue;
+      closing_[m] = 0;  // a link at the tip touches, or no joint can flex: the ordinary rules take over
+    }
+    touching[m] = 1;
     const Vec2 tip = old[m][N];
     Vec2 head = tip;
     if (link_gap(m, tip, tip, delta) <= delta) {
@@ -277,7 +469,8 @@ void Planner::phase2_iteration() {
       fr.step = s;
       fr.level = level;
       // H within reach of the root where the palm step may take it this iteration (sigma <= s).
-      fr.root = palm_touched_ ? root : Vec2(root.x(), root.y() + s);
+      const Vec2 rm = root2d(m, eta_);
+      fr.root = palm_touched_ ? rm : Vec2(rm.x(), rm.y() + s);
       fr.reach = hand_.finger_length(m);
       fr.front = eta_;
       head = sensing_->follow_boundary(fr).head;
@@ -306,13 +499,24 @@ void Planner::phase2_iteration() {
     }
   }
 
-  // (c) the palm step sigma: mean tail gap, clipped to [0, s] and to the free distance.
+  // (c) the palm step sigma, clipped to [0, s] and to the free distance of the palm, the FROZEN
+  // fingers, the roots and the DONE fingers (which move only rigidly with the palm).
   double sigma = 0.0;
   if (!palm_touched_) {
     const bool none_in_contact =
         std::none_of(states_.begin(), states_.end(), [](TipState t) { return t == TipState::kContact; });
     if (none_in_contact) {
       sigma = s;  // decision 1: approach until a touch (also once every touching finger is DONE)
+    } else if (hug) {
+      // Every touching finger yields (it bends, clinging, as the palm advances), so the palm
+      // advances a full step, clipped below like the paper's (and by the fingers' motion).
+      int count = 0;
+      for (int m = 0; m < M; ++m)
+        if (states_[m] == TipState::kContact && touching[m]) {
+          sigma += s;
+          ++count;
+        }
+      sigma = count > 0 ? std::clamp(sigma / count, 0.0, s) : 0.0;
     } else {
       for (int m = 0; m < M; ++m)
         if (states_[m] == TipState::kContact) sigma += (cand[m][0].y() - eta_) / M;
@@ -326,43 +530,60 @@ void Planner::phase2_iteration() {
           // Bounds above the cap change nothing: sigma <= s < cap - level.
           for (int n = 0; n <= N; ++n) free = std::min(free, frozen_gap(m, n, cap));
         } else {
-          free = std::min(free, link_gap(m, root_at(m, eta_), root_at(m, eta_), cap));
+          const Vec2 rm = root2d(m, eta_);
+          free = std::min(free, link_gap(m, rm, rm, cap));
         }
       }
       sigma = std::min(sigma, std::max(0.0, free - level));
+      for (int m = 0; m < M && sigma > 0.0; ++m)
+        if (states_[m] == TipState::kDone) sigma = translation_free(m, old[m], sigma);
+      // Steps below a hundredth of delta are rounding, not motion (they would crawl forever).
+      if (sigma < 1e-2 * delta) sigma = 0.0;
     }
   }
 
-  // (d) Tail2Head toward the moved roots; commit finger by finger, checking the fingers
-  // against each other. If anything fails with the palm moved, retry with the palm still.
+  // (d) Tail2Head toward the moved roots; commit finger by finger, checking the motion of each
+  // finger (joint steps, swept collision) and the fingers against each other. If anything fails
+  // with the palm moved, retry with a shorter palm step, and finally with the palm still.
   auto attempt = [&](double sig, bool last, std::vector<Chain>& out, std::vector<TipState>& st) {
     out = old;
     st = states_;
+    const double new_eta = eta_ + sig;
     for (int m = 0; m < M; ++m) {
-      const Vec2 new_root = root_at(m, eta_ + sig);
       Chain c;
       switch (st[m]) {
         case TipState::kFrozen:
+        case TipState::kDone:  // rigidly with the palm: the joint angles do not change
           c = old[m];
           for (Vec2& x : c) x.y() += sig;
           break;
-        case TipState::kDone:
-          c = old[m];
-          if (sig > 0.0 && !tail_to_head(*sensing_, snake_request(m, new_root.y()), new_root, c)) return false;
-          break;
-        case TipState::kContact:
-          c = cand[m];
-          if (!tail_to_head(*sensing_, snake_request(m, new_root.y()), new_root, c)) {
+        case TipState::kContact: {
+          // Its Head2Tail chain re-attached to the moved root; failing that (clinging finds no
+          // free position, a joint would jump, the swept motion collides), the old chain
+          // re-attached: the finger only yields to the palm step this iteration.
+          bool ok = false;
+          for (int pass = 0; pass < 2 && !ok; ++pass) {
+            if (pass == 1 && (sig == 0.0 || cand[m] == old[m])) break;  // the same chain again
+            c = pass == 0 ? cand[m] : old[m];
+            ok = tail_to_head(*sensing_, snake_request(m, new_eta), root2d(m, new_eta), c);
+            if (!ok) ++stats_.clinging_failures;
+            if (ok && !motion_ok(m, old[m], c)) {
+              ok = false;
+              ++stats_.motion_rejections;
+            }
+          }
+          if (!ok) {
             if (!last) return false;
-            c = old[m];
+            c = old[m];  // last: sig == 0, the old chain is still attached to its root
             st[m] = TipState::kDone;
-            ++stats_.clinging_failures;
           }
           break;
+        }
       }
       if (!fingers_clear(m, c, out)) {
         if (!last) return false;
         c = old[m];
+        for (Vec2& x : c) x.y() += sig;
         st[m] = TipState::kDone;
         ++stats_.finger_collisions;
       }
@@ -372,20 +593,51 @@ void Planner::phase2_iteration() {
   };
   std::vector<Chain> next;
   std::vector<TipState> next_states;
-  if (!attempt(sigma, sigma == 0.0, next, next_states)) {
-    ++stats_.sigma_retries;
+  bool committed = false;
+  for (double sig = sigma; sig >= 1e-2 * delta && !committed; sig *= 0.25) {
+    committed = attempt(sig, false, next, next_states);
+    if (committed) sigma = sig;
+    else ++stats_.sigma_retries;
+  }
+  if (!committed) {
     sigma = 0.0;
     attempt(0.0, true, next, next_states);
   }
+  bool starts_closing = false;  // a finger starts closing: the next iteration moves it
   for (int m = 0; m < M; ++m) {
     if (next_states[m] != TipState::kContact) continue;
-    if ((next[m][N] - old[m][N]).norm() < params_.epsilon) next_states[m] = TipState::kDone;
+    if (closing_[m]) {  // a closing finger ends when it can flex no more (above)
+      double moved = 0.0;
+      for (int n = 0; n <= N; ++n) moved = std::max(moved, (next[m][n] - old[m][n]).norm());
+      if (moved >= 1e-3 * params_.epsilon) continue;
+      closing_[m] = 0;  // closing in steps this small is rounding, not motion: it has closed
+      next_states[m] = TipState::kDone;
+      continue;
+    }
+    // Paper: the tip moved less than epsilon. Hug: the hand is at rest (sigma = 0: while the
+    // palm advances, no touching finger is done) and no joint of the finger moved epsilon.
+    double moved = (next[m][N] - old[m][N]).norm();
+    if (hug)
+      for (int n = 0; n < N; ++n) moved = std::max(moved, (next[m][n] - old[m][n]).norm());
+    bool rest = moved < params_.epsilon && !(hug && sigma > 0.0);
     // Overextension over a window: a tip that oscillates (pulled off by Tail2Head, swung back)
     // without getting farther than 2 s from where it was kStallWindow iterations ago is DONE.
     if ((next[m][N] - anchors_[m]).norm() > 2.0 * s) {
       anchors_[m] = next[m][N];
       stalled_[m] = 0;
     } else if (++stalled_[m] >= kStallWindow) {
+      rest = true;
+    }
+    if (!rest) continue;
+    if (hug && palm_touched_ && !closed_[m]) {
+      // Hug rule: before it is DONE, a finger closes the joints beyond its distal-most touching
+      // link until they touch too (close-until-contact, clinging), once.
+      closing_[m] = 1;
+      closed_[m] = 1;
+      starts_closing = true;
+      stalled_[m] = 0;
+      anchors_[m] = next[m][N];
+    } else {
       next_states[m] = TipState::kDone;
     }
   }
@@ -394,15 +646,34 @@ void Planner::phase2_iteration() {
   const bool blocked = sigma == 0.0 && std::none_of(next_states.begin(), next_states.end(),
                                                     [](TipState t) { return t == TipState::kContact; });
   if (blocked)
-    for (auto& st : next_states)
-      if (st == TipState::kFrozen) st = TipState::kContact;
+    for (int m = 0; m < M; ++m)
+      if (next_states[m] == TipState::kFrozen) {
+        next_states[m] = TipState::kContact;
+        closing_[m] = hug;
+        closed_[m] = hug;
+      }
+  ++stats_.phase2_iterations;
+  // Never emit an unchanged configuration: when nothing moved and no state changed, nothing
+  // can move any more.
   chains_ = std::move(next);
   states_ = std::move(next_states);
   eta_ += sigma;
   for (double& lb : frozen_lb_) lb -= sigma + 1e-12;  // a picometre for rounding
-  ++stats_.phase2_iterations;
-  history_.push_back(make_configuration(2));
-  if (std::all_of(states_.begin(), states_.end(), [](TipState t) { return t == TipState::kDone; }))
+  const bool all_done = std::all_of(states_.begin(), states_.end(), [](TipState t) { return t == TipState::kDone; });
+  Configuration c = make_configuration(2);
+  const Configuration& last = history_.back();
+  const bool unchanged = c.palm.matrix() == last.palm.matrix() && c.joints == last.joints && c.tip_state == last.tip_state;
+  if (unchanged) {
+    // Nothing to emit. A finger that starts closing moves in the next iteration (at most once
+    // per finger); otherwise nothing can move any more.
+    if (starts_closing)
+      status_ = stats_.phase2_iterations >= params_.max_iterations ? Status::kMaxIterations : Status::kRunning;
+    else
+      status_ = all_done ? Status::kDone : Status::kStalled;
+    return;
+  }
+  history_.push_back(std::move(c));
+  if (all_done)
     status_ = Status::kDone;
   else if (stats_.phase2_iterations >= params_.max_iterations)
     status_ = Status::kMaxIterations;
@@ -410,8 +681,10 @@ void Planner::phase2_iteration() {
 
 std::optional<Configuration> Planner::step() {
   if (next_ < history_.size()) return history_[next_++];
-  if (status_ != Status::kRunning) return std::nullopt;
-  phase2_iteration();
+  while (next_ >= history_.size()) {  // an iteration that ends the plan may emit nothing
+    if (status_ != Status::kRunning) return std::nullopt;
+    phase2_iteration();
+  }
   return history_[next_++];
 }
 

@@ -62,6 +62,7 @@ bool place(const Sensing& sensing, const SnakeRequest& req, const Chain& old, in
   rr.front = req.front;
   rr.tolerance = req.tolerance;
   rr.sample_angle = req.sample_angle;
+  rr.max_angle = req.max_rotation;
   const RotateResult r = sensing.rotate_until_free(rr);
   if (!r.ok) return false;
   Vec2 freed = r.end - chain[from];

@@ -177,10 +177,33 @@ RotateResult Sensing::rotate_until_free(const RotateRequest& req) const {
     }
     return good;
   };
+  // The coarse two-way search: the first sample angle below `limit` at which either way is
+  // free, refined on each free side; the smaller rotation wins (ties: flexion).
+  const double da = std::max(req.sample_angle, 1e-6);
+  auto coarse = [&](double limit, Probe* best) {
+    const int samples = static_cast<int>(std::ceil(limit / da - 1e-9));
+    Probe prev_plus = start, prev_minus = start;
+    for (int k = 1; k <= samples; ++k) {
+      const double a = std::min(k * da, limit);
+      const Probe plus = probe(a), minus = probe(-a);
+      if (plus.free || minus.free) {
+        if (plus.free) *best = refine(prev_plus, plus);
+        if (minus.free) {
+          const Probe m = refine(prev_minus, minus);
+          if (!plus.free || std::abs(m.angle) < std::abs(best->angle)) *best = m;
+        }
+        return true;
+      }
+      prev_plus = plus;
+      prev_minus = minus;
+    }
+    return false;
+  };
   // Newton steps on the measured gap, toward the side that opens it: a link resting a little
   // inside a smooth surface is freed in two or three probes. A step longer than a few sample
   // angles could pass over a thin part of O or the first free side: the sampled search decides.
-  const double da = std::max(req.sample_angle, 1e-6);
+  // The rotation must be the smallest that frees the link (DESIGN decision 6): a Newton result
+  // beyond the first sample angle is kept only if no sample nearer zero, either way, is free.
   Probe bad = start;
   int dir = 0;
   for (int it = 0; it < 4 && bad.measured && std::abs(bad.slope) > 1e-12; ++it) {
@@ -190,27 +213,18 @@ RotateResult Sensing::rotate_until_free(const RotateRequest& req) const {
       break;  // turned back, out of range, or too long a step
     dir = d;
     const Probe m = probe(a);
-    if (m.free) return finish(refine(bad, m));
-    bad = m;
-  }
-  // The coarse two-way search: the first sample angle at which either way is free.
-  const int samples = static_cast<int>(std::ceil(req.max_angle / da));
-  Probe prev_plus = start, prev_minus = start;
-  for (int k = 1; k <= samples; ++k) {
-    const double a = std::min(k * da, req.max_angle);
-    const Probe plus = probe(a), minus = probe(-a);
-    if (plus.free || minus.free) {
-      Probe best;
-      if (plus.free) best = refine(prev_plus, plus);
-      if (minus.free) {
-        const Probe m = refine(prev_minus, minus);
-        if (!plus.free || std::abs(m.angle) < std::abs(best.angle)) best = m;
-      }
+    if (m.free) {
+      Probe best = refine(bad, m);
+      Probe nearer;
+      if (std::abs(best.angle) > da && coarse(std::abs(best.angle) - 0.5 * da, &nearer) &&
+          std::abs(nearer.angle) < std::abs(best.angle))
+        best = nearer;
       return finish(best);
     }
-    prev_plus = plus;
-    prev_minus = minus;
+    bad = m;
   }
+  Probe best;
+  if (coarse(req.max_angle, &best)) return finish(best);
   return out;
 }
 

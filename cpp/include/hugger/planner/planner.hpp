@@ -15,8 +15,22 @@
 namespace hugger {
 
 enum class TipState : std::int8_t { kFrozen = 0, kContact = 1, kDone = 2 };
-enum class Status : std::int8_t { kRunning = 0, kDone = 1, kMaxIterations = 2, kTimeout = 3 };
+/// How a plan ends: kDone every finger DONE; kStalled nothing can move any more although some
+/// finger is not DONE (the plan never repeats an unchanged configuration); kMaxIterations the
+/// bound on Phase 2 iterations; kTimeout the wall-clock limit of plan().
+enum class Status : std::int8_t { kRunning = 0, kDone = 1, kMaxIterations = 2, kTimeout = 3, kStalled = 4 };
 std::string to_string(Status s);
+
+/// The rule set of Phase 2 (docs/algorithm.md). kPaper: the paper's rules with the documented
+/// decisions, nothing more (the reference of the 1994 method). kHug: those plus extensions for
+/// firmer grasps: touching fingers yield, so the palm advances a full (clipped) step while any
+/// finger touches; no finger is DONE while the hand moves; after palm contact, fingers close the
+/// joints beyond their distal-most contact (all joints, for a finger that never touched) until
+/// they touch, clinging.
+enum class Rules : std::int8_t { kPaper = 0, kHug = 1 };
+std::string to_string(Rules r);
+/// "paper" or "hug"; throws std::invalid_argument for any other name.
+Rules rules_from_string(const std::string& name);
 
 /// Planner parameters. NaN selects the documented default; any other value must be positive.
 struct PlannerParams {
@@ -24,6 +38,7 @@ struct PlannerParams {
   double epsilon = std::numeric_limits<double>::quiet_NaN();  ///< overextension threshold (m); default: step / 10
   double contact_tolerance = std::numeric_limits<double>::quiet_NaN();  ///< sensing distance delta (m); default 1e-4
   long max_iterations = 20000;     ///< bound on Phase 2 iterations
+  Rules rules = Rules::kHug;       ///< the rule set of Phase 2
 };
 
 /// One hand configuration (DESIGN.md section 2).
@@ -45,6 +60,8 @@ struct PlannerStats {
   long sigma_retries = 0;             ///< iterations whose palm step had to be taken back
   long finger_collisions = 0;         ///< fingers stopped by another finger or themselves
   long clinging_failures = 0;         ///< fingers stopped because no free link position was found
+  long motion_rejections = 0;         ///< finger moves refused: a joint would move > 4 s, or the swept motion collides
+  long approach_configurations = 0;   ///< configurations emitted by the approach before the first contact
 };
 
 class Planner {
@@ -56,8 +73,10 @@ class Planner {
 
   /// The next configuration, or nothing when the plan has ended.
   std::optional<Configuration> step();
-  /// Runs one Phase 2 iteration and appends its configuration to history() (step() hands it
-  /// out later). Returns false, doing nothing, once the plan has ended.
+  /// Runs one Phase 2 iteration and appends its configurations to history() (step() hands them
+  /// out later): one, several for the approach before the first contact (each palm step <= s),
+  /// none for an iteration that ends the plan because nothing could move. Returns false, doing
+  /// nothing, once the plan has ended.
   bool advance();
   /// Runs to the end; returns the final status. With a finite `timeout` (seconds, > 0) the plan
   /// stops with Status::kTimeout once that much wall-clock time has passed since the call: the
@@ -81,6 +100,23 @@ class Planner {
   void phase2_iteration();
   bool chain_free(int m, const Chain& chain) const;
   SnakeRequest snake_request(int m, double front) const;
+  /// Finger m's root in its plane with the palm moved eta along p.
+  Vec2 root2d(int m, double eta) const;
+  /// The approach before any contact (decision 1): translate by the free distance, emitting as
+  /// many configurations (each <= s) as that takes. Returns false when the hand could not move.
+  bool approach();
+  /// The largest t in [0, sigma] (from a grid of samples) such that chain m translated by every
+  /// t' <= t along p stays clear of O (it may stay in contact): the palm step a DONE finger allows.
+  double translation_free(int m, const Chain& chain, double sigma) const;
+  /// The motion old -> next of finger m (root moved by d_eta, joint angles interpolated
+  /// linearly, as a robot executes it) keeps every joint within 4 s and is collision-free.
+  bool motion_ok(int m, const Chain& old, const Chain& next) const;
+  /// A link sampled on such a motion: clear of O, or into it by at most a quarter of the
+  /// collision tolerance.
+  bool swept_link_ok(int m, const Vec2& a, const Vec2& b) const;
+  /// Hug rule: one close-until-contact step of finger m (every joint distal to the proximal-most
+  /// touching link flexes). Returns false when it cannot flex any more.
+  bool close_step(int m, Chain& chain) const;
   bool fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const;
   double link_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
   /// A lower bound of the gap of FROZEN finger m's link n (n == N: its root, as a sphere), exact
@@ -110,6 +146,8 @@ class Planner {
   double eta_ = 0.0;
   bool palm_touched_ = false;
   bool any_contact_ = false;
+  std::vector<char> closing_;  ///< hug rule: per finger, closing until contact
+  std::vector<char> closed_;   ///< hug rule: per finger, has closed (or is closing) once
 };
 
 }  // namespace hugger

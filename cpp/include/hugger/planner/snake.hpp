@@ -20,6 +20,7 @@ struct SnakeRequest {
   double front = -kInf;             ///< no joint may pass behind this eta (the palm's front plane)
   double tolerance = 1e-5;          ///< clinging resolution: metres of link-end motion
   double sample_angle = 0.05;       ///< coarse angular search increment for clinging (rad)
+  double max_rotation = kPi;        ///< largest clinging rotation (rad); beyond it the link is stuck
   /// The chain's first pivot (the head for Head2Tail, the root for Tail2Head) is known to lie
   /// outside O. Every later pivot is the end of a link just placed free, so outside as well.
   bool start_outside = false;
@@ -50,7 +51,7 @@ bool joint_within_limits(const SnakeRequest& req, const Chain& chain, int joint,
 /// Head2Tail (DESIGN.md decision 6): tip to `head`, then each joint on the ray toward its old
 /// position at the link's length (turned, with joint limits, so that the joint just passed is
 /// within them); a link that would hit O is rotated about its distal joint by
-/// a small angle that frees it (Sensing::rotate_until_free). Returns false (chain partly
+/// the smallest angle that frees it (Sensing::rotate_until_free), at most `max_rotation`. Returns false (chain partly
 /// updated) if none frees it.
 bool head_to_tail(const Sensing& sensing, const SnakeRequest& req, const Vec2& head, Chain& chain);
 

@@ -90,11 +90,13 @@ class Sensing {
   virtual FollowResult follow_boundary(const FollowRequest& req) const;
   /// Flex the link about its pivot (counter-clockwise) until it touches O, up to max_angle.
   virtual RotateResult rotate_until_touch(const RotateRequest& req) const;
-  /// Rotate a colliding link about its pivot by a small angle that frees it, leaving it resting
-  /// on O (gap at most `tolerance`, or the end within `tolerance` of the boundary angle). Newton
-  /// steps on the sensed gap turn it the way that opens the gap; where the gap is not measured
-  /// (the axis crosses O, or the front plane blocks) both ways are searched in steps of
-  /// `sample_angle` and the nearer free side is taken; false position then refines.
+  /// Rotate a colliding link about its pivot by the smallest angle (at most max_angle) that frees
+  /// it, leaving it resting on O (gap at most `tolerance`, or the end within `tolerance` of the
+  /// boundary angle). Newton steps on the sensed gap turn it the way that opens the gap; where
+  /// the gap is not measured (the axis crosses O, or the front plane blocks) both ways are
+  /// searched in steps of `sample_angle` and the nearer free side is taken; false position then
+  /// refines. Smallest up to `sample_angle`: a free window narrower than it may be missed, and a
+  /// Newton result beyond one sample angle is kept only if no sample nearer zero is free.
   virtual RotateResult rotate_until_free(const RotateRequest& req) const;
 };
 

@@ -1,0 +1,158 @@
+// The Phase 2 rules of issue 16: DONE fingers at rest, a tip on a face facing the palm, the
+// smallest freeing rotation, and the motion between configurations.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "hugger/planner/planner.hpp"
+#include "hugger/world/simulated_world.hpp"
+#include "meshes.hpp"
+#include "scenes.hpp"
+
+using namespace hugger;
+
+namespace {
+
+/// An axis-aligned box of half-extents h about `centre`, 12 outward triangles.
+std::shared_ptr<SimulatedWorld> box_world(const Vec3& h, const Vec3& centre = Vec3::Zero()) {
+  PointsN3 v(8, 3);
+  for (int i = 0; i < 8; ++i)
+    v.row(i) = (centre + Vec3((i & 1 ? 1 : -1) * h.x(), (i & 2 ? 1 : -1) * h.y(), (i & 4 ? 1 : -1) * h.z())).transpose();
+  const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  FacesN3 faces(12, 3);
+  for (int i = 0; i < 12; ++i) faces.row(i) << f[i][0], f[i][1], f[i][2];
+  return std::make_shared<SimulatedWorld>(std::make_shared<Object>(v, faces));
+}
+
+/// Every emitted configuration: DONE fingers keep their angles; in Phase 2 no joint moves more
+/// than 4 s between consecutive configurations; no configuration repeats the one before.
+void expect_motion_rules(const Planner& p) {
+  const auto& h = p.history();
+  const int M = p.hand().fingers(), N = p.hand().links();
+  const double s = p.params().step;
+  for (std::size_t k = 1; k < h.size(); ++k) {
+    for (int m = 0; m < M; ++m)
+      if (h[k - 1].tip_state[m] == TipState::kDone)
+        for (int n = 0; n < N; ++n) EXPECT_EQ(h[k].angles(m, n), h[k - 1].angles(m, n)) << "k " << k << " m " << m;
+    if (h[k].phase != 2) continue;
+    double worst = 0.0;
+    for (std::size_t j = 0; j < h[k].joints.size(); ++j) worst = std::max(worst, (h[k].joints[j] - h[k - 1].joints[j]).norm());
+    EXPECT_LE(worst, 4.0 * s) << "configuration " << k;
+    bool same = h[k].palm.matrix() == h[k - 1].palm.matrix() && h[k].tip_state == h[k - 1].tip_state;
+    for (std::size_t j = 0; j < h[k].joints.size() && same; ++j) same = h[k].joints[j] == h[k - 1].joints[j];
+    EXPECT_FALSE(same) << "configuration " << k << " repeats the one before";
+  }
+}
+
+double palm_height(const Configuration& c) { return c.palm.translation().z(); }
+
+}  // namespace
+
+// A straight finger whose tip lands on a flat face that faces the palm. The paper's rules: the
+// tip can only slide outward, the tail drifts radially, sigma is 0: the finger is DONE at once,
+// straight, and (a DONE finger being rigid) it holds the palm off the face. The hug rule: the
+// finger yields, so the palm keeps advancing after the first contact.
+TEST(Rules, TipOnAFaceFacingThePalm) {
+  const HandModel hand = HandModel::uniform(3, 4, 0.02, 0.0, 0.02, 0.01);
+  // The box's top face z = 0.02 is 12 cm wide: every tip lands on it, none passes its edge.
+  auto world = box_world(Vec3(0.06, 0.06, 0.02));
+  Pose start = test::facing_down(0.2);
+  double end_height[2] = {0.0, 0.0};
+  bool palm_contact[2] = {false, false};
+  for (Rules rules : {Rules::kPaper, Rules::kHug}) {
+    PlannerParams params;
+    params.rules = rules;
+    Planner p(hand, world, Vec3::Zero(), start, params);
+    const Status st = p.plan();
+    EXPECT_TRUE(st == Status::kDone || st == Status::kStalled) << to_string(st);
+    expect_motion_rules(p);
+    const auto& h = p.history();
+    end_height[static_cast<int>(rules)] = palm_height(h.back());
+    palm_contact[static_cast<int>(rules)] = p.stats().palm_contact_iteration >= 0;
+  }
+  // the face is at z = 0.02; the straight fingers are 8 cm long
+  EXPECT_GT(end_height[0], 0.02 + 0.04) << "paper: the DONE fingers hold the palm off the face";
+  EXPECT_FALSE(palm_contact[0]);
+  EXPECT_LT(end_height[1], 0.02 + 0.001) << "hug: the fingers yield and the palm lands on the face";
+}
+
+// A DONE finger keeps its joint angles while the palm still advances: the 5 x 5 hand on an
+// ellipsoid of 10 x 8 x 6 cm from above, where some fingers are DONE before the palm lands.
+TEST(Rules, DoneFingerAtRestWhileThePalmAdvances) {
+  const HandModel hand = HandModel::uniform(5, 5, 0.02, 0.004, 0.03, 0.01);
+  const auto mesh = test::icosphere(4, Vec3(0.05, 0.04, 0.03));
+  auto world = std::make_shared<SimulatedWorld>(std::make_shared<Object>(mesh.vertices, mesh.faces));
+  bool exercised = false;
+  for (Rules rules : {Rules::kPaper, Rules::kHug}) {
+    PlannerParams params;
+    params.rules = rules;
+    Planner p(hand, world, Vec3::Zero(), test::facing_down(0.2), params);
+    EXPECT_NE(p.plan(), Status::kMaxIterations);
+    expect_motion_rules(p);
+    // some finger is DONE while the palm still moves (with either rule set): the rule is exercised
+    const auto& h = p.history();
+    for (std::size_t k = 1; k < h.size() && !exercised; ++k)
+      for (int m = 0; m < 5; ++m)
+        if (h[k - 1].tip_state[m] == TipState::kDone &&
+            (h[k].palm.translation() - h[k - 1].palm.translation()).norm() > 0.0)
+          exercised = true;
+  }
+  EXPECT_TRUE(exercised);
+}
+
+// rotate_until_free turns a colliding link by the smallest angle that frees it: against a
+// brute-force sweep of fine angles both ways, on a sphere and on a box, random links.
+TEST(Rules, SmallestFreeingRotationMatchesBruteForce) {
+  std::mt19937 rng(16);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  const std::shared_ptr<SimulatedWorld> worlds[2] = {test::sphere_world(0.03, 4), box_world(Vec3(0.03, 0.02, 0.025))};
+  FingerPlane plane;  // z = 0
+  plane.u = Vec3::UnitX();
+  plane.p = Vec3::UnitY();
+  int checked = 0;
+  for (const auto& world : worlds)
+    for (double radius : {0.0, 0.003})
+      for (int trial = 0; trial < 300; ++trial) {
+        // a pivot outside O near its surface, a link of 2 cm pointing somewhere, colliding
+        const double a = kPi * U(rng), d = 0.036 + 0.01 * (U(rng) + 1.0);
+        const Vec2 pivot(d * std::cos(a), d * std::sin(a));
+        if (!world->link_free(plane, pivot, pivot, radius, -kInf)) continue;
+        const double b = kPi * U(rng);
+        const Vec2 end = pivot + 0.02 * Vec2(std::cos(b), std::sin(b));
+        if (world->link_free(plane, pivot, end, radius, -kInf)) continue;
+        RotateRequest rr;
+        rr.plane = plane;
+        rr.pivot = pivot;
+        rr.end = end;
+        rr.radius = radius;
+        rr.max_angle = kPi;
+        rr.tolerance = 1e-5;
+        rr.sample_angle = 0.025;
+        const RotateResult res = world->rotate_until_free(rr);
+        // brute force: the smallest |angle| on a grid of 1e-4 rad at which the link is free
+        auto free_at = [&](double ang) {
+          const Vec2 arm = end - pivot;
+          const Vec2 e = pivot + Vec2(std::cos(ang) * arm.x() - std::sin(ang) * arm.y(),
+                                      std::sin(ang) * arm.x() + std::cos(ang) * arm.y());
+          return world->link_free(plane, pivot, e, radius, -kInf);
+        };
+        double brute = kInf;
+        for (int k = 1; k <= 31416 && !std::isfinite(brute); ++k)
+          for (double sgn : {1.0, -1.0})
+            if (!std::isfinite(brute) && free_at(sgn * 1e-4 * k)) brute = 1e-4 * k;
+        ASSERT_EQ(res.ok, std::isfinite(brute));
+        if (!res.ok) continue;
+        ++checked;
+        EXPECT_TRUE(world->link_free(plane, pivot, res.end, radius, -kInf));
+        // never farther than the smallest free angle by more than the refinement resolution
+        // (tolerance / length, and the grid), unless the link then rests on O within the
+        // tolerance (grazing: the gap grows slowly with the angle) -- and then by less than one
+        // sample angle; never nearer than a free angle can be
+        if (res.gap > rr.tolerance) EXPECT_LE(std::abs(res.angle), brute + 1e-3 + 1e-4) << "trial " << trial;
+        EXPECT_LE(std::abs(res.angle), brute + rr.sample_angle) << "trial " << trial;
+        EXPECT_GE(std::abs(res.angle), brute - 1e-4 - 1e-9) << "trial " << trial;
+      }
+  EXPECT_GE(checked, 150);
+}
