@@ -258,3 +258,26 @@ TEST(SectionSkin, PlansAreCollisionFreeIn3DAndDeterministic) {
         ASSERT_TRUE(h1[k].joints[j] == h2[k].joints[j]) << c.name << " configuration " << k;
   }
 }
+
+TEST(SectionSkin, RegionSizeBarelyGrowsWithTheMesh) {
+  // A plane through a sphere of radius 4 cm, link radius 4 mm: the boundary pieces are one ring
+  // of features, so their number grows with the square root of the triangle count, and the
+  // flattened segments (whose count is set by the curvature of R, not the mesh) barely at all.
+  FingerPlane pl;
+  pl.origin = Vec3(0.0, 0.005, 0.0);
+  pl.u = Vec3(1, 0, 0);
+  pl.p = Vec3(0, 0.6, 0.8);
+  std::vector<std::size_t> counts;
+  for (int s : {3, 5, 6}) {
+    const auto m = test::icosphere(s, Vec3::Constant(0.04));
+    auto obj = std::make_shared<Object>(m.vertices, m.faces);
+    const PlaneRegion R(obj, pl, 0.004, 1e-6);
+    long crossed = 0;
+    for (const auto& p : R.pieces()) crossed += p.crossed;
+    std::printf("  sphere %ld triangles: %zu pieces (%ld flagged), %zu segments\n", static_cast<long>(m.faces.rows()),
+                R.pieces().size(), crossed, R.segments().size());
+    EXPECT_EQ(crossed, 0);  // a convex object: no piece of its region lies inside it
+    counts.push_back(R.segments().size());
+  }
+  EXPECT_LT(counts.back(), 8 * counts.front());
+}

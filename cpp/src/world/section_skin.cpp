@@ -29,11 +29,17 @@ struct Harmonic {
 /// The closed intervals of [0, 2 pi) (an interval may run past 2 pi when it wraps) where every
 /// constraint holds: cut at every root, test the middle of each part.
 std::vector<std::array<double, 2>> allowed_intervals(const Harmonic* hs, int n) {
-  double cuts[2 * 16 + 2];
+  std::vector<std::array<double, 2>> out;
+  // A constraint that holds nowhere (k0 > its amplitude) empties the set: checked first, cheaply.
+  for (int i = 0; i < n; ++i) {
+    const Harmonic& h = hs[i];
+    if (h.k0 > 0.0 && h.k0 * h.k0 > (h.k1 * h.k1 + h.k2 * h.k2) * (1.0 + 1e-12)) return out;
+  }
+  double cuts[2 * 18 + 2];
   int nc = 0;
   cuts[nc++] = 0.0;
   cuts[nc++] = kTwoPi;
-  for (int i = 0; i < n && nc + 2 <= 2 * 16 + 2; ++i) {
+  for (int i = 0; i < n && nc + 2 <= 2 * 18 + 2; ++i) {
     const Harmonic& h = hs[i];
     const double A = std::hypot(h.k1, h.k2);
     if (!(A > 0.0) || std::abs(h.k0) > A) continue;
@@ -45,13 +51,12 @@ std::vector<std::array<double, 2>> allowed_intervals(const Harmonic* hs, int n) 
     }
   }
   std::sort(cuts, cuts + nc);
-  std::vector<std::array<double, 2>> out;
   for (int i = 0; i + 1 < nc; ++i) {
     const double lo = cuts[i], hi = cuts[i + 1];
     if (!(hi > lo)) continue;
-    const double mid = 0.5 * (lo + hi);
+    const double mid = 0.5 * (lo + hi), c = std::cos(mid), s = std::sin(mid);
     bool ok = true;
-    for (int j = 0; j < n && ok; ++j) ok = hs[j].at(mid) <= 1e-12 * hs[j].scale();
+    for (int j = 0; j < n && ok; ++j) ok = hs[j].k0 + hs[j].k1 * c + hs[j].k2 * s <= 1e-12 * hs[j].scale();
     if (!ok) continue;
     if (!out.empty() && out.back()[1] == lo) out.back()[1] = hi;
     else out.push_back({lo, hi});
@@ -129,9 +134,14 @@ PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane
 }
 
 void PlaneRegion::add_segment(const Vec2& a, const Vec2& b, const Vec2& outward, int piece) {
+  // The ends of each piece (its polyline's first and last points), for the junction check.
   const Vec2 d = b - a;
   const double len = d.norm();
   if (!(len > 0.0)) return;
+  const Vec2 nan = Vec2::Constant(std::numeric_limits<double>::quiet_NaN());
+  if (piece_ends_.size() <= static_cast<std::size_t>(piece)) piece_ends_.resize(piece + 1, {nan, nan});
+  if (std::isnan(piece_ends_[piece][0].x())) piece_ends_[piece][0] = a;
+  piece_ends_[piece][1] = b;
   Segment s;
   s.a = a;
   s.b = b;
@@ -192,6 +202,7 @@ void PlaneRegion::build_pieces() {
   const PointsN3& X = O.vertices();
   auto vertex = [&](std::int64_t i) { return Vec3(X.row(i).transpose()); };
   std::vector<char> vertex_seen(r > 0.0 ? static_cast<std::size_t>(X.rows()) : 0, 0);
+  std::vector<char> vertex_mark(vertex_seen.size(), 0);  ///< an edge of the vertex has an arc
   for (const int f : band) {
     const std::int64_t idx[3] = {F(f, 0), F(f, 1), F(f, 2)};
     const Vec3 P[3] = {vertex(idx[0]), vertex(idx[1]), vertex(idx[2])};
@@ -240,7 +251,21 @@ void PlaneRegion::build_pieces() {
       Vec3 e1 = tA.norm() > 0.0 ? Vec3(tA.normalized()) : Vec3(perp(n).normalized());
       if (!(e1.norm() > 0.5)) continue;
       const Vec3 e2 = eh.cross(e1);
-      const Vec3 nsum = n + O.face_normal(g);
+      const Vec3& nB = O.face_normal(g);
+      const Vec3 nsum = n + nB;
+      // A concave edge is never the nearest feature of an outside point: no piece.
+      if ((vertex(ic) - Pa).dot(n) > 0.0) continue;
+      {
+        // Quick rejection: the plane misses the wedge Pa + t e + r d (t in [0, 1], d on the arc
+        // from nA to nB, which stays within 1 - cos(half angle) of their chord).
+        const double sag = 1.0 - std::sqrt(std::max(0.0, 0.5 * (1.0 + n.dot(nB))));
+        const double da = n.dot(nu), db = nB.dot(nu);
+        const double lo = std::min(sa, sb) + r * (std::min(da, db) - sag) - 1e-12 * r;
+        const double hi = std::max(sa, sb) + r * (std::max(da, db) + sag) + 1e-12 * r;
+        if (lo > 0.0 || hi < 0.0) continue;
+      }
+      // The plane meets the edge's wedge: its end vertices' arcs may end on it.
+      vertex_mark[static_cast<std::size_t>(ia)] = vertex_mark[static_cast<std::size_t>(ib)] = 1;
       Harmonic hs[5];
       int nh = 0;
       hs[nh++] = {0.0, r * e1.dot(tA), r * e2.dot(tA)};
@@ -277,8 +302,15 @@ void PlaneRegion::build_pieces() {
         }
       }
     }
-    // Vertices: the plane's circle on the sphere of radius r about each vertex, where the vertex
-    // can be the nearest feature (the polar cone of its edges, on the outward side).
+  }
+  if (!(r > 0.0)) return;
+  // Vertices: the plane's circle on the sphere of radius r about each vertex, where the vertex
+  // can be the nearest feature (the polar cone of its edges, on the outward side). The ends of a
+  // vertex's arc lie on the wedges of its (convex) edges: a vertex none of whose edge wedges the
+  // plane meets has an arc only when its whole circle lies in the cone.
+  for (const int f : band) {
+    const std::int64_t idx[3] = {F(f, 0), F(f, 1), F(f, 2)};
+    const Vec3 P[3] = {vertex(idx[0]), vertex(idx[1]), vertex(idx[2])};
     for (int k = 0; k < 3; ++k) {
       const std::int64_t iv = idx[k];
       if (vertex_seen[static_cast<std::size_t>(iv)]) continue;
@@ -303,6 +335,11 @@ void PlaneRegion::build_pieces() {
       }
       const Vec3& nv = O.vertex_normal(iv);
       if (nv.norm() > 1e-12) hs[nh++] = {sv * nu.dot(nv), -rho * u.dot(nv), -rho * p.dot(nv)};
+      if (!vertex_mark[static_cast<std::size_t>(iv)]) {
+        bool whole = true;  // every constraint holds on the whole circle
+        for (int j = 0; j < nh && whole; ++j) whole = hs[j].k0 + std::hypot(hs[j].k1, hs[j].k2) <= 0.0;
+        if (!whole) continue;
+      }
       const auto allowed = allowed_intervals(hs, nh);
       if (allowed.empty()) continue;
       add_arcs(Kind::kVertex, iv, to_plane(V - sv * nu), Vec2(rho, 0.0), Vec2(0.0, rho), allowed,
@@ -312,6 +349,8 @@ void PlaneRegion::build_pieces() {
 }
 
 int PlaneRegion::build_node(int begin, int end, std::vector<Vec2>& centres, int depth) {
+  // centres[i] is the centre of segment order_[i]; the range [begin, end) of order_ is split in
+  // place (median along the longer axis of the boxes; ties by index: a fixed order everywhere).
   depth_ = std::max(depth_, depth);
   const int id = static_cast<int>(nodes_.size());
   nodes_.emplace_back();
@@ -319,7 +358,7 @@ int PlaneRegion::build_node(int begin, int end, std::vector<Vec2>& centres, int 
   nd.lo[0] = nd.lo[1] = kInf;
   nd.hi[0] = nd.hi[1] = -kInf;
   for (int i = begin; i < end; ++i) {
-    const Segment& s = segments_[i];
+    const Segment& s = segments_[order_[i]];
     for (int a = 0; a < 2; ++a) {
       nd.lo[a] = std::min({nd.lo[a], s.a[a], s.b[a]});
       nd.hi[a] = std::max({nd.hi[a], s.a[a], s.b[a]});
@@ -333,21 +372,9 @@ int PlaneRegion::build_node(int begin, int end, std::vector<Vec2>& centres, int 
   }
   const int axis = (nd.hi[0] - nd.lo[0]) >= (nd.hi[1] - nd.lo[1]) ? 0 : 1;
   const int mid = (begin + end) / 2;
-  // Sort a permutation, then apply it to segments and centres together (ties by index: a fixed
-  // order on every platform).
-  std::vector<int> order(end - begin);
-  for (int i = 0; i < end - begin; ++i) order[i] = begin + i;
-  std::nth_element(order.begin(), order.begin() + (mid - begin), order.end(), [&](int x, int y) {
+  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end, [&](int x, int y) {
     return centres[x][axis] < centres[y][axis] || (centres[x][axis] == centres[y][axis] && x < y);
   });
-  std::vector<Segment> segs(end - begin);
-  std::vector<Vec2> cs(end - begin);
-  for (int i = 0; i < end - begin; ++i) {
-    segs[i] = segments_[order[i]];
-    cs[i] = centres[order[i]];
-  }
-  std::copy(segs.begin(), segs.end(), segments_.begin() + begin);
-  std::copy(cs.begin(), cs.end(), centres.begin() + begin);
   nd.left = build_node(begin, mid, centres, depth + 1);
   nd.right = build_node(mid, end, centres, depth + 1);
   nodes_[id] = nd;
@@ -358,9 +385,18 @@ void PlaneRegion::build_bvh() {
   nodes_.clear();
   if (segments_.empty()) return;
   std::vector<Vec2> centres(segments_.size());
-  for (std::size_t i = 0; i < segments_.size(); ++i) centres[i] = 0.5 * (segments_[i].a + segments_[i].b);
-  nodes_.reserve(2 * segments_.size() / 4 + 8);
+  order_.resize(segments_.size());
+  for (std::size_t i = 0; i < segments_.size(); ++i) {
+    centres[i] = 0.5 * (segments_[i].a + segments_[i].b);
+    order_[i] = static_cast<int>(i);
+  }
+  nodes_.reserve(segments_.size() + 8);
   build_node(0, static_cast<int>(segments_.size()), centres, 1);
+  std::vector<Segment> sorted(segments_.size());
+  for (std::size_t i = 0; i < segments_.size(); ++i) sorted[i] = segments_[order_[i]];
+  segments_.swap(sorted);
+  order_.clear();
+  order_.shrink_to_fit();
   if (depth_ + 2 > 96) throw std::runtime_error("PlaneRegion: BVH too deep");
 }
 
@@ -468,32 +504,42 @@ bool PlaneRegion::any_within(const Vec2& a, const Vec2& b, double distance) cons
 }
 
 void PlaneRegion::mark_crossings() {
-  // R's boundary is closed curves: every end point of a piece on it is an end point of another
-  // piece too. A piece with a loose end lies (in part) inside R: flag it.
+  // R's boundary is closed curves: every end of a piece on it is the end of another piece (or of
+  // itself, a closed circle). A piece with a loose end lies (in part) inside R: flag it.
   const std::size_t n = segments_.size();
-  auto joined = [&](std::size_t i, const Vec2& x) {
-    const Query q(x, x);
-    int stack[96];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const Node& nd = nodes_[stack[--top]];
-      if (node_bound(nd, q) > kJoin) continue;
-      if (nd.count == 0) {
-        stack[top++] = nd.right;
-        stack[top++] = nd.left;
-        continue;
-      }
-      for (int j = nd.first; j < nd.first + nd.count; ++j)
-        if (static_cast<std::size_t>(j) != i &&
-            ((segments_[j].a - x).norm() <= kJoin || (segments_[j].b - x).norm() <= kJoin))
-          return true;
+  {
+    struct End {
+      double x, y;
+      int piece;
+    };
+    std::vector<End> ends;
+    ends.reserve(2 * pieces_.size());
+    for (std::size_t k = 0; k < piece_ends_.size(); ++k) {
+      const auto& pe = piece_ends_[k];
+      if (std::isnan(pe[0].x())) continue;  // a piece without segments
+      ends.push_back({pe[0].x(), pe[0].y(), static_cast<int>(k)});
+      ends.push_back({pe[1].x(), pe[1].y(), static_cast<int>(k)});
     }
-    return false;
-  };
-  for (std::size_t i = 0; i < n; ++i)
-    if (!joined(i, segments_[i].a) || !joined(i, segments_[i].b)) pieces_[segments_[i].piece].crossed = true;
-
+    std::vector<int> idx(ends.size());
+    for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<int>(i);
+    std::sort(idx.begin(), idx.end(), [&](int a, int b) { return ends[a].x < ends[b].x || (ends[a].x == ends[b].x && a < b); });
+    std::vector<char> joined(ends.size(), 0);
+    for (std::size_t i = 0; i < idx.size(); ++i) {
+      const End& e = ends[idx[i]];
+      for (std::size_t j = i + 1; j < idx.size() && ends[idx[j]].x - e.x <= kJoin; ++j) {
+        const End& f = ends[idx[j]];
+        if (std::abs(f.y - e.y) <= kJoin && std::hypot(f.x - e.x, f.y - e.y) <= kJoin &&
+            (f.piece != e.piece || (idx[i] ^ idx[j]) == 1)) {
+          joined[idx[i]] = 1;
+          joined[idx[j]] = 1;
+        }
+      }
+    }
+    for (std::size_t i = 0; i < ends.size(); ++i)
+      if (!joined[i]) pieces_[ends[i].piece].crossed = true;
+    piece_ends_.clear();
+    piece_ends_.shrink_to_fit();
+  }
   // Pieces of R's boundary never cross one another; a piece that another crosses (transversally,
   // away from both their end points) has parts inside R, where the side test is unsafe.
   for (std::size_t i = 0; i < n; ++i) {

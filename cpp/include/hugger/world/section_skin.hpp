@@ -95,10 +95,12 @@ class PlaneRegion {
 
   std::shared_ptr<const Object> object_;
   FingerPlane plane_;
-  double radius_ = 0.0, flatten_ = 2e-7;
+  double radius_ = 0.0, flatten_ = 1e-6;
   std::vector<Segment> segments_;
   std::vector<Piece> pieces_;
   std::vector<Node> nodes_;
+  std::vector<int> order_;                       ///< while building the BVH
+  std::vector<std::array<Vec2, 2>> piece_ends_;  ///< while building: first and last point of each piece
   int depth_ = 0;
   mutable std::atomic<long> fallbacks_{0};
 };
@@ -110,7 +112,7 @@ class PlaneRegion {
 class SectionSkin final : public Sensing {
  public:
   /// `flatten`: the outward flattening tolerance of arcs (metres, > 0).
-  explicit SectionSkin(std::shared_ptr<const Object> object, double flatten = 2e-7);
+  explicit SectionSkin(std::shared_ptr<const Object> object, double flatten = 1e-6);
   ~SectionSkin() override;
 
   Touch capsule(const Vec3& a, const Vec3& b, double radius, double cap = kInf) const override {
