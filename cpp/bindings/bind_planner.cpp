@@ -4,6 +4,7 @@
 
 #include "common.hpp"
 #include "hugger/planner/planner.hpp"
+#include "hugger/world/section_skin.hpp"
 #include "hugger/world/simulated_world.hpp"
 
 namespace py = pybind11;
@@ -16,6 +17,7 @@ namespace {
 struct PyPlanner {
   std::unique_ptr<Planner> planner;
   std::shared_ptr<const Object> object;
+  std::string skin = "section";  ///< "mesh" (3D queries on the BVH) or "section" (2D, per finger plane)
   std::mutex busy;
 };
 
@@ -106,8 +108,12 @@ void bind_planner(py::module_& m) {
   py::class_<PyPlanner>(m, "Planner", "The Hugger planner (DESIGN.md section 3) over a simulated world.")
       .def(py::init([](const HandModel& hand, std::shared_ptr<Object> object, const ArrayD& target,
                        const ArrayD& palm_pose, const py::object& step, const py::object& epsilon,
-                       const py::object& contact_tolerance, const py::object& max_iterations) {
+                       const py::object& contact_tolerance, const py::object& max_iterations,
+                       const std::string& skin) {
              auto out = std::make_unique<PyPlanner>();
+             if (skin != "mesh" && skin != "section")
+               throw py::value_error("skin must be 'mesh' or 'section', got '" + skin + "'");
+             out->skin = skin;
              if (!object) throw py::value_error("object must not be None");
              const Vec3 t = to_vec3(target, "target");
              if (!t.allFinite()) throw py::value_error("target must be finite");
@@ -130,12 +136,15 @@ void bind_planner(py::module_& m) {
                   << ") is not inside the object (its distance to the surface is " << depth << " m, outside or on it)";
                throw std::invalid_argument(os.str());
              }
-             out->planner = std::make_unique<Planner>(hand, std::make_shared<SimulatedWorld>(object), t, pose, params);
+             std::shared_ptr<const Sensing> sensing;
+             if (skin == "section") sensing = std::make_shared<SectionSkin>(object);
+             else sensing = std::make_shared<SimulatedWorld>(object);
+             out->planner = std::make_unique<Planner>(hand, sensing, t, pose, params);
              return out;
            }),
            py::arg("hand"), py::arg("object"), py::arg("target"), py::arg("palm_pose"), py::arg("step") = py::none(),
            py::arg("epsilon") = py::none(), py::arg("contact_tolerance") = py::none(),
-           py::arg("max_iterations") = py::none())
+           py::arg("max_iterations") = py::none(), py::arg("skin") = "section")
       .def(
           "step",
           [](PyPlanner& p) -> py::object {
@@ -184,6 +193,7 @@ void bind_planner(py::module_& m) {
         d["epsilon"] = q.epsilon;
         d["contact_tolerance"] = q.contact_tolerance;
         d["max_iterations"] = q.max_iterations;
+        d["skin"] = p.skin;
         return d;
       })
       .def_property_readonly("stats", [](PyPlanner& p) {

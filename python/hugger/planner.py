@@ -50,6 +50,10 @@ MAX_ITERATIONS = 10**9
 #: Smallest ``contact_tolerance`` relative to the scene's largest coordinate (m / m): below it the
 #: sensing distance drowns in rounding of double-precision positions and the approach never lands.
 MIN_RELATIVE_TOLERANCE = 1e-10
+#: The sensing skins a plan can use: ``section`` answers Phase 2 in each finger plane by exact 2D
+#: geometry (docs/performance.md), ``mesh`` by 3D queries on the mesh (the reference).
+SKINS = ("section", "mesh")
+DEFAULT_SKIN = "section"
 
 
 def _optional_count(name: str, value: Any) -> int | None:
@@ -83,7 +87,8 @@ class Planner:
 
     ``palm_pose`` (4, 4) is the initial palm pose T_WP (fingers extended). Defaults:
     ``step`` = shortest link / 20, ``epsilon`` = step / 10, ``contact_tolerance`` = 1e-4 m,
-    ``max_iterations`` = 20000 Phase 2 iterations. Raises ``ValueError`` for bad input, T
+    ``max_iterations`` = 20000 Phase 2 iterations, ``skin`` = ``"section"`` (or ``"mesh"``, the
+    3D reference; both give collision-free plans, see docs/performance.md). Raises ``ValueError`` for bad input, T
     outside O, or a hand that touches O at the start or while turning in Phase 1.
 
     ``step()`` returns the next :class:`Configuration` (or None at the end), so a plan can
@@ -93,7 +98,11 @@ class Planner:
 
     def __init__(self, hand: Hand, obj: Object, target: Any, palm_pose: Any, step: float | None = None,
                  epsilon: float | None = None, contact_tolerance: float | None = None,
-                 max_iterations: int | None = None) -> None:
+                 max_iterations: int | None = None, skin: str | None = None) -> None:
+        if skin is None:
+            skin = DEFAULT_SKIN
+        if skin not in SKINS:
+            raise ValueError(f"skin must be one of {list(SKINS)}, got {skin!r}")
         if not isinstance(hand, Hand):
             raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
         if not isinstance(obj, Object):
@@ -111,7 +120,7 @@ class Planner:
         self._core = _core.Planner(hand._core, obj._core, t, pose, _optional_size("step", step),
                                    _optional_size("epsilon", epsilon),
                                    delta,
-                                   _optional_count("max_iterations", max_iterations))
+                                   _optional_count("max_iterations", max_iterations), skin)
         self._emitted: int | None = 0  # configurations handed out by step(); None after plan()
 
     @property

@@ -131,6 +131,36 @@ PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane
   build_pieces();
   build_bvh();
   mark_crossings();
+  drop_inner_segments();
+}
+
+void PlaneRegion::drop_inner_segments() {
+  // A segment of a flagged piece that no other piece crosses lies wholly on R's boundary or wholly
+  // inside R: its middle decides. Those inside are dropped (the rest still covers the boundary).
+  const Object& O = *object_;
+  std::vector<Segment> kept;
+  kept.reserve(segments_.size());
+  for (const Segment& s : segments_) {
+    if (!pieces_[s.piece].crossed || s.crossed) {
+      kept.push_back(s);
+      continue;
+    }
+    const Vec3 X = plane_.to_world(0.5 * (s.a + s.b));
+    bool inner;
+    if (radius_ > 0.0) {
+      // Within r less a margin of O's surface, or inside O: strictly inside R.
+      const double margin = std::max(1e-9, 1e-3 * radius_);
+      inner = O.bvh().any_within(X, X, radius_ - margin) ||
+              (!O.bvh().any_within(X, X, radius_) && O.inside_off_surface(X));
+    } else {
+      inner = O.inside(X);
+    }
+    if (inner) ++dropped_;
+    else kept.push_back(s);
+  }
+  if (dropped_ == 0) return;
+  segments_.swap(kept);
+  build_bvh();
 }
 
 void PlaneRegion::add_segment(const Vec2& a, const Vec2& b, const Vec2& outward, int piece) {
@@ -446,14 +476,17 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
         if (!found || d < best - kTie) {
           found = true;
           out.normal_sum = s.normal;
-          out.crossed = pieces_[s.piece].crossed;
+          out.crossed = s.crossed;
+          out.ties = 1;
+          out.at_end = (c2 - s.a).squaredNorm() <= kJoin * kJoin || (c2 - s.b).squaredNorm() <= kJoin * kJoin;
           best = d;
           out.distance = d;
           out.on_query = c1;
           out.on_region = c2;
         } else {
           out.normal_sum += s.normal;
-          out.crossed = out.crossed || pieces_[s.piece].crossed;
+          out.crossed = out.crossed || s.crossed;
+          ++out.ties;
           if (d < best) {
             best = d;
             out.distance = d;
@@ -568,6 +601,8 @@ void PlaneRegion::mark_crossings() {
         if (x > ex && x < 1.0 - ex && y > ey && y < 1.0 - ey) {
           pieces_[s.piece].crossed = true;
           pieces_[t.piece].crossed = true;
+          segments_[i].crossed = true;
+          segments_[j].crossed = true;
         }
       }
     }
@@ -585,7 +620,8 @@ bool PlaneRegion::inside_3d(const Vec2& x) const {
 bool PlaneRegion::inside_from(const Near& near, const Vec2& x) const {
   if (near.distance == 0.0) return true;
   if (!std::isfinite(near.distance)) return inside_3d(x);
-  if (near.crossed) return inside_3d(near.on_query);
+  // A crossed piece, or a loose end (an end point no other segment shares): no safe side.
+  if (near.crossed || (near.at_end && near.ties < 2)) return inside_3d(near.on_query);
   const double s = (near.on_query - near.on_region).dot(near.normal_sum);
   if (!(std::abs(s) > 1e-9 * near.distance * near.normal_sum.norm())) return inside_3d(near.on_query);
   return s < 0.0;

@@ -36,12 +36,13 @@ class PlaneRegion {
     Vec2 a = Vec2::Zero(), b = Vec2::Zero();
     Vec2 normal = Vec2::UnitX();
     int piece = 0;  ///< index of the feature's piece (one polyline per face, edge or vertex arc)
+    bool crossed = false;  ///< another piece crosses it: part of it lies inside R (side test unsafe)
   };
   enum class Kind : std::uint8_t { kFace, kEdge, kVertex };
   struct Piece {
     Kind kind = Kind::kFace;
     std::int64_t feature = 0;  ///< face, vertex or (for edges) 3 * face + k
-    bool crossed = false;      ///< another piece crosses it: parts may lie inside R
+    bool crossed = false;      ///< another piece crosses it, or it has a loose end: parts may lie inside R
   };
   /// Nearest piece of R's boundary to a query segment.
   struct Near {
@@ -50,6 +51,8 @@ class PlaneRegion {
     Vec2 on_region = Vec2::Zero();   ///< nearest point of the boundary pieces
     Vec2 normal_sum = Vec2::Zero();  ///< sum of the outward normals of the pieces nearest (ties)
     bool crossed = false;            ///< a nearest piece is crossed by another (side test unsafe)
+    int ties = 0;                    ///< how many segments are nearest (several at a shared end point)
+    bool at_end = false;             ///< the nearest point is an end point of the (first) nearest segment
   };
 
   /// Builds R for the plane and `radius` (>= 0). `flatten` (> 0): how far outside the exact arcs
@@ -73,6 +76,8 @@ class PlaneRegion {
   double radius() const { return radius_; }
   const std::vector<Segment>& segments() const { return segments_; }
   const std::vector<Piece>& pieces() const { return pieces_; }
+  /// Segments dropped at build time as lying inside R.
+  long dropped() const { return dropped_; }
   /// Number of 3D inside tests asked so far (side tests that were unsafe).
   long fallbacks() const { return fallbacks_.load(std::memory_order_relaxed); }
 
@@ -85,6 +90,9 @@ class PlaneRegion {
   void build_pieces();
   void build_bvh();
   void mark_crossings();
+  /// Drops the segments of flagged pieces that lie inside R (one 3D test at each one's middle);
+  /// the crossed segments stay, flagged.
+  void drop_inner_segments();
   int build_node(int begin, int end, std::vector<Vec2>& centres, int depth);
   /// Adds the arcs of x(t) = centre + U cos t + V sin t over the allowed intervals of `allowed`
   /// ([0, 2 pi), sorted, disjoint) as tangent polygons; `out3(t)`: the in-plane outward direction.
@@ -102,6 +110,7 @@ class PlaneRegion {
   std::vector<int> order_;                       ///< while building the BVH
   std::vector<std::array<Vec2, 2>> piece_ends_;  ///< while building: first and last point of each piece
   int depth_ = 0;
+  long dropped_ = 0;
   mutable std::atomic<long> fallbacks_{0};
 };
 
