@@ -135,31 +135,54 @@ PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane
 }
 
 void PlaneRegion::drop_inner_segments() {
-  // A segment of a flagged piece that no other piece crosses lies wholly on R's boundary or wholly
-  // inside R: its middle decides. Those inside are dropped (the rest still covers the boundary).
+  // Crossed segments are cut at their crossings. Then every segment of a flagged piece lies
+  // wholly on R's boundary or wholly inside R: its middle decides, and those inside are dropped
+  // (the rest still covers the boundary, and no segment left has parts inside R).
   const Object& O = *object_;
-  std::vector<Segment> kept;
-  kept.reserve(segments_.size());
-  for (const Segment& s : segments_) {
-    if (!pieces_[s.piece].crossed || s.crossed) {
-      kept.push_back(s);
-      continue;
-    }
-    const Vec3 X = plane_.to_world(0.5 * (s.a + s.b));
-    bool inner;
+  auto inner = [&](const Vec2& x) {
+    const Vec3 X = plane_.to_world(x);
     if (radius_ > 0.0) {
       // Within r less a margin of O's surface, or inside O: strictly inside R.
       const double margin = std::max(1e-9, 1e-3 * radius_);
-      inner = O.bvh().any_within(X, X, radius_ - margin) ||
-              (!O.bvh().any_within(X, X, radius_) && O.inside_off_surface(X));
-    } else {
-      inner = O.inside(X);
+      return O.bvh().any_within(X, X, radius_ - margin) ||
+             (!O.bvh().any_within(X, X, radius_) && O.inside_off_surface(X));
     }
-    if (inner) ++dropped_;
-    else kept.push_back(s);
+    return O.inside(X);
+  };
+  std::sort(cuts_.begin(), cuts_.end(),
+            [](const std::pair<int, double>& a, const std::pair<int, double>& b) { return a < b; });
+  std::vector<Segment> kept;
+  kept.reserve(segments_.size() + cuts_.size());
+  std::size_t c = 0;
+  for (std::size_t i = 0; i < segments_.size(); ++i) {
+    const Segment& s = segments_[i];
+    if (!pieces_[s.piece].crossed) {
+      kept.push_back(s);
+      continue;
+    }
+    // The parameters of its cuts (none unless crossed), then one part per interval.
+    std::vector<double> at = {0.0};
+    for (; c < cuts_.size() && cuts_[c].first == static_cast<int>(i); ++c) at.push_back(cuts_[c].second);
+    at.push_back(1.0);
+    Vec2 from = s.a;
+    for (std::size_t k = 0; k + 1 < at.size(); ++k) {
+      const Vec2 to = k + 2 == at.size() ? s.b : Vec2(s.a + at[k + 1] * (s.b - s.a));
+      if (inner(0.5 * (from + to))) {
+        ++dropped_;
+      } else {
+        Segment part = s;
+        part.a = from;
+        part.b = to;
+        part.crossed = false;
+        kept.push_back(part);
+      }
+      from = to;
+    }
   }
-  if (dropped_ == 0) return;
+  cuts_.clear();
+  cuts_.shrink_to_fit();
   segments_.swap(kept);
+  for (auto& p : pieces_) p.crossed = false;  // resolved
   build_bvh();
 }
 
@@ -603,6 +626,8 @@ void PlaneRegion::mark_crossings() {
           pieces_[t.piece].crossed = true;
           segments_[i].crossed = true;
           segments_[j].crossed = true;
+          cuts_.push_back({static_cast<int>(i), x});
+          cuts_.push_back({j, y});
         }
       }
     }
@@ -620,8 +645,8 @@ bool PlaneRegion::inside_3d(const Vec2& x) const {
 bool PlaneRegion::inside_from(const Near& near, const Vec2& x) const {
   if (near.distance == 0.0) return true;
   if (!std::isfinite(near.distance)) return inside_3d(x);
-  // A crossed piece, or a loose end (an end point no other segment shares): no safe side.
-  if (near.crossed || (near.at_end && near.ties < 2)) return inside_3d(near.on_query);
+  // A loose end (an end point no other segment shares: rounding, or a gap): no safe side.
+  if (near.at_end && near.ties < 2) return inside_3d(near.on_query);
   const double s = (near.on_query - near.on_region).dot(near.normal_sum);
   if (!(std::abs(s) > 1e-9 * near.distance * near.normal_sum.norm())) return inside_3d(near.on_query);
   return s < 0.0;

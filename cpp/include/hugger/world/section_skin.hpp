@@ -19,6 +19,7 @@
 #include <atomic>
 #include <memory>
 #include <mutex>
+#include <utility>
 #include <vector>
 
 #include "hugger/sensing/sensing.hpp"
@@ -36,7 +37,7 @@ class PlaneRegion {
     Vec2 a = Vec2::Zero(), b = Vec2::Zero();
     Vec2 normal = Vec2::UnitX();
     int piece = 0;  ///< index of the feature's piece (one polyline per face, edge or vertex arc)
-    bool crossed = false;  ///< another piece crosses it: part of it lies inside R (side test unsafe)
+    bool crossed = false;  ///< while building: another piece crosses it
   };
   enum class Kind : std::uint8_t { kFace, kEdge, kVertex };
   struct Piece {
@@ -90,8 +91,8 @@ class PlaneRegion {
   void build_pieces();
   void build_bvh();
   void mark_crossings();
-  /// Drops the segments of flagged pieces that lie inside R (one 3D test at each one's middle);
-  /// the crossed segments stay, flagged.
+  /// Cuts crossed segments at their crossings and drops the parts of flagged pieces that lie
+  /// inside R (one 3D test at each part's middle).
   void drop_inner_segments();
   int build_node(int begin, int end, std::vector<Vec2>& centres, int depth);
   /// Adds the arcs of x(t) = centre + U cos t + V sin t over the allowed intervals of `allowed`
@@ -108,6 +109,7 @@ class PlaneRegion {
   std::vector<Piece> pieces_;
   std::vector<Node> nodes_;
   std::vector<int> order_;                       ///< while building the BVH
+  std::vector<std::pair<int, double>> cuts_;     ///< while building: crossings (segment, parameter)
   std::vector<std::array<Vec2, 2>> piece_ends_;  ///< while building: first and last point of each piece
   int depth_ = 0;
   long dropped_ = 0;
