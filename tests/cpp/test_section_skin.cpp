@@ -279,3 +279,52 @@ TEST(SectionSkin, RegionSizeBarelyGrowsWithTheMesh) {
   }
   EXPECT_LT(counts.back(), 8 * counts.front());
 }
+
+TEST(SectionSkin, ClingingIsTheSmallestFreeingRotation) {
+  // Random colliding links about a free pivot: the closed-form rotation frees the link (in 3D
+  // too), rests it within the tolerance of R, and no smaller rotation either way is free.
+  const auto m = curvy(4);
+  auto object = std::make_shared<const Object>(m.vertices, m.faces);
+  const SectionSkin skin(object);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  int tried = 0, freed = 0;
+  for (int k = 0; k < 40; ++k) {
+    FingerPlane pl;
+    pl.origin = Vec3(U(rng) - 0.5, U(rng) - 0.5, U(rng) - 0.5) * 0.03;
+    pl.p = test::random_unit(rng);
+    pl.u = test::random_unit(rng).cross(pl.p).normalized();
+    const double r = 0.004;
+    for (int q = 0; q < 50; ++q) {
+      const Vec2 pivot = pl.to_plane(Vec3::Zero()) + Vec2(U(rng) - 0.5, U(rng) - 0.5) * 0.14;
+      const double ang = U(rng) * 2 * kPi;
+      const Vec2 end = pivot + 0.02 * Vec2(std::cos(ang), std::sin(ang));
+      if (!skin.link_free(pl, pivot, pivot, r, -kInf, false)) continue;  // the pivot must be clear
+      if (skin.link_free(pl, pivot, end, r, -kInf, true)) continue;      // and the link blocked
+      ++tried;
+      RotateRequest rr;
+      rr.plane = pl;
+      rr.pivot = pivot;
+      rr.end = end;
+      rr.radius = r;
+      rr.tolerance = 1e-5;
+      const RotateResult res = skin.rotate_until_free(rr);
+      if (!res.ok) continue;
+      ++freed;
+      EXPECT_TRUE(skin.mesh_world().capsule_clear(pl.to_world(pivot), pl.to_world(res.end), r, false));
+      EXPECT_NEAR((res.end - pivot).norm(), 0.02, 1e-12);
+      EXPECT_LE(res.gap, 1e-5);
+      for (int side : {1, -1})
+        for (int j = 1; j < 40; ++j) {
+          const double a = side * std::abs(res.angle) * j / 40.0 - side * 1e-4;
+          if (side * a <= 0.0) continue;
+          const Vec2 e = pivot + Vec2(std::cos(a) * (end - pivot).x() - std::sin(a) * (end - pivot).y(),
+                                      std::sin(a) * (end - pivot).x() + std::cos(a) * (end - pivot).y());
+          EXPECT_FALSE(skin.link_free(pl, pivot, e, r, -kInf, true)) << "a smaller rotation " << a << " frees it";
+        }
+    }
+  }
+  std::printf("  %d colliding links, %d freed\n", tried, freed);
+  EXPECT_GT(tried, 100);
+  EXPECT_GT(freed, tried * 9 / 10);
+}

@@ -634,6 +634,52 @@ void PlaneRegion::mark_crossings() {
   }
 }
 
+void PlaneRegion::blocked_angles(const Vec2& pivot, const Vec2& arm, std::vector<std::array<double, 2>>& out) const {
+  if (nodes_.empty()) return;
+  const double L = arm.norm();
+  if (!(L > 0.0)) return;
+  const Vec2 ax = arm / L, ay(-ax.y(), ax.x());
+  const Query q(pivot, pivot);
+  auto rel = [&](const Vec2& v) { return std::atan2(v.dot(ay), v.dot(ax)); };
+  int stack[96];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& nd = nodes_[stack[--top]];
+    if (node_bound(nd, q) > L) continue;
+    if (nd.count == 0) {
+      stack[top++] = nd.right;
+      stack[top++] = nd.left;
+      continue;
+    }
+    for (int i = nd.first; i < nd.first + nd.count; ++i) {
+      const Segment& s = segments_[i];
+      // The part of the segment within reach: |a + t d - pivot| <= L.
+      const Vec2 d = s.b - s.a, w = s.a - pivot;
+      const double A = d.squaredNorm(), B = w.dot(d), C = w.squaredNorm() - L * L;
+      double t0 = 0.0, t1 = 1.0;
+      if (A > 0.0) {
+        const double disc = B * B - A * C;
+        if (disc < 0.0) continue;
+        const double sq = std::sqrt(disc);
+        t0 = std::max(0.0, (-B - sq) / A);
+        t1 = std::min(1.0, (-B + sq) / A);
+        if (t0 > t1) continue;
+      } else if (C > 0.0) {
+        continue;
+      }
+      const double da = rel(w + t0 * d), db = rel(w + t1 * d);
+      const double lo = std::min(da, db), hi = std::max(da, db);
+      if (hi - lo <= kPi) {
+        out.push_back({lo, hi});
+      } else {  // across the back direction (+-pi)
+        out.push_back({hi, kPi});
+        out.push_back({-kPi, lo});
+      }
+    }
+  }
+}
+
 bool PlaneRegion::inside_3d(const Vec2& x) const {
   fallbacks_.fetch_add(1, std::memory_order_relaxed);
   const Vec3 X = plane_.to_world(x);
@@ -743,6 +789,80 @@ Touch SectionSkin::link(const FingerPlane& plane, const Vec2& a, const Vec2& b, 
   const Vec2 g = (nr.on_query - nr.on_region) / nr.distance;
   t.normal = dir(inside ? Vec2(-g) : g);
   return t;
+}
+
+RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
+  const PlaneRegion* R = region(req.plane, req.radius);
+  if (!R) return Sensing::rotate_until_free(req);
+  constexpr double kSlack = 1e-12;
+  const Vec2 arm = req.end - req.pivot;
+  const double L = arm.norm();
+  const double cap = std::max(req.radius, 4.0 * req.tolerance);
+  auto finish = [&](double angle) {
+    RotateResult out;
+    const double c = std::cos(angle), s = std::sin(angle);
+    out.ok = true;
+    out.angle = angle;
+    out.end = req.pivot + Vec2(c * arm.x() - s * arm.y(), s * arm.x() + c * arm.y());
+    out.gap = link(req.plane, req.pivot, out.end, req.radius, cap).gap;
+    return out;
+  };
+  if (link_free(req.plane, req.pivot, req.end, req.radius, req.front, false)) return finish(0.0);
+  // The closed form needs a pivot clear of R (then a link that crosses no piece is outside R).
+  if (!(L > 0.0) || req.pivot.y() < req.front - kSlack || R->any_within(req.pivot, req.pivot, 1e-12) ||
+      R->inside(req.pivot))
+    return Sensing::rotate_until_free(req);
+  std::vector<std::array<double, 2>> blocked;
+  blocked.reserve(64);
+  R->blocked_angles(req.pivot, arm, blocked);
+  // Behind the palm's front plane: the end's eta, pivot.y + L sin(phi0 + a), below `front`.
+  const double phi0 = std::atan2(arm.y(), arm.x());
+  const double c = (req.front - req.pivot.y()) / L;
+  if (c > -1.0) {
+    if (c >= 1.0) return Sensing::rotate_until_free(req);
+    // sin(phi) < c for phi in (pi - asin c, 2 pi + asin c): relative to phi0, wrapped.
+    const double from = kPi - std::asin(c) - phi0, to = 2.0 * kPi + std::asin(c) - phi0;
+    auto wrap = [](double x) { return std::remainder(x, 2.0 * kPi); };
+    const double lo = wrap(from), hi = lo + (to - from);
+    if (hi <= kPi) {
+      blocked.push_back({lo, hi});
+    } else {
+      blocked.push_back({lo, kPi});
+      blocked.push_back({-kPi, hi - 2.0 * kPi});
+    }
+  }
+  std::sort(blocked.begin(), blocked.end());
+  // Merge; the merged interval holding 0 (the start is blocked). Intervals touching -pi and pi
+  // continue each other across the back direction.
+  const double join = 1e-12;
+  std::vector<std::array<double, 2>> merged;
+  for (std::size_t i = 0; i < blocked.size();) {
+    double a = blocked[i][0], b = blocked[i][1];
+    std::size_t j = i + 1;
+    while (j < blocked.size() && blocked[j][0] <= b + join) b = std::max(b, blocked[j++][1]);
+    merged.push_back({a, b});
+    i = j;
+  }
+  int k0 = -1;
+  for (int k = 0; k < static_cast<int>(merged.size()); ++k)
+    if (merged[k][0] <= 0.0 && merged[k][1] >= 0.0) k0 = k;
+  if (k0 < 0) return Sensing::rotate_until_free(req);
+  double lo = merged[k0][0], hi = merged[k0][1];
+  const bool at_back_lo = lo <= -kPi + join, at_back_hi = hi >= kPi - join;
+  if (at_back_lo && at_back_hi) return Sensing::rotate_until_free(req);  // blocked all round
+  if (at_back_lo && merged.back()[1] >= kPi - join) lo = merged.back()[0] - 2.0 * kPi;
+  if (at_back_hi && merged.front()[0] <= -kPi + join) hi = merged.front()[1] + 2.0 * kPi;
+  // Move past the interval's end by a quarter of the tolerance at the link's end.
+  const double margin = std::max(0.25 * req.tolerance / L, 1e-12);
+  double cand[2] = {hi + margin, lo - margin};
+  if (std::abs(cand[1]) < std::abs(cand[0])) std::swap(cand[0], cand[1]);
+  for (double a : cand) {
+    if (!(std::abs(a) <= req.max_angle)) continue;
+    const double ca = std::cos(a), sa = std::sin(a);
+    const Vec2 e = req.pivot + Vec2(ca * arm.x() - sa * arm.y(), sa * arm.x() + ca * arm.y());
+    if (link_free(req.plane, req.pivot, e, req.radius, req.front, true)) return finish(a);
+  }
+  return Sensing::rotate_until_free(req);
 }
 
 bool SectionSkin::link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
