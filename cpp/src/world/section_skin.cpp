@@ -634,19 +634,31 @@ void PlaneRegion::mark_crossings() {
   }
 }
 
-void PlaneRegion::blocked_angles(const Vec2& pivot, const Vec2& arm, std::vector<std::array<double, 2>>& out) const {
+void PlaneRegion::blocked_angles(const Vec2& pivot, const Vec2& arm, double window,
+                                 std::vector<std::array<double, 2>>& out) const {
   if (nodes_.empty()) return;
   const double L = arm.norm();
   if (!(L > 0.0)) return;
   const Vec2 ax = arm / L, ay(-ax.y(), ax.x());
   const Query q(pivot, pivot);
   auto rel = [&](const Vec2& v) { return std::atan2(v.dot(ay), v.dot(ax)); };
+  // The sector's two bounding half-planes through the pivot (a convex sector for window < pi/2).
+  const bool sector = window < 0.5 * kPi;
+  const double cw = std::cos(window), sw = std::sin(window);
+  const Vec2 d_lo = cw * ax - sw * ay, d_hi = cw * ax + sw * ay;
+  const Vec2 n1(-d_lo.y(), d_lo.x()), n2(d_hi.y(), -d_hi.x());
+  auto outside = [&](const Node& nd, const Vec2& n) {
+    const double cx = 0.5 * (nd.lo[0] + nd.hi[0]) - pivot.x(), cy = 0.5 * (nd.lo[1] + nd.hi[1]) - pivot.y();
+    const double hx = 0.5 * (nd.hi[0] - nd.lo[0]), hy = 0.5 * (nd.hi[1] - nd.lo[1]);
+    return n.x() * cx + n.y() * cy + std::abs(n.x()) * hx + std::abs(n.y()) * hy < 0.0;
+  };
   int stack[96];
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
     const Node& nd = nodes_[stack[--top]];
     if (node_bound(nd, q) > L) continue;
+    if (sector && (outside(nd, n1) || outside(nd, n2))) continue;
     if (nd.count == 0) {
       stack[top++] = nd.right;
       stack[top++] = nd.left;
@@ -797,7 +809,8 @@ RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
   constexpr double kSlack = 1e-12;
   const Vec2 arm = req.end - req.pivot;
   const double L = arm.norm();
-  const double cap = std::max(req.radius, 4.0 * req.tolerance);
+  // The link rests within a quarter of the tolerance of R: its gap is exact within this cap.
+  const double cap = req.tolerance;
   auto finish = [&](double angle) {
     RotateResult out;
     const double c = std::cos(angle), s = std::sin(angle);
@@ -812,51 +825,85 @@ RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
   if (!(L > 0.0) || req.pivot.y() < req.front - kSlack || R->any_within(req.pivot, req.pivot, 1e-12) ||
       R->inside(req.pivot))
     return Sensing::rotate_until_free(req);
-  std::vector<std::array<double, 2>> blocked;
-  blocked.reserve(64);
-  R->blocked_angles(req.pivot, arm, blocked);
   // Behind the palm's front plane: the end's eta, pivot.y + L sin(phi0 + a), below `front`.
+  std::vector<std::array<double, 2>> front_blocked;
   const double phi0 = std::atan2(arm.y(), arm.x());
   const double c = (req.front - req.pivot.y()) / L;
   if (c > -1.0) {
     if (c >= 1.0) return Sensing::rotate_until_free(req);
     // sin(phi) < c for phi in (pi - asin c, 2 pi + asin c): relative to phi0, wrapped.
     const double from = kPi - std::asin(c) - phi0, to = 2.0 * kPi + std::asin(c) - phi0;
-    auto wrap = [](double x) { return std::remainder(x, 2.0 * kPi); };
-    const double lo = wrap(from), hi = lo + (to - from);
+    const double lo = std::remainder(from, 2.0 * kPi), hi = lo + (to - from);
     if (hi <= kPi) {
-      blocked.push_back({lo, hi});
+      front_blocked.push_back({lo, hi});
     } else {
-      blocked.push_back({lo, kPi});
-      blocked.push_back({-kPi, hi - 2.0 * kPi});
+      front_blocked.push_back({lo, kPi});
+      front_blocked.push_back({-kPi, hi - 2.0 * kPi});
     }
   }
-  std::sort(blocked.begin(), blocked.end());
-  // Merge; the merged interval holding 0 (the start is blocked). Intervals touching -pi and pi
-  // continue each other across the back direction.
+  // The blocked interval [lo, hi] holding the start, from the pieces meeting a sector of angles
+  // within w of the link: its ends inside the sector are exact (nothing outside the sector blocks
+  // an angle inside it). Widen the sector until the nearer end is inside (w = pi: everything).
   const double join = 1e-12;
-  std::vector<std::array<double, 2>> merged;
-  for (std::size_t i = 0; i < blocked.size();) {
-    double a = blocked[i][0], b = blocked[i][1];
-    std::size_t j = i + 1;
-    while (j < blocked.size() && blocked[j][0] <= b + join) b = std::max(b, blocked[j++][1]);
-    merged.push_back({a, b});
-    i = j;
+  std::vector<std::array<double, 2>> blocked;
+  blocked.reserve(64);
+  double lo = 0.0, hi = 0.0, w = 0.0;
+  for (double window = std::max(4.0 * req.sample_angle, 0.02);; window *= 4.0) {
+    w = window >= 0.5 * kPi ? kPi : window;
+    blocked.assign(front_blocked.begin(), front_blocked.end());
+    R->blocked_angles(req.pivot, arm, w, blocked);
+    std::sort(blocked.begin(), blocked.end());
+    lo = hi = 0.0;
+    bool start_blocked = false;
+    for (bool grew = true; grew;) {
+      grew = false;
+      for (const auto& iv : blocked)
+        if (iv[0] <= hi + join && iv[1] >= lo - join) {
+          start_blocked = start_blocked || (iv[0] <= 0.0 && iv[1] >= 0.0);
+          if (iv[0] < lo || iv[1] > hi) {
+            lo = std::min(lo, iv[0]);
+            hi = std::max(hi, iv[1]);
+            grew = true;
+          }
+        }
+    }
+    if (!start_blocked) return Sensing::rotate_until_free(req);  // blocked by something else
+    if (w >= kPi) break;
+    if (hi < w - 1e-9 || lo > -w + 1e-9) break;  // an end inside the sector: the nearer one is known
   }
-  int k0 = -1;
-  for (int k = 0; k < static_cast<int>(merged.size()); ++k)
-    if (merged[k][0] <= 0.0 && merged[k][1] >= 0.0) k0 = k;
-  if (k0 < 0) return Sensing::rotate_until_free(req);
-  double lo = merged[k0][0], hi = merged[k0][1];
-  const bool at_back_lo = lo <= -kPi + join, at_back_hi = hi >= kPi - join;
-  if (at_back_lo && at_back_hi) return Sensing::rotate_until_free(req);  // blocked all round
-  if (at_back_lo && merged.back()[1] >= kPi - join) lo = merged.back()[0] - 2.0 * kPi;
-  if (at_back_hi && merged.front()[0] <= -kPi + join) hi = merged.front()[1] + 2.0 * kPi;
-  // Move past the interval's end by a quarter of the tolerance at the link's end.
+  double cand[2] = {kInf, kInf};
+  int n = 0;
   const double margin = std::max(0.25 * req.tolerance / L, 1e-12);
-  double cand[2] = {hi + margin, lo - margin};
-  if (std::abs(cand[1]) < std::abs(cand[0])) std::swap(cand[0], cand[1]);
-  for (double a : cand) {
+  if (w >= kPi) {
+    // Everything seen; intervals touching -pi and pi continue each other across the back.
+    const bool back_lo = lo <= -kPi + join, back_hi = hi >= kPi - join;
+    if (back_lo && back_hi) return Sensing::rotate_until_free(req);  // blocked all round
+    if (back_lo || back_hi) {
+      // Continue through the back direction: the interval on the other side of +-pi.
+      double olo = 0.0, ohi = 0.0;
+      const double seed = back_lo ? kPi : -kPi;
+      olo = ohi = seed;
+      for (bool grew = true; grew;) {
+        grew = false;
+        for (const auto& iv : blocked)
+          if (iv[0] <= ohi + join && iv[1] >= olo - join && (iv[0] < olo || iv[1] > ohi)) {
+            olo = std::min(olo, iv[0]);
+            ohi = std::max(ohi, iv[1]);
+            grew = true;
+          }
+      }
+      if (back_lo) lo = olo - 2.0 * kPi;
+      else hi = ohi + 2.0 * kPi;
+    }
+    cand[n++] = hi + margin;
+    cand[n++] = lo - margin;
+  } else {
+    if (hi < w - 1e-9) cand[n++] = hi + margin;
+    if (lo > -w + 1e-9) cand[n++] = lo - margin;
+  }
+  if (n == 2 && std::abs(cand[1]) < std::abs(cand[0])) std::swap(cand[0], cand[1]);
+  for (int i = 0; i < n; ++i) {
+    const double a = cand[i];
     if (!(std::abs(a) <= req.max_angle)) continue;
     const double ca = std::cos(a), sa = std::sin(a);
     const Vec2 e = req.pivot + Vec2(ca * arm.x() - sa * arm.y(), sa * arm.x() + ca * arm.y());
