@@ -70,13 +70,6 @@ class PlaneRegion {
   bool inside(const Vec2& x) const;
   /// Whether a point at the `near` answer of a query (not crossing) lies in R.
   bool inside_from(const Near& near, const Vec2& x) const;
-  /// The angles (relative to the direction of `arm`, in (-pi, pi]) at which the segment from
-  /// `pivot` along a direction of length |arm| meets a boundary piece: closed intervals, one or
-  /// two per piece within reach, appended to `out` unsorted.
-  /// Only pieces that meet the sector of angles within `window` of the arm (< pi/2) are
-  /// visited (window >= pi/2: all within reach); their intervals are complete.
-  void blocked_angles(const Vec2& pivot, const Vec2& arm, double window,
-                      std::vector<std::array<double, 2>>& out) const;
   /// The exact 3D test (x in R: within `radius` of O, or inside O).
   bool inside_3d(const Vec2& x) const;
 
@@ -148,13 +141,6 @@ class SectionSkin final : public Sensing {
   Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap = kInf) const override;
   bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
                  bool a_outside = false) const override;
-  /// In closed form: the angles at which the link meets R (and passes behind the front plane)
-  /// are intervals over R's segments; the result is the nearer end of the interval holding the
-  /// start, either way, moved a quarter of `tolerance` (at the link's end) into the free side.
-  /// The smallest freeing rotation; falls back to the generic search when the pivot is not
-  /// clear of R or the closed form finds nothing it can verify. The result's gap is exact up to
-  /// `tolerance` (a link that needed no rotation: any value above it).
-  RotateResult rotate_until_free(const RotateRequest& req) const override;
 
   /// The region of a plane and radius, built on first use; nullptr past kMaxRegions regions
   /// (queries in further planes then go to the mesh world).
