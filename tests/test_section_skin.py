@@ -17,7 +17,7 @@ def test_skin_choice_is_recorded_and_checked():
         traj = hugger.Planner(hand, obj, [0, 0, 0], start, skin=skin).plan()
         assert traj.status == "done"
         assert json.loads(traj.params_json)["skin"] == skin
-    assert json.loads(hugger.Planner(hand, obj, [0, 0, 0], start).plan().params_json)["skin"] == "section"
+    assert json.loads(hugger.Planner(hand, obj, [0, 0, 0], start).plan().params_json)["skin"] == "mesh"
     with pytest.raises(ValueError, match="skin"):
         hugger.Planner(hand, obj, [0, 0, 0], start, skin="voxels")
 

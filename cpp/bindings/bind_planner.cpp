@@ -17,7 +17,7 @@ namespace {
 struct PyPlanner {
   std::unique_ptr<Planner> planner;
   std::shared_ptr<const Object> object;
-  std::string skin = "section";  ///< "mesh" (3D queries on the BVH) or "section" (2D, per finger plane)
+  std::string skin = "mesh";  ///< "mesh" (3D queries on the BVH) or "section" (2D, per finger plane)
   std::mutex busy;
 };
 
@@ -144,7 +144,7 @@ void bind_planner(py::module_& m) {
            }),
            py::arg("hand"), py::arg("object"), py::arg("target"), py::arg("palm_pose"), py::arg("step") = py::none(),
            py::arg("epsilon") = py::none(), py::arg("contact_tolerance") = py::none(),
-           py::arg("max_iterations") = py::none(), py::arg("skin") = "section")
+           py::arg("max_iterations") = py::none(), py::arg("skin") = "mesh")
       .def(
           "step",
           [](PyPlanner& p) -> py::object {

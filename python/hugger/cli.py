@@ -55,8 +55,8 @@ def _planner_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--epsilon", type=float, help="tip-to-surface distance epsilon, m (default step / 10)")
     g.add_argument("--contact-tolerance", type=float, help="sensing distance delta, m (default 1e-4)")
     g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
-    g.add_argument("--skin", choices=("section", "mesh"),
-                   help="sensing skin: section (2D per finger plane, the default) or mesh (3D reference)")
+    g.add_argument("--skin", choices=("mesh", "section"),
+                   help="sensing skin: mesh (exact 3D queries, the default) or section (2D per finger plane)")
     g.add_argument("--timeout", type=float, metavar="SECONDS",
                    help="stop planning after this long, with status 'timeout' and a valid partial plan")
 

@@ -52,8 +52,8 @@ MAX_ITERATIONS = 10**9
 MIN_RELATIVE_TOLERANCE = 1e-10
 #: The sensing skins a plan can use: ``section`` answers Phase 2 in each finger plane by exact 2D
 #: geometry (docs/performance.md), ``mesh`` by 3D queries on the mesh (the reference).
-SKINS = ("section", "mesh")
-DEFAULT_SKIN = "section"
+SKINS = ("mesh", "section")
+DEFAULT_SKIN = "mesh"
 
 
 def _optional_count(name: str, value: Any) -> int | None:
@@ -87,8 +87,9 @@ class Planner:
 
     ``palm_pose`` (4, 4) is the initial palm pose T_WP (fingers extended). Defaults:
     ``step`` = shortest link / 20, ``epsilon`` = step / 10, ``contact_tolerance`` = 1e-4 m,
-    ``max_iterations`` = 20000 Phase 2 iterations, ``skin`` = ``"section"`` (or ``"mesh"``, the
-    3D reference; both give collision-free plans, see docs/performance.md). Raises ``ValueError`` for bad input, T
+    ``max_iterations`` = 20000 Phase 2 iterations, ``skin`` = ``"mesh"`` (exact 3D queries, the
+    reference) or ``"section"`` (2D per finger plane, faster; see docs/performance.md). Raises
+    ``ValueError`` for bad input, T
     outside O, or a hand that touches O at the start or while turning in Phase 1.
 
     ``step()`` returns the next :class:`Configuration` (or None at the end), so a plan can
