@@ -1,7 +1,9 @@
 // hugger_bench: plans fixed scenarios and reports where the time goes.
 //
-//   hugger_bench [--scenario NAME]... [--repeat R] [--json] [--list] [--no-fork]
+//   hugger_bench [--scenario NAME]... [--skin mesh|section|both] [--repeat R] [--json] [--list] [--no-fork]
 //
+// Every scenario is planned with each chosen skin (default both: the mesh world, the reference,
+// and the section skin), side by side, with the ratio of their figures.
 // Every scenario runs in a child process of its own (unless --no-fork), so that its peak
 // memory (max RSS) is its own. Inputs (meshes, hands, poses) are generated before any clock
 // starts. Figures are medians over the R repeats; per-iteration percentiles pool the Phase 2
@@ -27,6 +29,7 @@
 
 #include "hugger/planner/planner.hpp"
 #include "hugger/world/object.hpp"
+#include "hugger/world/section_skin.hpp"
 #include "hugger/world/simulated_world.hpp"
 
 using namespace hugger;
@@ -189,11 +192,13 @@ std::vector<Scenario> scenarios() {
 /// One scenario's figures, as plain data: a child process sends it through a pipe.
 struct Result {
   char name[32] = {};
+  char skin[12] = {};
   char status[24] = {};
   int repeats = 0;
   long triangles = 0, fingers = 0, links = 0;
   long configurations = 0, phase1_configurations = 0, phase2_iterations = 0;
   double object_s = 0, planner_s = 0, phase2_s = 0, total_s = 0;  // medians
+  double sections_s = 0;  // section skin: building the regions of every finger plane (median)
   double configurations_per_s = 0;                                // Phase 2 iterations / Phase 2 time
   double p50_us = 0, p90_us = 0, p99_us = 0, max_us = 0;           // per Phase 2 iteration, pooled
   double max_rss_mib = 0;
@@ -239,9 +244,15 @@ double max_rss_mib() {
   return static_cast<double>(u.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
 }
 
-Result run(const Scenario& sc, int repeats) {
+std::shared_ptr<const Sensing> make_skin(const std::string& skin, const std::shared_ptr<const Object>& object) {
+  if (skin == "section") return std::make_shared<SectionSkin>(object);
+  return std::make_shared<SimulatedWorld>(object);
+}
+
+Result run(const Scenario& sc, const std::string& skin, int repeats) {
   Result r;
   std::snprintf(r.name, sizeof r.name, "%s", sc.name.c_str());
+  std::snprintf(r.skin, sizeof r.skin, "%s", skin.c_str());
   r.repeats = repeats;
   r.fingers = sc.fingers;
   r.links = sc.links;
@@ -252,15 +263,25 @@ Result run(const Scenario& sc, int repeats) {
     const Vec3 target = Vec3::Zero();
     const Pose start = paper_start(target);
     r.triangles = mesh.faces.rows();
-    std::vector<double> object_s, planner_s, phase2_s, total_s, per_iteration;
+    std::vector<double> object_s, planner_s, phase2_s, total_s, sections_s, per_iteration;
     std::uint64_t first_digest = 0;
     for (int k = 0; k < repeats; ++k) {
       const auto t0 = Clock::now();
       auto object = std::make_shared<const Object>(mesh.vertices, mesh.faces);
       const double t_object = seconds_since(t0);
       const auto t1 = Clock::now();
-      Planner planner(hand, std::make_shared<SimulatedWorld>(object), target, start);
+      const std::shared_ptr<const Sensing> sensing = make_skin(skin, object);
+      Planner planner(hand, sensing, target, start);
       const double t_planner = seconds_since(t1);
+      if (skin == "section") {
+        // The finger planes' regions, built here (the skin would build them at its first query
+        // in each plane): the planes of Phase 2, where Phase 1 left the palm.
+        const auto* section = static_cast<const SectionSkin*>(sensing.get());
+        const Pose palm2 = planner.history().back().palm;
+        const auto ts = Clock::now();
+        for (int m = 0; m < hand.fingers(); ++m) section->region(hand.plane(palm2, m), hand.link_radius());
+        sections_s.push_back(seconds_since(ts));
+      }
       const auto t2 = Clock::now();
       per_iteration.reserve(per_iteration.size() + 4096);
       for (;;) {
@@ -272,7 +293,7 @@ Result run(const Scenario& sc, int repeats) {
       object_s.push_back(t_object);
       planner_s.push_back(t_planner);
       phase2_s.push_back(t_phase2);
-      total_s.push_back(t_object + t_planner + t_phase2);
+      total_s.push_back(t_object + t_planner + (sections_s.empty() ? 0.0 : sections_s.back()) + t_phase2);
       const std::uint64_t d = digest(planner);
       if (k == 0) {
         first_digest = d;
@@ -289,6 +310,7 @@ Result run(const Scenario& sc, int repeats) {
     r.planner_s = median(planner_s);
     r.phase2_s = median(phase2_s);
     r.total_s = median(total_s);
+    r.sections_s = median(sections_s);
     r.configurations_per_s = r.phase2_s > 0 ? static_cast<double>(r.phase2_iterations) / r.phase2_s : 0.0;
     std::sort(per_iteration.begin(), per_iteration.end());
     r.p50_us = percentile(per_iteration, 0.50);
@@ -304,18 +326,18 @@ Result run(const Scenario& sc, int repeats) {
 }
 
 /// Runs a scenario in a child process (its own peak memory); falls back to in-process on error.
-Result run_isolated(const Scenario& sc, int repeats) {
+Result run_isolated(const Scenario& sc, const std::string& skin, int repeats) {
   int fd[2];
-  if (pipe(fd) != 0) return run(sc, repeats);
+  if (pipe(fd) != 0) return run(sc, skin, repeats);
   const pid_t pid = fork();
   if (pid < 0) {
     close(fd[0]);
     close(fd[1]);
-    return run(sc, repeats);
+    return run(sc, skin, repeats);
   }
   if (pid == 0) {
     close(fd[0]);
-    const Result r = run(sc, repeats);
+    const Result r = run(sc, skin, repeats);
     const char* p = reinterpret_cast<const char*>(&r);
     std::size_t left = sizeof r;
     while (left > 0) {
@@ -342,6 +364,7 @@ Result run_isolated(const Scenario& sc, int repeats) {
   if (got != sizeof r) {
     r = Result();
     std::snprintf(r.name, sizeof r.name, "%s", sc.name.c_str());
+    std::snprintf(r.skin, sizeof r.skin, "%s", skin.c_str());
     std::snprintf(r.error, sizeof r.error, "the benchmark process died (wait status %d)", wstatus);
   }
   return r;
@@ -365,7 +388,8 @@ std::string load_average() {
 }
 
 void usage(const std::vector<Scenario>& all) {
-  std::printf("usage: hugger_bench [--scenario NAME]... [--repeat R] [--json] [--list] [--no-fork] [--allow-debug]\n"
+  std::printf("usage: hugger_bench [--scenario NAME]... [--skin mesh|section|both] [--repeat R] [--json] [--list]\n"
+              "                    [--no-fork] [--allow-debug]\n"
               "       hugger_bench --dump-obj SCENARIO FILE   (write the scenario's object as OBJ)\n"
               "scenarios:");
   for (const auto& s : all) std::printf(" %s", s.name.c_str());
@@ -379,11 +403,21 @@ int main(int argc, char** argv) {
   std::vector<std::string> chosen;
   int repeats = 5;
   bool json = false, fork_each = true, allow_debug = false;
+  std::vector<std::string> skins = {"mesh", "section"};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--scenario" && i + 1 < argc) chosen.push_back(argv[++i]);
     else if (a == "--repeat" && i + 1 < argc) repeats = std::atoi(argv[++i]);
     else if (a == "--json") json = true;
+    else if (a == "--skin" && i + 1 < argc) {
+      const std::string k = argv[++i];
+      if (k == "both") skins = {"mesh", "section"};
+      else if (k == "mesh" || k == "section") skins = {k};
+      else {
+        std::fprintf(stderr, "--skin must be mesh, section or both, got '%s'\n", k.c_str());
+        return 2;
+      }
+    }
     else if (a == "--no-fork") fork_each = false;
     else if (a == "--allow-debug") allow_debug = true;
     else if (a == "--dump-obj" && i + 2 < argc) {
@@ -443,24 +477,36 @@ int main(int argc, char** argv) {
   FILE* table = json ? stderr : stdout;
   std::fprintf(table, "hugger_bench: %s build, %d repeat(s), medians; load average %s\n",
                kReleaseBuild ? "Release" : "DEBUG", repeats, load_average().c_str());
-  std::fprintf(table, "%-11s %8s %5s %6s %6s %8s %8s %8s %8s %9s %7s %7s %7s %7s %7s %-14s\n", "scenario", "tris",
-               "MxN", "confs", "iters", "obj ms", "plan1 ms", "phase2ms", "total ms", "conf/s", "p50 us", "p90 us",
-               "p99 us", "max us", "RSS MiB", "status");
+  std::fprintf(table, "%-11s %-7s %8s %5s %6s %6s %8s %8s %8s %8s %8s %9s %7s %7s %7s %7s %7s %-14s\n", "scenario", "skin",
+               "tris", "MxN", "confs", "iters", "obj ms", "plan1 ms", "sect ms", "phase2ms", "total ms", "conf/s",
+               "p50 us", "p90 us", "p99 us", "max us", "RSS MiB", "status");
   std::vector<Result> results;
   for (const Scenario* sc : todo) {
-    const Result r = fork_each ? run_isolated(*sc, repeats) : run(*sc, repeats);
-    results.push_back(r);
-    if (!r.ok) {
-      std::fprintf(table, "%-11s FAILED: %s\n", r.name, r.error);
-      continue;
+    std::vector<Result> mine;
+    for (const std::string& skin : skins) {
+      const Result r = fork_each ? run_isolated(*sc, skin, repeats) : run(*sc, skin, repeats);
+      results.push_back(r);
+      mine.push_back(r);
+      if (!r.ok) {
+        std::fprintf(table, "%-11s %-7s FAILED: %s\n", r.name, r.skin, r.error);
+        continue;
+      }
+      char mxn[16];
+      std::snprintf(mxn, sizeof mxn, "%ldx%ld", r.fingers, r.links);
+      std::fprintf(table,
+                   "%-11s %-7s %8ld %5s %6ld %6ld %8.2f %8.2f %8.2f %8.2f %8.2f %9.0f %7.1f %7.1f %7.1f %7.1f %7.1f %-14s%s\n",
+                   r.name, r.skin, r.triangles, mxn, r.configurations, r.phase2_iterations, r.object_s * 1e3,
+                   r.planner_s * 1e3, r.sections_s * 1e3, r.phase2_s * 1e3, r.total_s * 1e3, r.configurations_per_s,
+                   r.p50_us, r.p90_us, r.p99_us, r.max_us, r.max_rss_mib, r.status,
+                   r.deterministic ? "" : " NOT DETERMINISTIC");
+      std::fflush(table);
     }
-    char mxn[16];
-    std::snprintf(mxn, sizeof mxn, "%ldx%ld", r.fingers, r.links);
-    std::fprintf(table, "%-11s %8ld %5s %6ld %6ld %8.2f %8.2f %8.2f %8.2f %9.0f %7.1f %7.1f %7.1f %7.1f %7.1f %-14s%s\n",
-                 r.name, r.triangles, mxn, r.configurations, r.phase2_iterations, r.object_s * 1e3, r.planner_s * 1e3,
-                 r.phase2_s * 1e3, r.total_s * 1e3, r.configurations_per_s, r.p50_us, r.p90_us, r.p99_us, r.max_us,
-                 r.max_rss_mib, r.status, r.deterministic ? "" : " NOT DETERMINISTIC");
-    std::fflush(table);
+    if (mine.size() == 2 && mine[0].ok && mine[1].ok && mine[1].phase2_s > 0 && mine[1].p50_us > 0 && mine[1].total_s > 0)
+      std::fprintf(table, "%-11s %-7s  mesh/section: Phase 2 time %.2fx, per-iteration p50 %.2fx, iterations/s %.2fx, "
+                          "total %.2fx\n",
+                   "", "ratio", mine[0].phase2_s / mine[1].phase2_s, mine[0].p50_us / mine[1].p50_us,
+                   mine[1].configurations_per_s / std::max(mine[0].configurations_per_s, 1e-300),
+                   mine[0].total_s / mine[1].total_s);
   }
   if (json) {
     std::ostringstream os;
@@ -469,7 +515,8 @@ int main(int argc, char** argv) {
        << ",\n  \"load_average\": " << json_string(load_average()) << ",\n  \"scenarios\": [";
     for (std::size_t i = 0; i < results.size(); ++i) {
       const Result& r = results[i];
-      os << (i ? "," : "") << "\n    {\"name\": " << json_string(r.name) << ", \"ok\": " << (r.ok ? "true" : "false");
+      os << (i ? "," : "") << "\n    {\"name\": " << json_string(r.name) << ", \"skin\": " << json_string(r.skin)
+         << ", \"ok\": " << (r.ok ? "true" : "false");
       if (!r.ok) {
         os << ", \"error\": " << json_string(r.error) << "}";
         continue;
@@ -478,7 +525,7 @@ int main(int argc, char** argv) {
          << ", \"status\": " << json_string(r.status) << ", \"configurations\": " << r.configurations
          << ", \"phase1_configurations\": " << r.phase1_configurations
          << ", \"phase2_iterations\": " << r.phase2_iterations << ", \"object_setup_s\": " << r.object_s
-         << ", \"planner_setup_and_phase1_s\": " << r.planner_s << ", \"phase2_s\": " << r.phase2_s
+         << ", \"planner_setup_and_phase1_s\": " << r.planner_s << ", \"sections_s\": " << r.sections_s << ", \"phase2_s\": " << r.phase2_s
          << ", \"total_s\": " << r.total_s << ", \"phase2_configurations_per_s\": " << r.configurations_per_s
          << ", \"iteration_us\": {\"p50\": " << r.p50_us << ", \"p90\": " << r.p90_us << ", \"p99\": " << r.p99_us
          << ", \"max\": " << r.max_us << "}, \"max_rss_mib\": " << r.max_rss_mib

@@ -4,6 +4,7 @@
 
 #include "common.hpp"
 #include "hugger/planner/planner.hpp"
+#include "hugger/world/section_skin.hpp"
 #include "hugger/world/simulated_world.hpp"
 
 namespace py = pybind11;
@@ -15,7 +16,8 @@ namespace {
 /// A planner with a lock: one thread at a time may advance it; others get a clear error.
 struct PyPlanner {
   std::unique_ptr<Planner> planner;
-  py::object skin;  ///< the Object or Sensing given: keeps a Python skin (and its overrides) alive
+  py::object source;  ///< the Object or Sensing given: keeps a Python skin (and its overrides) alive
+  std::string skin = "mesh";  ///< how an Object is sensed: "mesh" (3D queries on the BVH) or "section" (2D per finger plane)
   std::mutex busy;
   /// An exception left the planner in the middle of an iteration (a skin's callback raised): the
   /// plan has ended with status "error"; history() holds every configuration completed before.
@@ -120,21 +122,25 @@ double optional_param(const py::object& value, const char* name) {
 
 void bind_planner(py::module_& m) {
   py::class_<PyPlanner>(m, "Planner", "The Hugger planner (DESIGN.md section 3) over a simulated world.")
-      .def(py::init([](const HandModel& hand, const py::object& skin, const ArrayD& target,
+      .def(py::init([](const HandModel& hand, const py::object& source, const ArrayD& target,
                        const ArrayD& palm_pose, const py::object& step, const py::object& epsilon,
                        const py::object& contact_tolerance, const py::object& max_iterations,
-                       const std::string& rules) {
+                       const std::string& rules, const std::string& skin) {
              auto out = std::make_unique<PyPlanner>();
-             if (skin.is_none()) throw py::value_error("the object or skin must not be None");
+             if (source.is_none()) throw py::value_error("the object or skin must not be None");
+             if (skin != "mesh" && skin != "section")
+               throw py::value_error("skin must be 'mesh' or 'section', got '" + skin + "'");
+             out->skin = skin;
              std::shared_ptr<Object> object;
              std::shared_ptr<Sensing> sensing;
-             if (py::isinstance<Object>(skin)) {
-               object = skin.cast<std::shared_ptr<Object>>();
-             } else if (py::isinstance<Sensing>(skin)) {
-               sensing = skin.cast<std::shared_ptr<Sensing>>();
+             if (py::isinstance<Object>(source)) {
+               object = source.cast<std::shared_ptr<Object>>();
+             } else if (py::isinstance<Sensing>(source)) {
+               sensing = source.cast<std::shared_ptr<Sensing>>();
+               out->skin = "custom";
              } else {
                throw py::type_error("expected a hugger Object or Sensing skin, got " +
-                                    py::str(py::type::of(skin).attr("__name__")).cast<std::string>());
+                                    py::str(py::type::of(source).attr("__name__")).cast<std::string>());
              }
              const Vec3 t = to_vec3(target, "target");
              if (!t.allFinite()) throw py::value_error("target must be finite");
@@ -149,7 +155,7 @@ void bind_planner(py::module_& m) {
                params.max_iterations = mi;
              }
              params.rules = rules_from_string(rules);  // std::invalid_argument -> ValueError
-             out->skin = skin;
+             out->source = source;
              py::gil_scoped_release release;
              if (sensing) {  // a skin that need not have a mesh: T is taken as given
                out->planner = std::make_unique<Planner>(hand, std::move(sensing), t, pose, params);
@@ -162,12 +168,15 @@ void bind_planner(py::module_& m) {
                   << ") is not inside the object (its distance to the surface is " << depth << " m, outside or on it)";
                throw std::invalid_argument(os.str());
              }
-             out->planner = std::make_unique<Planner>(hand, std::make_shared<SimulatedWorld>(object), t, pose, params);
+             std::shared_ptr<const Sensing> world;
+             if (skin == "section") world = std::make_shared<SectionSkin>(object);
+             else world = std::make_shared<SimulatedWorld>(object);
+             out->planner = std::make_unique<Planner>(hand, world, t, pose, params);
              return out;
            }),
            py::arg("hand"), py::arg("sensing"), py::arg("target"), py::arg("palm_pose"), py::arg("step") = py::none(),
            py::arg("epsilon") = py::none(), py::arg("contact_tolerance") = py::none(),
-           py::arg("max_iterations") = py::none(), py::arg("rules") = "hug")
+           py::arg("max_iterations") = py::none(), py::arg("rules") = "hug", py::arg("skin") = "mesh")
       .def(
           "step",
           [](PyPlanner& p) -> py::object {
@@ -224,6 +233,7 @@ void bind_planner(py::module_& m) {
         d["contact_tolerance"] = q.contact_tolerance;
         d["max_iterations"] = q.max_iterations;
         d["rules"] = to_string(q.rules);
+        d["skin"] = p.skin;
         return d;
       })
       .def_property_readonly("stats", [](PyPlanner& p) {

@@ -1,7 +1,10 @@
+#include <cmath>
 #include <memory>
+#include <string>
 
 #include "common.hpp"
 #include "hugger/world/object.hpp"
+#include "hugger/world/section_skin.hpp"
 #include "hugger/world/simulated_world.hpp"
 
 namespace py = pybind11;
@@ -118,6 +121,46 @@ void bind_world(py::module_& m) {
           py::arg("origin"), py::arg("u"), py::arg("v"),
           "Section of O by the plane origin + a u + b v: a list of closed loops (k, 2) in (a, b); "
           "outer loops counter-clockwise.")
+      .def(
+          "section_region",
+          [](std::shared_ptr<Object> o, const ArrayD& origin, const ArrayD& u, const ArrayD& v, double radius,
+             double flatten) {
+            const Vec3 uu = to_vec3(u, "u"), vv = to_vec3(v, "v"), oo = to_vec3(origin, "origin");
+            if (!oo.allFinite()) throw py::value_error("origin must be finite");
+            if (std::abs(uu.norm() - 1) > 1e-9 || std::abs(vv.norm() - 1) > 1e-9 || std::abs(uu.dot(vv)) > 1e-9)
+              throw py::value_error("u and v must be orthonormal");
+            if (!(radius >= 0.0) || !std::isfinite(radius))
+              throw py::value_error("radius must be finite and >= 0, got " + std::to_string(radius));
+            if (!(flatten > 0.0) || !std::isfinite(flatten))
+              throw py::value_error("flatten must be positive, got " + std::to_string(flatten));
+            FingerPlane plane;
+            plane.origin = oo;
+            plane.u = uu;
+            plane.p = vv;
+            std::unique_ptr<PlaneRegion> region;
+            {
+              py::gil_scoped_release release;
+              region = std::make_unique<PlaneRegion>(o, plane, radius, flatten);
+            }
+            const auto& segs = region->segments();
+            const py::ssize_t n = static_cast<py::ssize_t>(segs.size());
+            py::array_t<double> seg({n, py::ssize_t(2), py::ssize_t(2)}), nrm({n, py::ssize_t(2)});
+            auto ws = seg.mutable_unchecked<3>();
+            auto wn = nrm.mutable_unchecked<2>();
+            for (py::ssize_t i = 0; i < n; ++i) {
+              const auto& sg = segs[static_cast<std::size_t>(i)];
+              ws(i, 0, 0) = sg.a.x(), ws(i, 0, 1) = sg.a.y(), ws(i, 1, 0) = sg.b.x(), ws(i, 1, 1) = sg.b.y();
+              wn(i, 0) = sg.normal.x(), wn(i, 1) = sg.normal.y();
+            }
+            py::dict d;
+            d["segments"] = seg;
+            d["normals"] = nrm;
+            return d;
+          },
+          py::arg("origin"), py::arg("u"), py::arg("v"), py::arg("radius"), py::arg("flatten") = 1e-6,
+          "The section skin's region of the plane origin + a u + b v for links of `radius`: the points "
+          "within `radius` of O. Returns its boundary as flattened segments (k, 2, 2) in (a, b), at most "
+          "`flatten` m outside the exact curve, and their outward unit normals (k, 2).")
       .def(
           "palm_gap",
           [](std::shared_ptr<Object> o, const ArrayD& pose, double radius, double thickness) {

@@ -16,7 +16,7 @@ from .planner import Planner, _timeout
 from .trajectory import Trajectory
 from .world import Object
 
-_PARAMS = ("step", "epsilon", "contact_tolerance", "max_iterations")
+_PARAMS = ("step", "epsilon", "contact_tolerance", "max_iterations", "rules", "skin")
 
 
 @dataclass(frozen=True)

@@ -79,6 +79,8 @@ def _planner_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--rules", choices=("hug", "paper"), default="hug",
                    help="Phase 2 rule set: 'hug' (default; the paper's rules plus extensions for firmer "
                         "grasps) or 'paper' (the 1994 method with the documented decisions only)")
+    g.add_argument("--skin", choices=("mesh", "section"),
+                   help="sensing skin: mesh (exact 3D queries, the default) or section (2D per finger plane)")
     g.add_argument("--timeout", type=float, metavar="SECONDS",
                    help="stop planning after this long, with status 'timeout' and a valid partial plan")
 
@@ -123,7 +125,7 @@ def _hand(args: argparse.Namespace):
 def _params(args: argparse.Namespace) -> dict[str, Any]:
     from .batch import _PARAMS
 
-    return {k: getattr(args, k) for k in _PARAMS} | {"rules": args.rules}
+    return {k: getattr(args, k) for k in _PARAMS}
 
 
 def _load(path: str):

@@ -54,6 +54,10 @@ MAX_ITERATIONS = 10**9
 #: Smallest ``contact_tolerance`` relative to the scene's largest coordinate (m / m): below it the
 #: sensing distance drowns in rounding of double-precision positions and the approach never lands.
 MIN_RELATIVE_TOLERANCE = 1e-10
+#: The sensing skins a plan can use: ``section`` answers Phase 2 in each finger plane by exact 2D
+#: geometry (docs/performance.md), ``mesh`` by 3D queries on the mesh (the reference).
+SKINS = ("mesh", "section")
+DEFAULT_SKIN = "mesh"
 
 
 def _optional_count(name: str, value: Any) -> int | None:
@@ -96,7 +100,9 @@ class Planner:
     ``palm_pose`` (4, 4) is the initial palm pose T_WP (fingers extended). Defaults:
     ``step`` = shortest link / 20, ``epsilon`` = step / 10, ``contact_tolerance`` = 1e-4 m,
     ``max_iterations`` = 20000 Phase 2 iterations, ``rules`` = ``"hug"`` (``"paper"``: the 1994
-    method with the documented decisions only; see docs/algorithm.md). Raises ``ValueError`` for bad input, T
+    method with the documented decisions only; see docs/algorithm.md), ``skin`` = ``"mesh"``
+    (how an Object is sensed: exact 3D queries, the reference) or ``"section"`` (2D per finger
+    plane, faster; see docs/performance.md). Raises ``ValueError`` for bad input, T
     outside O, or a hand that touches O at the start or while turning in Phase 1.
 
     ``step()`` returns the next :class:`Configuration` (or None at the end), so a plan can
@@ -106,13 +112,17 @@ class Planner:
 
     def __init__(self, hand: Hand, obj: Any, target: Any, palm_pose: Any, step: float | None = None,
                  epsilon: float | None = None, contact_tolerance: float | None = None,
-                 max_iterations: int | None = None, rules: str = "hug",
+                 max_iterations: int | None = None, rules: str = "hug", skin: str | None = None,
                  record_object: Object | None = None) -> None:
+        if skin is not None and skin not in SKINS:
+            raise ValueError(f"skin must be one of {list(SKINS)}, got {skin!r}")
         if not isinstance(hand, Hand):
             raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
-        skin = None
+        sensing = None
         if isinstance(obj, _core.Sensing):
-            skin, obj = obj, record_object
+            if skin is not None:
+                raise ValueError("skin= chooses how an Object is sensed; a Sensing skin is used as given")
+            sensing, obj = obj, record_object
         elif not isinstance(obj, Object):
             raise ValueError(f"obj must be a hugger.Object or a hugger.skins.Sensing skin, got {type(obj).__name__}")
         elif record_object is not None:
@@ -131,11 +141,12 @@ class Planner:
         if delta is not None and delta < MIN_RELATIVE_TOLERANCE * extent:
             raise ValueError(f"contact_tolerance {delta:g} m is below the resolution this scene allows "
                              f"({MIN_RELATIVE_TOLERANCE:g} x its largest coordinate, {extent:g} m)")
-        self.hand, self.object, self.skin, self.target = hand, obj, skin, t
-        self._core = _core.Planner(hand._core, obj._core if skin is None else skin, t, pose, _optional_size("step", step),
+        self.hand, self.object, self.sensing, self.target = hand, obj, sensing, t
+        self._core = _core.Planner(hand._core, obj._core if sensing is None else sensing, t, pose, _optional_size("step", step),
                                    _optional_size("epsilon", epsilon),
                                    delta,
-                                   _optional_count("max_iterations", max_iterations), rules)
+                                   _optional_count("max_iterations", max_iterations), rules,
+                                   DEFAULT_SKIN if skin is None else skin)
         self._emitted: int | None = 0  # configurations handed out by step(); None after plan()
 
     @property

@@ -80,6 +80,12 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
   };
   edge_normals_.resize(nf);
   face_normals_.resize(nf);
+  neighbors_.resize(nf);
+  // The one-ring of each vertex: the other ends of its outgoing directed edges (on a closed,
+  // consistently oriented mesh every neighbour is the end of exactly one outgoing edge).
+  ring_start_.assign(row.begin(), row.end());
+  ring_.resize(out.size());
+  for (std::size_t i = 0; i < out.size(); ++i) ring_[i] = out[i].to;
   // Volume as a sum of tetrahedra on a reference point inside the bounding box: taken about the
   // origin, the terms of an object far from it are huge and cancel to rounding noise.
   const Vec3 ref = 0.5 * (vertices_.colwise().minCoeff() + vertices_.colwise().maxCoeff()).transpose();
@@ -101,6 +107,7 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
         fail(os.str());
       }
       edge_normals_[f][k] = face_normals_[f] + face_normals_[g];
+      neighbors_[f][k] = g;
     }
   if (!(volume_ > 0.0)) {
     std::ostringstream os;

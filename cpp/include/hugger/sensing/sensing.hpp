@@ -69,8 +69,10 @@ class Sensing {
   /// T_WP) and O.
   virtual double palm(const Pose& palm, double radius, double thickness, double cap = kInf) const = 0;
 
-  /// Gap of a link given in finger-plane coordinates.
-  Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap = kInf) const {
+  /// Gap of a link given in finger-plane coordinates. The default asks `capsule` in the world; a
+  /// skin that knows the plane (the section skin) answers in the plane itself, and may then
+  /// report the gap measured within the plane (never smaller than the gap in 3D).
+  virtual Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap = kInf) const {
     return capsule(plane.to_world(a), plane.to_world(b), radius, cap);
   }
   /// True when the capsule does not penetrate O (gap >= 0). `a_outside`: the caller knows that
@@ -82,8 +84,10 @@ class Sensing {
     return capsule(a, b, radius, 0.0).gap >= 0.0;
   }
   /// True when the link is collision-free (gap >= 0) and in front of the palm's front plane.
-  bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
-                 bool a_outside = false) const;
+  /// Virtual so that a skin that knows the plane can answer it there (the default converts to the
+  /// world and asks capsule_clear).
+  virtual bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
+                         bool a_outside = false) const;
 
   /// Slide the fingertip along O's boundary in its plane, counter-clockwise (interior on the
   /// left), to the first point whose chord from the tip is `step`.

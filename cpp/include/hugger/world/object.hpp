@@ -51,6 +51,15 @@ class Object {
   Section section(const Vec3& origin, const Vec3& u, const Vec3& v) const;
   /// The BVH over O's triangles (world frame), for custom queries.
   const TriangleBvh& bvh() const { return bvh_; }
+  /// The face across edge k of face f (edge k runs from corner k to corner k + 1).
+  std::int64_t face_neighbor(std::int64_t f, int k) const { return neighbors_[static_cast<std::size_t>(f)][k]; }
+  /// Angle-weighted pseudo-normal of vertex v (not normalised).
+  const Vec3& vertex_normal(std::int64_t v) const { return vertex_normals_[static_cast<std::size_t>(v)]; }
+  /// The vertices joined to vertex v by an edge (its one-ring), in no particular order.
+  const std::int64_t* ring_begin(std::int64_t v) const { return ring_.data() + ring_start_[static_cast<std::size_t>(v)]; }
+  const std::int64_t* ring_end(std::int64_t v) const { return ring_.data() + ring_start_[static_cast<std::size_t>(v) + 1]; }
+  /// A number unique to this object among all objects built by this process.
+  std::uint64_t serial() const { return serial_; }
 
  private:
   bool inside_by_rays(const Vec3& p) const;
@@ -62,6 +71,8 @@ class Object {
   std::vector<Vec3> face_normals_;            ///< unit (zero for degenerate faces)
   std::vector<std::array<Vec3, 3>> edge_normals_;  ///< per face, pseudo-normal of edges ab, bc, ca
   std::vector<Vec3> vertex_normals_;          ///< angle-weighted pseudo-normals
+  std::vector<std::array<std::int64_t, 3>> neighbors_;  ///< per face, the face across edges ab, bc, ca
+  std::vector<std::int64_t> ring_start_, ring_;          ///< per vertex, its one-ring (compressed rows)
   double volume_ = 0.0;
   std::uint64_t serial_ = 0;  ///< unique per constructed object (keys per-thread memos)
 };

@@ -1,0 +1,164 @@
+/// \file section_skin.hpp
+/// The section skin: Phase 2 sensing as exact 2D geometry in each finger plane.
+///
+/// In Phase 2 every finger moves in a fixed plane. A capsule link of radius r lying in the plane
+/// is clear of O exactly when its axis segment stays out of the plane's region
+///   R = { x in the plane : the 3D distance from x to O (a solid) is at most r }.
+/// PlaneRegion builds the boundary of R from the mesh: the plane's sections of the faces of O
+/// moved out by r along their normals (segments), of the cylinders of radius r about O's convex
+/// edges (ellipse arcs) and of the spheres of radius r about its vertices (circle arcs), each
+/// piece kept only where its feature can be the nearest one. Every piece lies in R (its points
+/// are at distance r from a feature of O) and together they cover R's boundary; arcs are
+/// flattened *outward* (tangent polygons, at most `flatten` metres out), so the pieces form a
+/// barrier that no segment starting outside R can cross unseen. A 2D BVH over the pieces answers
+/// every query of a link in the plane in a few hundred instructions, nearly independently of the
+/// mesh size. Gaps it reports are measured within the plane (never smaller than the 3D gap).
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <utility>
+#include <vector>
+
+#include "hugger/sensing/sensing.hpp"
+#include "hugger/world/object.hpp"
+#include "hugger/world/simulated_world.hpp"
+
+namespace hugger {
+
+/// The region R of one plane for one link radius (see the file comment). Immutable once built.
+class PlaneRegion {
+ public:
+  /// One flattened piece of R's boundary: a segment in plane coordinates with its outward unit
+  /// normal (pointing away from R) and the feature of O it comes from.
+  struct Segment {
+    Vec2 a = Vec2::Zero(), b = Vec2::Zero();
+    Vec2 normal = Vec2::UnitX();
+    int piece = 0;  ///< index of the feature's piece (one polyline per face, edge or vertex arc)
+    bool crossed = false;  ///< while building: another piece crosses it
+  };
+  enum class Kind : std::uint8_t { kFace, kEdge, kVertex };
+  struct Piece {
+    Kind kind = Kind::kFace;
+    std::int64_t feature = 0;  ///< face, vertex or (for edges) 3 * face + k
+    bool crossed = false;      ///< another piece crosses it, or it has a loose end: parts may lie inside R
+  };
+  /// Nearest piece of R's boundary to a query segment.
+  struct Near {
+    double distance = kInf;          ///< in-plane distance; 0 when the query crosses or touches
+    Vec2 on_query = Vec2::Zero();    ///< nearest point of the query
+    Vec2 on_region = Vec2::Zero();   ///< nearest point of the boundary pieces
+    Vec2 normal_sum = Vec2::Zero();  ///< sum of the outward normals of the pieces nearest (ties)
+    bool crossed = false;            ///< a nearest piece is crossed by another (side test unsafe)
+    int ties = 0;                    ///< how many segments are nearest (several at a shared end point)
+    bool at_end = false;             ///< the nearest point is an end point of the (first) nearest segment
+  };
+
+  /// Builds R for the plane and `radius` (>= 0). `flatten` (> 0): how far outside the exact arcs
+  /// their tangent polygons may lie (metres).
+  PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane& plane, double radius, double flatten);
+
+  /// Nearest boundary piece to segment [a, b] (a == b: a point) within `cap`; distance is +inf
+  /// when nothing is within cap.
+  Near nearest(const Vec2& a, const Vec2& b, double cap = kInf) const;
+  /// True when some boundary piece comes within `distance` of segment [a, b] (or touches it).
+  bool any_within(const Vec2& a, const Vec2& b, double distance) const;
+  /// True when x lies in R (closed). From the side of the nearest piece; where that is unsafe
+  /// (a crossed piece, a side test too close to call) from one 3D query.
+  bool inside(const Vec2& x) const;
+  /// Whether a point at the `near` answer of a query (not crossing) lies in R.
+  bool inside_from(const Near& near, const Vec2& x) const;
+  /// The exact 3D test (x in R: within `radius` of O, or inside O).
+  bool inside_3d(const Vec2& x) const;
+
+  const FingerPlane& plane() const { return plane_; }
+  double radius() const { return radius_; }
+  const std::vector<Segment>& segments() const { return segments_; }
+  const std::vector<Piece>& pieces() const { return pieces_; }
+  /// Segments dropped at build time as lying inside R.
+  long dropped() const { return dropped_; }
+  /// Number of 3D inside tests asked so far (side tests that were unsafe).
+  long fallbacks() const { return fallbacks_.load(std::memory_order_relaxed); }
+
+ private:
+  struct Node {
+    double lo[2], hi[2];
+    int left = -1, right = -1;
+    int first = 0, count = 0;
+  };
+  void build_pieces();
+  void build_bvh();
+  void mark_crossings();
+  /// Cuts crossed segments at their crossings and drops the parts of flagged pieces that lie
+  /// inside R (one 3D test at each part's middle).
+  void drop_inner_segments();
+  int build_node(int begin, int end, std::vector<Vec2>& centres, int depth);
+  /// Adds the arcs of x(t) = centre + U cos t + V sin t over the allowed intervals of `allowed`
+  /// ([0, 2 pi), sorted, disjoint) as tangent polygons; `out3(t)`: the in-plane outward direction.
+  template <class Outward>
+  void add_arcs(Kind kind, std::int64_t feature, const Vec2& centre, const Vec2& U, const Vec2& V,
+                const std::vector<std::array<double, 2>>& allowed, Outward&& outward);
+  void add_segment(const Vec2& a, const Vec2& b, const Vec2& outward, int piece);
+
+  std::shared_ptr<const Object> object_;
+  FingerPlane plane_;
+  double radius_ = 0.0, flatten_ = 1e-6;
+  std::vector<Segment> segments_;
+  std::vector<Piece> pieces_;
+  std::vector<Node> nodes_;
+  std::vector<int> order_;                       ///< while building the BVH
+  std::vector<std::pair<int, double>> cuts_;     ///< while building: crossings (segment, parameter)
+  std::vector<std::array<Vec2, 2>> piece_ends_;  ///< while building: first and last point of each piece
+  int depth_ = 0;
+  long dropped_ = 0;
+  mutable std::atomic<long> fallbacks_{0};
+};
+
+/// The section skin (DESIGN.md section 4): answers link queries given in finger-plane
+/// coordinates from the plane's PlaneRegion (built on first use, once per plane and radius);
+/// capsule and palm queries in the world, and the higher-level queries' world-frame parts, go
+/// to the mesh world. Thread-safe: regions are built under a lock and then only read.
+class SectionSkin final : public Sensing {
+ public:
+  /// `flatten`: the outward flattening tolerance of arcs (metres, > 0).
+  explicit SectionSkin(std::shared_ptr<const Object> object, double flatten = 1e-6);
+  ~SectionSkin() override;
+
+  Touch capsule(const Vec3& a, const Vec3& b, double radius, double cap = kInf) const override {
+    return mesh_.capsule(a, b, radius, cap);
+  }
+  double palm(const Pose& palm, double radius, double thickness, double cap = kInf) const override {
+    return mesh_.palm(palm, radius, thickness, cap);
+  }
+  bool capsule_clear(const Vec3& a, const Vec3& b, double radius, bool a_outside) const override {
+    return mesh_.capsule_clear(a, b, radius, a_outside);
+  }
+  /// In-plane gap of the link: the distance within the plane from its axis to R (negative inside
+  /// R). Exact when at most `cap`; otherwise a value above cap. on_object is the nearest point of
+  /// R's boundary (not of O), and the normal lies in the plane.
+  Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap = kInf) const override;
+  bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
+                 bool a_outside = false) const override;
+
+  /// The region of a plane and radius, built on first use; nullptr past kMaxRegions regions
+  /// (queries in further planes then go to the mesh world).
+  const PlaneRegion* region(const FingerPlane& plane, double radius) const;
+  const Object& object() const { return *object_; }
+  const SimulatedWorld& mesh_world() const { return mesh_; }
+  double flatten() const { return flatten_; }
+  static constexpr int kMaxRegions = 64;
+
+ private:
+  struct Entry;
+  std::shared_ptr<const Object> object_;
+  SimulatedWorld mesh_;
+  double flatten_;
+  mutable std::mutex mutex_;
+  mutable std::vector<std::unique_ptr<Entry>> owned_;
+  mutable std::array<std::atomic<const Entry*>, kMaxRegions> slots_{};
+  mutable std::atomic<int> count_{0};
+};
+
+}  // namespace hugger

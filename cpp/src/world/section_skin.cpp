@@ -1,0 +1,758 @@
+#include "hugger/world/section_skin.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace hugger {
+
+namespace {
+
+constexpr double kTwoPi = 2.0 * kPi;
+/// Distances at or below this count as touching (closes rounding gaps between pieces).
+constexpr double kTouch = 1e-12;
+/// Ties between nearest pieces (a shared end point): their normals are summed.
+constexpr double kTie = 1e-10;
+/// End points of two pieces this close are joined (rounding of the same point computed twice).
+constexpr double kJoin = 1e-10;
+
+inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+/// A constraint on an angle t: allowed where k0 + k1 cos t + k2 sin t <= 0.
+struct Harmonic {
+  double k0, k1, k2;
+  double at(double t) const { return k0 + k1 * std::cos(t) + k2 * std::sin(t); }
+  double scale() const { return std::abs(k0) + std::abs(k1) + std::abs(k2); }
+};
+
+/// The closed intervals of [0, 2 pi) (an interval may run past 2 pi when it wraps) where every
+/// constraint holds: cut at every root, test the middle of each part.
+std::vector<std::array<double, 2>> allowed_intervals(const Harmonic* hs, int n) {
+  std::vector<std::array<double, 2>> out;
+  // A constraint that holds nowhere (k0 > its amplitude) empties the set: checked first, cheaply.
+  for (int i = 0; i < n; ++i) {
+    const Harmonic& h = hs[i];
+    if (h.k0 > 0.0 && h.k0 * h.k0 > (h.k1 * h.k1 + h.k2 * h.k2) * (1.0 + 1e-12)) return out;
+  }
+  double cuts[2 * 18 + 2];
+  int nc = 0;
+  cuts[nc++] = 0.0;
+  cuts[nc++] = kTwoPi;
+  for (int i = 0; i < n && nc + 2 <= 2 * 18 + 2; ++i) {
+    const Harmonic& h = hs[i];
+    const double A = std::hypot(h.k1, h.k2);
+    if (!(A > 0.0) || std::abs(h.k0) > A) continue;
+    const double phi = std::atan2(h.k2, h.k1), dphi = std::acos(std::clamp(-h.k0 / A, -1.0, 1.0));
+    for (double t : {phi - dphi, phi + dphi}) {
+      t = std::fmod(t, kTwoPi);
+      if (t < 0.0) t += kTwoPi;
+      cuts[nc++] = t;
+    }
+  }
+  std::sort(cuts, cuts + nc);
+  for (int i = 0; i + 1 < nc; ++i) {
+    const double lo = cuts[i], hi = cuts[i + 1];
+    if (!(hi > lo)) continue;
+    const double mid = 0.5 * (lo + hi), c = std::cos(mid), s = std::sin(mid);
+    bool ok = true;
+    for (int j = 0; j < n && ok; ++j) ok = hs[j].k0 + hs[j].k1 * c + hs[j].k2 * s <= 1e-12 * hs[j].scale();
+    if (!ok) continue;
+    if (!out.empty() && out.back()[1] == lo) out.back()[1] = hi;
+    else out.push_back({lo, hi});
+  }
+  if (out.size() >= 2 && out.front()[0] == 0.0 && out.back()[1] == kTwoPi) {
+    out.back()[1] = kTwoPi + out.front()[1];
+    out.erase(out.begin());
+  }
+  return out;
+}
+
+/// Distance between 2D segments [p1, q1] and [p2, q2], with the closest points.
+double segment_distance(const Vec2& p1, const Vec2& q1, const Vec2& p2, const Vec2& q2, Vec2* c1, Vec2* c2) {
+  const Vec2 d1 = q1 - p1, d2 = q2 - p2, w = p2 - p1;
+  const double denom = cross2(d1, d2);
+  if (denom != 0.0) {
+    const double s = cross2(w, d2) / denom, t = cross2(w, d1) / denom;
+    if (s >= 0.0 && s <= 1.0 && t >= 0.0 && t <= 1.0) {
+      *c1 = p1 + s * d1;
+      *c2 = *c1;
+      return 0.0;
+    }
+  }
+  double best = kInf;
+  auto point_segment = [&](const Vec2& p, const Vec2& a, const Vec2& b, bool p_on_first) {
+    const Vec2 ab = b - a;
+    const double l2 = ab.squaredNorm();
+    double s = l2 > 0.0 ? (p - a).dot(ab) / l2 : 0.0;
+    s = std::clamp(s, 0.0, 1.0);
+    const Vec2 q = a + s * ab;
+    const double d = (p - q).squaredNorm();
+    if (d < best) {
+      best = d;
+      *c1 = p_on_first ? p : q;
+      *c2 = p_on_first ? q : p;
+    }
+  };
+  point_segment(p1, p2, q2, true);
+  if (d1.x() != 0.0 || d1.y() != 0.0) {
+    point_segment(q1, p2, q2, true);
+    point_segment(p2, p1, q1, false);
+    point_segment(q2, p1, q1, false);
+  }
+  return std::sqrt(best);
+}
+
+/// A segment query's bounds, for the node test.
+struct Query {
+  Vec2 a, b, lo, hi, n;
+  bool line = false;  ///< n is the unit normal of the query's line (a != b)
+  Query(const Vec2& a_, const Vec2& b_) : a(a_), b(b_), lo(a_.cwiseMin(b_)), hi(a_.cwiseMax(b_)) {
+    const Vec2 d = b - a;
+    const double len = d.norm();
+    if (len > 0.0) {
+      n = Vec2(-d.y(), d.x()) / len;
+      line = true;
+    }
+  }
+};
+
+}  // namespace
+
+// --- PlaneRegion --------------------------------------------------------------------------
+
+PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane& plane, double radius, double flatten)
+    : object_(std::move(object)), plane_(plane), radius_(radius), flatten_(flatten) {
+  if (!object_) throw std::invalid_argument("PlaneRegion needs an object");
+  if (!(radius >= 0.0) || !std::isfinite(radius))
+    throw std::invalid_argument("PlaneRegion: the link radius must be finite and >= 0, got " + std::to_string(radius));
+  if (!(flatten > 0.0) || !std::isfinite(flatten))
+    throw std::invalid_argument("PlaneRegion: the flattening tolerance must be positive, got " + std::to_string(flatten));
+  build_pieces();
+  build_bvh();
+  mark_crossings();
+  drop_inner_segments();
+}
+
+void PlaneRegion::drop_inner_segments() {
+  // Crossed segments are cut at their crossings. Then every segment of a flagged piece lies
+  // wholly on R's boundary or wholly inside R: its middle decides, and those inside are dropped
+  // (the rest still covers the boundary, and no segment left has parts inside R).
+  const Object& O = *object_;
+  auto inner = [&](const Vec2& x) {
+    const Vec3 X = plane_.to_world(x);
+    if (radius_ > 0.0) {
+      // Within r less a margin of O's surface, or inside O: strictly inside R.
+      const double margin = std::max(1e-9, 1e-3 * radius_);
+      return O.bvh().any_within(X, X, radius_ - margin) ||
+             (!O.bvh().any_within(X, X, radius_) && O.inside_off_surface(X));
+    }
+    return O.inside(X);
+  };
+  std::sort(cuts_.begin(), cuts_.end(),
+            [](const std::pair<int, double>& a, const std::pair<int, double>& b) { return a < b; });
+  std::vector<Segment> kept;
+  kept.reserve(segments_.size() + cuts_.size());
+  std::size_t c = 0;
+  for (std::size_t i = 0; i < segments_.size(); ++i) {
+    const Segment& s = segments_[i];
+    if (!pieces_[s.piece].crossed) {
+      kept.push_back(s);
+      continue;
+    }
+    // The parameters of its cuts (none unless crossed), then one part per interval.
+    std::vector<double> at = {0.0};
+    for (; c < cuts_.size() && cuts_[c].first == static_cast<int>(i); ++c) at.push_back(cuts_[c].second);
+    at.push_back(1.0);
+    Vec2 from = s.a;
+    for (std::size_t k = 0; k + 1 < at.size(); ++k) {
+      const Vec2 to = k + 2 == at.size() ? s.b : Vec2(s.a + at[k + 1] * (s.b - s.a));
+      if (inner(0.5 * (from + to))) {
+        ++dropped_;
+      } else {
+        Segment part = s;
+        part.a = from;
+        part.b = to;
+        part.crossed = false;
+        kept.push_back(part);
+      }
+      from = to;
+    }
+  }
+  cuts_.clear();
+  cuts_.shrink_to_fit();
+  segments_.swap(kept);
+  for (auto& p : pieces_) p.crossed = false;  // resolved
+  build_bvh();
+}
+
+void PlaneRegion::add_segment(const Vec2& a, const Vec2& b, const Vec2& outward, int piece) {
+  // The ends of each piece (its polyline's first and last points), for the junction check.
+  const Vec2 d = b - a;
+  const double len = d.norm();
+  if (!(len > 0.0)) return;
+  const Vec2 nan = Vec2::Constant(std::numeric_limits<double>::quiet_NaN());
+  if (piece_ends_.size() <= static_cast<std::size_t>(piece)) piece_ends_.resize(piece + 1, {nan, nan});
+  if (std::isnan(piece_ends_[piece][0].x())) piece_ends_[piece][0] = a;
+  piece_ends_[piece][1] = b;
+  Segment s;
+  s.a = a;
+  s.b = b;
+  s.normal = Vec2(d.y(), -d.x()) / len;
+  if (s.normal.dot(outward) < 0.0) s.normal = -s.normal;
+  s.piece = piece;
+  segments_.push_back(s);
+}
+
+template <class Outward>
+void PlaneRegion::add_arcs(Kind kind, std::int64_t feature, const Vec2& centre, const Vec2& U, const Vec2& V,
+                           const std::vector<std::array<double, 2>>& allowed, Outward&& outward) {
+  const double M = U.norm() + V.norm();
+  if (!(M > 0.0) || allowed.empty()) return;
+  // Tangent polygons: the tangents at t_j and t_j + dt meet at centre + (U cos + V sin)(t_j +
+  // dt/2) / cos(dt/2), at most M (1 / cos(dt/2) - 1) <= flatten outside the curve.
+  const double dt_max = std::min(kPi / 3.0, 2.0 * std::acos(1.0 / (1.0 + flatten_ / M)));
+  for (const auto& iv : allowed) {
+    const double t0 = iv[0], t1 = iv[1];
+    if (!(t1 - t0 > 1e-15)) continue;
+    const int k = std::clamp(static_cast<int>(std::ceil((t1 - t0) / dt_max)), 1, 4096);
+    const double dt = (t1 - t0) / k, sec = 1.0 / std::cos(0.5 * dt);
+    const int piece = static_cast<int>(pieces_.size());
+    pieces_.push_back({kind, feature, false});
+    auto at = [&](double t, double scale) { return Vec2(centre + scale * (U * std::cos(t) + V * std::sin(t))); };
+    Vec2 prev = at(t0, 1.0);
+    for (int j = 0; j <= k; ++j) {
+      const Vec2 next = j < k ? at(t0 + (j + 0.5) * dt, sec) : at(t1, 1.0);
+      add_segment(prev, next, outward(j < k ? t0 + j * dt : t1), piece);
+      prev = next;
+    }
+  }
+}
+
+void PlaneRegion::build_pieces() {
+  const Object& O = *object_;
+  const Vec3 nu = plane_.normal(), o = plane_.origin, u = plane_.u, p = plane_.p;
+  const double r = radius_;
+  auto height = [&](const Vec3& x) { return nu.dot(x - o); };
+  auto to_plane = [&](const Vec3& x) { return plane_.to_plane(x); };
+  auto in_plane = [&](const Vec3& d) { return Vec2(d.dot(u), d.dot(p)); };
+  const double nabs[3] = {std::abs(nu.x()), std::abs(nu.y()), std::abs(nu.z())};
+  // The faces within r of the plane (those whose pieces can meet it).
+  std::vector<int> band;
+  double bound = r;
+  O.bvh().traverse(
+      [&](const Aabb& box) {
+        const Vec3 c = box.centre(), h = 0.5 * box.extent();
+        return std::abs(height(c)) - (nabs[0] * h.x() + nabs[1] * h.y() + nabs[2] * h.z());
+      },
+      [&](const std::array<Vec3, 3>& t, int id) {
+        const double s0 = height(t[0]), s1 = height(t[1]), s2 = height(t[2]);
+        if (std::min({s0, s1, s2}) <= r && std::max({s0, s1, s2}) >= -r) band.push_back(id);
+      },
+      bound);
+  std::sort(band.begin(), band.end());  // a fixed order: the pieces do not depend on the BVH
+  const FacesN3& F = O.faces();
+  const PointsN3& X = O.vertices();
+  auto vertex = [&](std::int64_t i) { return Vec3(X.row(i).transpose()); };
+  std::vector<char> vertex_seen(r > 0.0 ? static_cast<std::size_t>(X.rows()) : 0, 0);
+  std::vector<char> vertex_mark(vertex_seen.size(), 0);  ///< an edge of the vertex has an arc
+  for (const int f : band) {
+    const std::int64_t idx[3] = {F(f, 0), F(f, 1), F(f, 2)};
+    const Vec3 P[3] = {vertex(idx[0]), vertex(idx[1]), vertex(idx[2])};
+    const Vec3& n = O.face_normal(f);
+    // Face: the plane's section of the face moved out by r along its normal.
+    const Vec2 n_in = in_plane(n);
+    if (n_in.norm() > 1e-12) {
+      Vec3 Q[3];
+      double s[3];
+      for (int k = 0; k < 3; ++k) {
+        Q[k] = P[k] + r * n;
+        s[k] = height(Q[k]);
+        if (s[k] == 0.0) s[k] = 1e-300;  // symbolic perturbation: on the plane counts as above it
+      }
+      const bool pos[3] = {s[0] > 0, s[1] > 0, s[2] > 0};
+      if (!(pos[0] == pos[1] && pos[1] == pos[2])) {
+        int k = 0;  // the corner alone on its side
+        if (pos[0] == pos[1]) k = 2;
+        else if (pos[0] == pos[2]) k = 1;
+        auto cut = [&](int i, int j) { return to_plane(Q[i] + (s[i] / (s[i] - s[j])) * (Q[j] - Q[i])); };
+        const int piece = static_cast<int>(pieces_.size());
+        pieces_.push_back({Kind::kFace, f, false});
+        add_segment(cut(k, (k + 1) % 3), cut(k, (k + 2) % 3), n_in, piece);
+      }
+    }
+    if (!(r > 0.0)) continue;
+    // Edges: the plane's section of the cylinder of radius r about each edge, where the edge can
+    // be the nearest feature (the outward wedge between its faces) and within the edge's slab.
+    for (int k = 0; k < 3; ++k) {
+      const std::int64_t ia = idx[k], ib = idx[(k + 1) % 3];
+      if (ia > ib) continue;  // each edge once, from the face holding it as (low, high)
+      const Vec3 &Pa = P[k], &Pb = P[(k + 1) % 3];
+      const double sa = height(Pa), sb = height(Pb);
+      if (std::min(sa, sb) > r || std::max(sa, sb) < -r) continue;
+      const std::int64_t g = O.face_neighbor(f, k);
+      std::int64_t ic = -1;
+      for (int j = 0; j < 3; ++j)
+        if (F(g, j) != ia && F(g, j) != ib) ic = F(g, j);
+      if (ic < 0) continue;
+      const Vec3 e = Pb - Pa;
+      const double L = e.norm();
+      if (!(L > 0.0)) continue;
+      const Vec3 eh = e / L;
+      auto perp = [&](const Vec3& x) { return Vec3(x - x.dot(eh) * eh); };
+      const Vec3 tA = perp(P[(k + 2) % 3] - Pa), tB = perp(vertex(ic) - Pa);
+      Vec3 e1 = tA.norm() > 0.0 ? Vec3(tA.normalized()) : Vec3(perp(n).normalized());
+      if (!(e1.norm() > 0.5)) continue;
+      const Vec3 e2 = eh.cross(e1);
+      const Vec3& nB = O.face_normal(g);
+      const Vec3 nsum = n + nB;
+      // A concave edge is never the nearest feature of an outside point: no piece.
+      if ((vertex(ic) - Pa).dot(n) > 0.0) continue;
+      {
+        // Quick rejection: the plane misses the wedge Pa + t e + r d (t in [0, 1], d on the arc
+        // from nA to nB, which stays within 1 - cos(half angle) of their chord).
+        const double sag = 1.0 - std::sqrt(std::max(0.0, 0.5 * (1.0 + n.dot(nB))));
+        const double da = n.dot(nu), db = nB.dot(nu);
+        const double lo = std::min(sa, sb) + r * (std::min(da, db) - sag) - 1e-12 * r;
+        const double hi = std::max(sa, sb) + r * (std::max(da, db) + sag) + 1e-12 * r;
+        if (lo > 0.0 || hi < 0.0) continue;
+      }
+      // The plane meets the edge's wedge: its end vertices' arcs may end on it.
+      vertex_mark[static_cast<std::size_t>(ia)] = vertex_mark[static_cast<std::size_t>(ib)] = 1;
+      Harmonic hs[5];
+      int nh = 0;
+      hs[nh++] = {0.0, r * e1.dot(tA), r * e2.dot(tA)};
+      hs[nh++] = {0.0, r * e1.dot(tB), r * e2.dot(tB)};
+      if (nsum.norm() > 1e-12) hs[nh++] = {0.0, -r * e1.dot(nsum), -r * e2.dot(nsum)};
+      const double D = e.dot(nu), alpha = e1.dot(nu), beta = e2.dot(nu);
+      const Vec2 E1 = in_plane(e1), E2 = in_plane(e2);
+      const std::int64_t feature = 3 * static_cast<std::int64_t>(f) + k;
+      if (std::abs(D) > 1e-9 * L) {
+        // The plane meets the cylinder point Pa + t e + r (cos th e1 + sin th e2) at
+        // t(th) = c0 + c1 cos th + c2 sin th: an ellipse, kept where 0 <= t <= 1.
+        const double c0 = -sa / D, c1 = -r * alpha / D, c2 = -r * beta / D;
+        hs[nh++] = {-c0, -c1, -c2};
+        hs[nh++] = {c0 - 1.0, c1, c2};
+        const auto allowed = allowed_intervals(hs, nh);
+        if (allowed.empty()) continue;
+        const Vec3 C3 = Pa + c0 * e, U3 = c1 * e + r * e1, V3 = c2 * e + r * e2;
+        add_arcs(Kind::kEdge, feature, to_plane(C3), in_plane(U3), in_plane(V3), allowed,
+                 [&](double t) { return Vec2(std::cos(t) * E1 + std::sin(t) * E2); });
+      } else {
+        // The edge is parallel to the plane: the section is up to two lines along it.
+        const double sm = 0.5 * (sa + sb), A = r * std::hypot(alpha, beta);
+        if (!(A > 0.0) || std::abs(sm) > A) continue;
+        const double phi = std::atan2(beta, alpha), dphi = std::acos(std::clamp(-sm / A, -1.0, 1.0));
+        for (int side = 0; side < (dphi > 0.0 ? 2 : 1); ++side) {
+          const double th = side == 0 ? phi + dphi : phi - dphi;
+          bool ok = true;
+          for (int j = 0; j < nh && ok; ++j) ok = hs[j].at(th) <= 1e-12 * hs[j].scale();
+          if (!ok) continue;
+          const Vec3 d = r * (std::cos(th) * e1 + std::sin(th) * e2);
+          const int piece = static_cast<int>(pieces_.size());
+          pieces_.push_back({Kind::kEdge, feature, false});
+          add_segment(to_plane(Pa + d), to_plane(Pb + d), in_plane(d), piece);
+        }
+      }
+    }
+  }
+  if (!(r > 0.0)) return;
+  // Vertices: the plane's circle on the sphere of radius r about each vertex, where the vertex
+  // can be the nearest feature (the polar cone of its edges, on the outward side). The ends of a
+  // vertex's arc lie on the wedges of its (convex) edges: a vertex none of whose edge wedges the
+  // plane meets has an arc only when its whole circle lies in the cone.
+  for (const int f : band) {
+    const std::int64_t idx[3] = {F(f, 0), F(f, 1), F(f, 2)};
+    const Vec3 P[3] = {vertex(idx[0]), vertex(idx[1]), vertex(idx[2])};
+    for (int k = 0; k < 3; ++k) {
+      const std::int64_t iv = idx[k];
+      if (vertex_seen[static_cast<std::size_t>(iv)]) continue;
+      vertex_seen[static_cast<std::size_t>(iv)] = 1;
+      const Vec3& V = P[k];
+      const double sv = height(V);
+      if (!(std::abs(sv) < r)) continue;
+      const double rho = std::sqrt((r - sv) * (r + sv));
+      if (!(rho > 1e-15)) continue;
+      const int degree = static_cast<int>(O.ring_end(iv) - O.ring_begin(iv));
+      if (degree + 1 > 16) {
+        // A vertex of very high degree: keep its whole circle (every point of it lies in R).
+        add_arcs(Kind::kVertex, iv, to_plane(V - sv * nu), Vec2(rho, 0.0), Vec2(0.0, rho), {{0.0, kTwoPi}},
+                 [](double t) { return Vec2(std::cos(t), std::sin(t)); });
+        continue;
+      }
+      Harmonic hs[17];
+      int nh = 0;
+      for (const std::int64_t* w = O.ring_begin(iv); w != O.ring_end(iv); ++w) {
+        const Vec3 e = vertex(*w) - V;
+        hs[nh++] = {-sv * nu.dot(e), rho * u.dot(e), rho * p.dot(e)};
+      }
+      const Vec3& nv = O.vertex_normal(iv);
+      if (nv.norm() > 1e-12) hs[nh++] = {sv * nu.dot(nv), -rho * u.dot(nv), -rho * p.dot(nv)};
+      if (!vertex_mark[static_cast<std::size_t>(iv)]) {
+        bool whole = true;  // every constraint holds on the whole circle
+        for (int j = 0; j < nh && whole; ++j) whole = hs[j].k0 + std::hypot(hs[j].k1, hs[j].k2) <= 0.0;
+        if (!whole) continue;
+      }
+      const auto allowed = allowed_intervals(hs, nh);
+      if (allowed.empty()) continue;
+      add_arcs(Kind::kVertex, iv, to_plane(V - sv * nu), Vec2(rho, 0.0), Vec2(0.0, rho), allowed,
+               [](double t) { return Vec2(std::cos(t), std::sin(t)); });
+    }
+  }
+}
+
+int PlaneRegion::build_node(int begin, int end, std::vector<Vec2>& centres, int depth) {
+  // centres[i] is the centre of segment order_[i]; the range [begin, end) of order_ is split in
+  // place (median along the longer axis of the boxes; ties by index: a fixed order everywhere).
+  depth_ = std::max(depth_, depth);
+  const int id = static_cast<int>(nodes_.size());
+  nodes_.emplace_back();
+  Node nd;
+  nd.lo[0] = nd.lo[1] = kInf;
+  nd.hi[0] = nd.hi[1] = -kInf;
+  for (int i = begin; i < end; ++i) {
+    const Segment& s = segments_[order_[i]];
+    for (int a = 0; a < 2; ++a) {
+      nd.lo[a] = std::min({nd.lo[a], s.a[a], s.b[a]});
+      nd.hi[a] = std::max({nd.hi[a], s.a[a], s.b[a]});
+    }
+  }
+  if (end - begin <= 4) {
+    nd.first = begin;
+    nd.count = end - begin;
+    nodes_[id] = nd;
+    return id;
+  }
+  const int axis = (nd.hi[0] - nd.lo[0]) >= (nd.hi[1] - nd.lo[1]) ? 0 : 1;
+  const int mid = (begin + end) / 2;
+  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end, [&](int x, int y) {
+    return centres[x][axis] < centres[y][axis] || (centres[x][axis] == centres[y][axis] && x < y);
+  });
+  nd.left = build_node(begin, mid, centres, depth + 1);
+  nd.right = build_node(mid, end, centres, depth + 1);
+  nodes_[id] = nd;
+  return id;
+}
+
+void PlaneRegion::build_bvh() {
+  nodes_.clear();
+  if (segments_.empty()) return;
+  std::vector<Vec2> centres(segments_.size());
+  order_.resize(segments_.size());
+  for (std::size_t i = 0; i < segments_.size(); ++i) {
+    centres[i] = 0.5 * (segments_[i].a + segments_[i].b);
+    order_[i] = static_cast<int>(i);
+  }
+  nodes_.reserve(segments_.size() + 8);
+  build_node(0, static_cast<int>(segments_.size()), centres, 1);
+  std::vector<Segment> sorted(segments_.size());
+  for (std::size_t i = 0; i < segments_.size(); ++i) sorted[i] = segments_[order_[i]];
+  segments_.swap(sorted);
+  order_.clear();
+  order_.shrink_to_fit();
+  if (depth_ + 2 > 96) throw std::runtime_error("PlaneRegion: BVH too deep");
+}
+
+namespace {
+
+/// Lower bound of the distance from the query to anything in the node's box.
+template <class Node>
+inline double node_bound(const Node& nd, const Query& q) {
+  const double dx = std::max({nd.lo[0] - q.hi.x(), q.lo.x() - nd.hi[0], 0.0});
+  const double dy = std::max({nd.lo[1] - q.hi.y(), q.lo.y() - nd.hi[1], 0.0});
+  double lb = std::sqrt(dx * dx + dy * dy);
+  if (q.line) {
+    const double cx = 0.5 * (nd.lo[0] + nd.hi[0]), cy = 0.5 * (nd.lo[1] + nd.hi[1]);
+    const double hx = 0.5 * (nd.hi[0] - nd.lo[0]), hy = 0.5 * (nd.hi[1] - nd.lo[1]);
+    const double l = std::abs(q.n.x() * (cx - q.a.x()) + q.n.y() * (cy - q.a.y())) -
+                     (std::abs(q.n.x()) * hx + std::abs(q.n.y()) * hy);
+    lb = std::max(lb, l);
+  }
+  return lb;
+}
+
+}  // namespace
+
+PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap) const {
+  Near out;
+  if (nodes_.empty()) return out;
+  const Query q(a, b);
+  double best = std::max(cap, 0.0);
+  bool found = false;
+  struct Item {
+    int node;
+    double lb;
+  };
+  Item stack[96];
+  int top = 0;
+  stack[top++] = {0, node_bound(nodes_[0], q)};
+  while (top > 0) {
+    const Item it = stack[--top];
+    if (it.lb > best + kTie) continue;
+    const Node& nd = nodes_[it.node];
+    if (nd.count > 0) {
+      for (int i = nd.first; i < nd.first + nd.count; ++i) {
+        const Segment& s = segments_[i];
+        Vec2 c1, c2;
+        const double d = segment_distance(a, b, s.a, s.b, &c1, &c2);
+        if (d > best + kTie) continue;
+        if (!found || d < best - kTie) {
+          found = true;
+          out.normal_sum = s.normal;
+          out.crossed = s.crossed;
+          out.ties = 1;
+          out.at_end = (c2 - s.a).squaredNorm() <= kJoin * kJoin || (c2 - s.b).squaredNorm() <= kJoin * kJoin;
+          best = d;
+          out.distance = d;
+          out.on_query = c1;
+          out.on_region = c2;
+        } else {
+          out.normal_sum += s.normal;
+          out.crossed = out.crossed || s.crossed;
+          ++out.ties;
+          if (d < best) {
+            best = d;
+            out.distance = d;
+            out.on_query = c1;
+            out.on_region = c2;
+          }
+        }
+        if (d <= kTouch) {
+          out.distance = 0.0;
+          return out;
+        }
+      }
+      continue;
+    }
+    const double ll = node_bound(nodes_[nd.left], q), lr = node_bound(nodes_[nd.right], q);
+    if (ll < lr) {
+      if (lr <= best + kTie) stack[top++] = {nd.right, lr};
+      if (ll <= best + kTie) stack[top++] = {nd.left, ll};
+    } else {
+      if (ll <= best + kTie) stack[top++] = {nd.left, ll};
+      if (lr <= best + kTie) stack[top++] = {nd.right, lr};
+    }
+  }
+  if (!found) out = Near();
+  return out;
+}
+
+bool PlaneRegion::any_within(const Vec2& a, const Vec2& b, double distance) const {
+  if (nodes_.empty()) return false;
+  const Query q(a, b);
+  int stack[96];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& nd = nodes_[stack[--top]];
+    if (node_bound(nd, q) > distance) continue;
+    if (nd.count > 0) {
+      for (int i = nd.first; i < nd.first + nd.count; ++i) {
+        Vec2 c1, c2;
+        if (segment_distance(a, b, segments_[i].a, segments_[i].b, &c1, &c2) <= distance) return true;
+      }
+      continue;
+    }
+    stack[top++] = nd.right;
+    stack[top++] = nd.left;
+  }
+  return false;
+}
+
+void PlaneRegion::mark_crossings() {
+  // R's boundary is closed curves: every end of a piece on it is the end of another piece (or of
+  // itself, a closed circle). A piece with a loose end lies (in part) inside R: flag it.
+  const std::size_t n = segments_.size();
+  {
+    struct End {
+      double x, y;
+      int piece;
+    };
+    std::vector<End> ends;
+    ends.reserve(2 * pieces_.size());
+    for (std::size_t k = 0; k < piece_ends_.size(); ++k) {
+      const auto& pe = piece_ends_[k];
+      if (std::isnan(pe[0].x())) continue;  // a piece without segments
+      ends.push_back({pe[0].x(), pe[0].y(), static_cast<int>(k)});
+      ends.push_back({pe[1].x(), pe[1].y(), static_cast<int>(k)});
+    }
+    std::vector<int> idx(ends.size());
+    for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<int>(i);
+    std::sort(idx.begin(), idx.end(), [&](int a, int b) { return ends[a].x < ends[b].x || (ends[a].x == ends[b].x && a < b); });
+    std::vector<char> joined(ends.size(), 0);
+    for (std::size_t i = 0; i < idx.size(); ++i) {
+      const End& e = ends[idx[i]];
+      for (std::size_t j = i + 1; j < idx.size() && ends[idx[j]].x - e.x <= kJoin; ++j) {
+        const End& f = ends[idx[j]];
+        if (std::abs(f.y - e.y) <= kJoin && std::hypot(f.x - e.x, f.y - e.y) <= kJoin &&
+            (f.piece != e.piece || (idx[i] ^ idx[j]) == 1)) {
+          joined[idx[i]] = 1;
+          joined[idx[j]] = 1;
+        }
+      }
+    }
+    for (std::size_t i = 0; i < ends.size(); ++i)
+      if (!joined[i]) pieces_[ends[i].piece].crossed = true;
+    piece_ends_.clear();
+    piece_ends_.shrink_to_fit();
+  }
+  // Pieces of R's boundary never cross one another; a piece that another crosses (transversally,
+  // away from both their end points) has parts inside R, where the side test is unsafe.
+  for (std::size_t i = 0; i < n; ++i) {
+    const Segment& s = segments_[i];
+    const Query q(s.a, s.b);
+    int stack[96];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& nd = nodes_[stack[--top]];
+      if (node_bound(nd, q) > kTouch) continue;
+      if (nd.count == 0) {
+        stack[top++] = nd.right;
+        stack[top++] = nd.left;
+        continue;
+      }
+      for (int j = nd.first; j < nd.first + nd.count; ++j) {
+        if (static_cast<std::size_t>(j) <= i) continue;  // each pair once
+        const Segment& t = segments_[j];
+        if (t.piece == s.piece) continue;
+        const Vec2 d1 = s.b - s.a, d2 = t.b - t.a, w = t.a - s.a;
+        const double denom = cross2(d1, d2);
+        if (std::abs(denom) <= 1e-9 * d1.norm() * d2.norm()) continue;  // parallel: a junction
+        const double x = cross2(w, d2) / denom, y = cross2(w, d1) / denom;
+        const double ex = 1e-9, ey = 1e-9;
+        if (x > ex && x < 1.0 - ex && y > ey && y < 1.0 - ey) {
+          pieces_[s.piece].crossed = true;
+          pieces_[t.piece].crossed = true;
+          segments_[i].crossed = true;
+          segments_[j].crossed = true;
+          cuts_.push_back({static_cast<int>(i), x});
+          cuts_.push_back({j, y});
+        }
+      }
+    }
+  }
+}
+
+bool PlaneRegion::inside_3d(const Vec2& x) const {
+  fallbacks_.fetch_add(1, std::memory_order_relaxed);
+  const Vec3 X = plane_.to_world(x);
+  const Object& O = *object_;
+  if (radius_ > 0.0) return O.bvh().any_within(X, X, radius_) || O.inside_off_surface(X);
+  return O.inside(X);
+}
+
+bool PlaneRegion::inside_from(const Near& near, const Vec2& x) const {
+  if (near.distance == 0.0) return true;
+  if (!std::isfinite(near.distance)) return inside_3d(x);
+  // A loose end (an end point no other segment shares: rounding, or a gap): no safe side.
+  if (near.at_end && near.ties < 2) return inside_3d(near.on_query);
+  const double s = (near.on_query - near.on_region).dot(near.normal_sum);
+  if (!(std::abs(s) > 1e-9 * near.distance * near.normal_sum.norm())) return inside_3d(near.on_query);
+  return s < 0.0;
+}
+
+bool PlaneRegion::inside(const Vec2& x) const {
+  if (segments_.empty()) return false;  // the plane misses R: no boundary, nothing inside
+  return inside_from(nearest(x, x, kInf), x);
+}
+
+// --- SectionSkin --------------------------------------------------------------------------
+
+struct SectionSkin::Entry {
+  Entry(std::shared_ptr<const Object> object, const FingerPlane& p, double r, double flatten)
+      : plane(p), radius(r), region(std::move(object), p, r, flatten) {}
+  FingerPlane plane;
+  double radius;
+  PlaneRegion region;
+};
+
+SectionSkin::SectionSkin(std::shared_ptr<const Object> object, double flatten)
+    : object_(object), mesh_(object), flatten_(flatten) {
+  if (!(flatten > 0.0) || !std::isfinite(flatten))
+    throw std::invalid_argument("SectionSkin: the flattening tolerance must be a positive number of metres, got " +
+                                std::to_string(flatten));
+}
+
+SectionSkin::~SectionSkin() = default;
+
+const PlaneRegion* SectionSkin::region(const FingerPlane& plane, double radius) const {
+  auto same = [&](const Entry* e) {
+    return e->radius == radius && e->plane.origin == plane.origin && e->plane.u == plane.u && e->plane.p == plane.p;
+  };
+  const int n = count_.load(std::memory_order_acquire);
+  for (int i = 0; i < n; ++i) {
+    const Entry* e = slots_[i].load(std::memory_order_acquire);
+    if (same(e)) return &e->region;
+  }
+  if (!(radius >= 0.0) || !std::isfinite(radius) || !plane.origin.allFinite() || !plane.u.allFinite() ||
+      !plane.p.allFinite())
+    return nullptr;
+  std::lock_guard<std::mutex> lock(mutex_);
+  const int m = count_.load(std::memory_order_relaxed);
+  for (int i = n; i < m; ++i) {
+    const Entry* e = slots_[i].load(std::memory_order_relaxed);
+    if (same(e)) return &e->region;
+  }
+  if (m >= kMaxRegions) return nullptr;
+  auto e = std::make_unique<Entry>(object_, plane, radius, flatten_);
+  const Entry* raw = e.get();
+  owned_.push_back(std::move(e));
+  slots_[m].store(raw, std::memory_order_release);
+  count_.store(m + 1, std::memory_order_release);
+  return &raw->region;
+}
+
+Touch SectionSkin::link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap) const {
+  const PlaneRegion* R = region(plane, radius);
+  if (!R) return Sensing::link(plane, a, b, radius, cap);
+  const double c = cap >= 0.0 ? cap : 0.0;
+  PlaneRegion::Near nr = R->nearest(a, b, c);
+  Touch t;
+  auto dir = [&](const Vec2& v) { return Vec3(v.x() * plane.u + v.y() * plane.p); };
+  if (nr.distance == 0.0) {
+    // Crosses or touches R's boundary: penetrating by an unmeasured depth (as the mesh world).
+    t.gap = -radius - std::numeric_limits<double>::min();
+    t.on_hand = plane.to_world(nr.on_query);
+    t.on_object = t.on_hand;
+    const double len = nr.normal_sum.norm();
+    t.normal = len > 0.0 ? dir(nr.normal_sum / len) : plane.normal();
+    return t;
+  }
+  bool inside;
+  if (!std::isfinite(nr.distance)) {
+    // Nothing within the cap: outside (any value above the cap will do) or deep inside.
+    inside = R->inside(a);
+    if (!inside) {
+      t.gap = std::nextafter(c, kInf);
+      t.on_hand = plane.to_world(a);
+      t.on_object = t.on_hand;
+      return t;
+    }
+    nr = R->nearest(a, b, kInf);
+    if (!std::isfinite(nr.distance)) {  // no boundary at all (cannot happen for a bounded R)
+      t.gap = -kInf;
+      return t;
+    }
+  } else {
+    inside = R->inside_from(nr, nr.on_query);
+  }
+  t.gap = inside ? -nr.distance : nr.distance;
+  t.on_hand = plane.to_world(nr.on_query);
+  t.on_object = plane.to_world(nr.on_region);
+  const Vec2 g = (nr.on_query - nr.on_region) / nr.distance;
+  t.normal = dir(inside ? Vec2(-g) : g);
+  return t;
+}
+
+bool SectionSkin::link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
+                            bool a_outside) const {
+  constexpr double kSlack = 1e-12;
+  if (a.y() < front - kSlack || b.y() < front - kSlack) return false;
+  const PlaneRegion* R = region(plane, radius);
+  if (!R) return Sensing::link_free(plane, a, b, radius, front, a_outside);
+  if (R->any_within(a, b, kTouch)) return false;
+  return a_outside || !R->inside(a);
+}
+
+}  // namespace hugger

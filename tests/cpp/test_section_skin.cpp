@@ -1,0 +1,281 @@
+// The section skin against the mesh world (the reference skin): clearance decisions, gaps and
+// inside tests on random queries in random planes, and plans made with it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+
+#include "hugger/planner/planner.hpp"
+#include "hugger/world/section_skin.hpp"
+#include "hugger/world/simulated_world.hpp"
+#include "meshes.hpp"
+
+using namespace hugger;
+
+namespace {
+
+constexpr double kFlatten = 2e-7;
+
+/// An axis-aligned box (12 triangles, outward normals): edges parallel to many planes.
+test::Mesh box(const Vec3& half) {
+  test::Mesh m;
+  m.vertices.resize(8, 3);
+  for (int i = 0; i < 8; ++i)
+    m.vertices.row(i) << ((i & 1) ? half.x() : -half.x()), ((i & 2) ? half.y() : -half.y()), ((i & 4) ? half.z() : -half.z());
+  const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  m.faces.resize(12, 3);
+  for (int i = 0; i < 12; ++i)
+    for (int k = 0; k < 3; ++k) m.faces(i, k) = f[i][k];
+  return m;
+}
+
+/// The benchmark's `curvy` object (non-convex: concave dents), at a given subdivision.
+test::Mesh curvy(int subdivisions) {
+  test::Mesh m = test::icosphere(subdivisions);
+  for (Eigen::Index i = 0; i < m.vertices.rows(); ++i) {
+    const double x = m.vertices(i, 0), y = m.vertices(i, 1), z = m.vertices(i, 2);
+    const double g = (x - 0.1) / 0.3;
+    const double rho = 1.0 + 0.20 * std::sin(3.0 * x + 0.7) * std::cos(2.5 * y - 0.3) +
+                       0.12 * std::sin(4.0 * z + 1.2) * std::cos(2.0 * x - 0.5) +
+                       0.10 * std::cos(3.5 * y + 0.9) * std::sin(2.5 * z) - 0.10 * std::exp(-(g * g));
+    m.vertices.row(i) *= rho * 0.04;
+    m.vertices(i, 0) *= 1.2;
+  }
+  return m;
+}
+
+/// A Wavefront OBJ (v and f lines; polygons fanned), or an empty mesh if the file is absent.
+test::Mesh load_obj(const std::string& path) {
+  test::Mesh m;
+  std::ifstream in(path);
+  if (!in) return m;
+  std::vector<Vec3> v;
+  std::vector<std::array<std::int64_t, 3>> f;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream is(line);
+    std::string tag;
+    is >> tag;
+    if (tag == "v") {
+      Vec3 p;
+      is >> p.x() >> p.y() >> p.z();
+      v.push_back(p);
+    } else if (tag == "f") {
+      std::vector<std::int64_t> idx;
+      std::string tok;
+      while (is >> tok) idx.push_back(std::stoll(tok.substr(0, tok.find('/'))) - 1);
+      for (std::size_t k = 1; k + 1 < idx.size(); ++k) f.push_back({idx[0], idx[k], idx[k + 1]});
+    }
+  }
+  m.vertices.resize(static_cast<Eigen::Index>(v.size()), 3);
+  for (std::size_t i = 0; i < v.size(); ++i) m.vertices.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
+  m.faces.resize(static_cast<Eigen::Index>(f.size()), 3);
+  for (std::size_t i = 0; i < f.size(); ++i)
+    for (int k = 0; k < 3; ++k) m.faces(static_cast<Eigen::Index>(i), k) = f[i][k];
+  return m;
+}
+
+std::string shared_dir() {
+  for (const char* d : {"../shared", "../../shared", "../../../shared", "/work/shared"}) {
+    std::ifstream probe(std::string(d) + "/data/objects/ycb_apple.obj");
+    if (probe) return d;
+  }
+  return "";
+}
+
+struct Tally {
+  long queries = 0, clear_disagree = 0, blocked_disagree = 0, inside_disagree = 0;
+  double worst_clear_penetration = 0.0;  ///< deepest 3D penetration of a link the skin called clear
+};
+
+/// Random planes through the object; random links and points in them, near the object.
+void compare(const std::shared_ptr<const Object>& object, unsigned seed, int planes, int per_plane, Tally* tally) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  const SectionSkin skin(object, kFlatten);
+  const SimulatedWorld& mesh = skin.mesh_world();
+  const Aabb box = object->bounds();
+  const Vec3 c = box.centre(), ext = box.extent();
+  const double size = ext.maxCoeff();
+  const double radii[3] = {0.0, 0.02 * size, 0.06 * size};
+  for (int k = 0; k < planes; ++k) {
+    FingerPlane pl;
+    pl.origin = c + Vec3(U(rng) - 0.5, U(rng) - 0.5, U(rng) - 0.5).cwiseProduct(ext) * 0.8;
+    pl.p = test::random_unit(rng);
+    pl.u = test::random_unit(rng).cross(pl.p).normalized();
+    const double r = radii[k % 3];
+    const Vec2 lo = pl.to_plane(c) - Vec2::Constant(0.7 * size), span = Vec2::Constant(1.4 * size);
+    for (int q = 0; q < per_plane; ++q) {
+      const Vec2 a = lo + Vec2(U(rng) * span.x(), U(rng) * span.y());
+      const double len = (q % 4 == 0) ? 0.0 : U(rng) * 0.4 * size, ang = U(rng) * 2 * kPi;
+      const Vec2 b = a + len * Vec2(std::cos(ang), std::sin(ang));
+      const Vec3 A = pl.to_world(a), B = pl.to_world(b);
+      // Reference: the exact 3D capsule test and gap.
+      const bool clear3 = mesh.capsule_clear(A, B, r, false);
+      const double gap3 = mesh.capsule(A, B, r).gap;
+      const bool clear2 = skin.link_free(pl, a, b, r, -kInf, false);
+      ++tally->queries;
+      if (clear2 && !clear3) {
+        ++tally->clear_disagree;
+        tally->worst_clear_penetration = std::max(tally->worst_clear_penetration, -gap3);
+      }
+      if (!clear2 && clear3 && gap3 > kFlatten + 1e-9) ++tally->blocked_disagree;
+      // In-plane gaps are never smaller than 3D gaps (less the flattening), and exact in sign.
+      const Touch t2 = skin.link(pl, a, b, r);
+      if (gap3 > kFlatten + 1e-9) {
+        EXPECT_GE(t2.gap, gap3 - kFlatten - 1e-9) << "plane " << k << " query " << q;
+      }
+      if (gap3 < -1e-9) {
+        EXPECT_LT(t2.gap, 0.0) << "plane " << k << " query " << q << " gap3 " << gap3;
+      }
+      // Point inside R: the side test against the exact 3D test.
+      const PlaneRegion* R = skin.region(pl, r);
+      ASSERT_NE(R, nullptr);
+      const double d3 = object->nearest(A, A).signed_distance;
+      if (std::abs(std::max(d3, 0.0) - r) > kFlatten + 1e-9 && (R->inside(a) != (d3 <= r)))
+        ++tally->inside_disagree;
+    }
+  }
+}
+
+}  // namespace
+
+TEST(SectionSkin, AgreesWithTheMeshWorldOnRandomQueries) {
+  struct Case {
+    const char* name;
+    test::Mesh mesh;
+  };
+  std::vector<Case> cases = {{"sphere", test::icosphere(3, Vec3::Constant(0.04))},
+                             {"ellipsoid", test::icosphere(3, Vec3(0.05, 0.03, 0.02), Vec3(0.01, 0.0, -0.02))},
+                             {"box", box(Vec3(0.03, 0.02, 0.05))},
+                             {"curvy", curvy(4)}};
+  Tally total;
+  unsigned seed = 1;
+  for (const auto& c : cases) {
+    Tally t;
+    compare(std::make_shared<Object>(c.mesh.vertices, c.mesh.faces), seed++, 30, 100, &t);
+    std::printf("  %-10s %ld queries: %ld clear-but-penetrating (worst %.3g m), %ld blocked-but-clear, %ld inside\n",
+                c.name, t.queries, t.clear_disagree, t.worst_clear_penetration, t.blocked_disagree, t.inside_disagree);
+    total.queries += t.queries;
+    total.clear_disagree += t.clear_disagree;
+    total.blocked_disagree += t.blocked_disagree;
+    total.inside_disagree += t.inside_disagree;
+    total.worst_clear_penetration = std::max(total.worst_clear_penetration, t.worst_clear_penetration);
+  }
+  EXPECT_GE(total.queries, 10000);
+  EXPECT_LE(total.worst_clear_penetration, 5e-6);
+  EXPECT_EQ(total.blocked_disagree, 0);
+  EXPECT_EQ(total.inside_disagree, 0);
+}
+
+TEST(SectionSkin, AgreesWithTheMeshWorldOnSharedMeshes) {
+  const std::string dir = shared_dir();
+  if (dir.empty()) GTEST_SKIP() << "../shared/data/objects (the shared YCB meshes) is absent";
+  Tally total;
+  unsigned seed = 100;
+  for (const char* name : {"ycb_apple", "ycb_banana", "ycb_cracker_box", "ycb_lemon"}) {
+    const test::Mesh m = load_obj(dir + "/data/objects/" + name + ".obj");
+    ASSERT_GT(m.faces.rows(), 0) << name;
+    std::shared_ptr<Object> obj;
+    try {
+      obj = std::make_shared<Object>(m.vertices, m.faces);
+    } catch (const std::invalid_argument& e) {
+      std::printf("  %s: not a closed mesh here (%s), skipped\n", name, e.what());
+      continue;
+    }
+    Tally t;
+    compare(obj, seed++, 15, 100, &t);
+    std::printf("  %-16s %ld queries: %ld clear-but-penetrating (worst %.3g m), %ld blocked-but-clear, %ld inside\n",
+                name, t.queries, t.clear_disagree, t.worst_clear_penetration, t.blocked_disagree, t.inside_disagree);
+    total.queries += t.queries;
+    total.worst_clear_penetration = std::max(total.worst_clear_penetration, t.worst_clear_penetration);
+    total.blocked_disagree += t.blocked_disagree;
+    total.inside_disagree += t.inside_disagree;
+  }
+  EXPECT_LE(total.worst_clear_penetration, 5e-6);
+  EXPECT_EQ(total.blocked_disagree, 0);
+  EXPECT_EQ(total.inside_disagree, 0);
+}
+
+namespace {
+
+/// Plans with the given skin; returns the deepest 3D penetration of any link in any configuration
+/// (0 when none), measured against the mesh world, and checks the plan's basic properties.
+double plan_and_measure(const std::shared_ptr<const Sensing>& skin, const SimulatedWorld& mesh, const HandModel& hand,
+                        const Pose& start, Status* status, std::vector<Configuration>* history) {
+  Planner planner(hand, skin, Vec3::Zero(), start);
+  *status = planner.plan();
+  *history = planner.history();
+  double worst = 0.0;
+  const int M = hand.fingers(), N = hand.links();
+  for (const Configuration& c : planner.history())
+    for (int m = 0; m < M; ++m)
+      for (int n = 0; n < N; ++n) {
+        const Vec3& a = c.joints[m * (N + 1) + n];
+        const Vec3& b = c.joints[m * (N + 1) + n + 1];
+        EXPECT_NEAR((b - a).norm(), hand.link_length(m, n), 1e-9);
+        worst = std::max(worst, -mesh.capsule(a, b, hand.link_radius()).gap);
+      }
+  for (std::size_t k = 1; k < planner.history().size(); ++k)
+    for (int m = 0; m < M; ++m) EXPECT_GE(planner.history()[k].tip_state[m], planner.history()[k - 1].tip_state[m]);
+  return worst;
+}
+
+}  // namespace
+
+TEST(SectionSkin, PlansAreCollisionFreeIn3DAndDeterministic) {
+  struct Case {
+    const char* name;
+    test::Mesh mesh;
+  };
+  std::vector<Case> cases = {{"sphere", test::icosphere(4, Vec3::Constant(0.04))}, {"curvy", curvy(5)},
+                             {"box", box(Vec3(0.03, 0.025, 0.04))}};
+  const HandModel hand = HandModel::uniform(5, 5, 0.02, 0.004, 0.03, 0.01);
+  for (const auto& c : cases) {
+    auto object = std::make_shared<const Object>(c.mesh.vertices, c.mesh.faces);
+    const SimulatedWorld mesh(object);
+    Pose start = Pose::Identity();
+    start.linear() = Eigen::AngleAxisd(kPi, Vec3::UnitX()).toRotationMatrix();
+    start.translation() = Vec3(0, 0, 0.2);
+    start.linear() = Eigen::AngleAxisd(0.7, Vec3::UnitY()).toRotationMatrix() * start.linear();
+    Status s1, s2, s3;
+    std::vector<Configuration> h1, h2, h3;
+    const double pen = plan_and_measure(std::make_shared<SectionSkin>(object), mesh, hand, start, &s1, &h1);
+    plan_and_measure(std::make_shared<SectionSkin>(object), mesh, hand, start, &s2, &h2);
+    const double pen_mesh = plan_and_measure(std::make_shared<SimulatedWorld>(object), mesh, hand, start, &s3, &h3);
+    std::printf("  %-7s section skin: %s, %zu configurations, deepest 3D penetration %.3g m; mesh world: %s, %zu, %.3g m\n",
+                c.name, to_string(s1).c_str(), h1.size(), pen, to_string(s3).c_str(), h3.size(), pen_mesh);
+    EXPECT_LE(pen, 5e-6) << c.name;
+    EXPECT_EQ(s1, Status::kDone) << c.name;
+    ASSERT_EQ(h1.size(), h2.size()) << c.name;
+    for (std::size_t k = 0; k < h1.size(); ++k)
+      for (std::size_t j = 0; j < h1[k].joints.size(); ++j)
+        ASSERT_TRUE(h1[k].joints[j] == h2[k].joints[j]) << c.name << " configuration " << k;
+  }
+}
+
+TEST(SectionSkin, RegionSizeBarelyGrowsWithTheMesh) {
+  // A plane through a sphere of radius 4 cm, link radius 4 mm: the boundary pieces are one ring
+  // of features, so their number grows with the square root of the triangle count, and the
+  // flattened segments (whose count is set by the curvature of R, not the mesh) barely at all.
+  FingerPlane pl;
+  pl.origin = Vec3(0.0, 0.005, 0.0);
+  pl.u = Vec3(1, 0, 0);
+  pl.p = Vec3(0, 0.6, 0.8);
+  std::vector<std::size_t> counts;
+  for (int s : {3, 5, 6}) {
+    const auto m = test::icosphere(s, Vec3::Constant(0.04));
+    auto obj = std::make_shared<Object>(m.vertices, m.faces);
+    const PlaneRegion R(obj, pl, 0.004, 1e-6);
+    std::printf("  sphere %ld triangles: %zu pieces, %zu segments (%ld dropped as inside R)\n",
+                static_cast<long>(m.faces.rows()), R.pieces().size(), R.segments().size(), R.dropped());
+    EXPECT_EQ(R.dropped(), 0);  // a convex object: no piece of its region lies inside it
+    counts.push_back(R.segments().size());
+  }
+  EXPECT_LT(counts.back(), 8 * counts.front());
+}

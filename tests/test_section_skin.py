@@ -1,0 +1,45 @@
+"""The section skin from Python: the skin choice, and the region it builds."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import hugger
+
+
+def test_skin_choice_is_recorded_and_checked():
+    hand = hugger.Hand()
+    obj = hugger.objects.sphere(0.04, subdivisions=3)
+    start = hugger.look_at([0, 0, 0.2], [0, 0, 0])
+    for skin in ("section", "mesh"):
+        traj = hugger.Planner(hand, obj, [0, 0, 0], start, skin=skin).plan()
+        assert traj.status == "done"
+        assert json.loads(traj.params_json)["skin"] == skin
+    assert json.loads(hugger.Planner(hand, obj, [0, 0, 0], start).plan().params_json)["skin"] == "mesh"
+    with pytest.raises(ValueError, match="skin"):
+        hugger.Planner(hand, obj, [0, 0, 0], start, skin="voxels")
+
+
+def test_region_boundary_is_a_link_radius_from_the_object():
+    obj = hugger.objects.sphere(0.04, subdivisions=3)
+    r, flatten = 0.004, 1e-6
+    origin, u, v = np.array([0.0, 0.01, 0.0]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.6, 0.8])
+    region = obj._core.section_region(origin, u, v, r, flatten)
+    seg = region["segments"]
+    assert seg.shape[1:] == (2, 2) and len(seg) > 50
+    # Every end and middle of every segment: between r and r + flatten from the surface, outside.
+    pts = np.concatenate([seg[:, 0], seg[:, 1], seg.mean(axis=1)])
+    world = origin + pts[:, :1] * u + pts[:, 1:] * v
+    d = obj._core.signed_distance(world)
+    assert np.all(d >= r - 1e-9) and np.all(d <= r + flatten + 1e-9)
+    # Outward normals point away from the object: one step along them increases the distance.
+    mid = world[2 * len(seg):]
+    n = region["normals"]
+    step = mid + 1e-4 * (n[:, :1] * u + n[:, 1:] * v)
+    assert np.all(obj._core.signed_distance(step) > d[2 * len(seg):])
+    with pytest.raises(ValueError, match="orthonormal"):
+        obj._core.section_region(origin, u, u, r)
+    with pytest.raises(ValueError, match="radius"):
+        obj._core.section_region(origin, u, v, -1.0)
