@@ -14,7 +14,7 @@ a detection margin so that gaps are measured before anything touches. Each touch
 bisection of the step, so every emitted configuration is free of penetration (up to MuJoCo's
 distance tolerance, about 1e-6 m).
 
-The result is a :class:`hugger.Trajectory` (DESIGN.md section 5): phase 0 for C_init, 1 for the
+The result is a :class:`hugger.Trajectory` (docs/file-format.md): phase 0 for C_init, 1 for the
 reorientation, 2 for approach and closing; tip_state FROZEN during the approach, CONTACT while a
 finger closes, DONE once all its joints have stopped; ``status`` ``done`` (or ``max_iterations``).
 ``stats`` holds ``plan_time_s``, the wall-clock time of the planning itself (the loop of collision

@@ -44,7 +44,7 @@ def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nd
 
 def point_palm_distance(p: np.ndarray, pose: np.ndarray, radius: float, thickness: float) -> np.ndarray:
     """Distance of points p (n, 3) to the solid palm cylinder: front face at the pose origin, body
-    behind it (local z in [-thickness, 0]), DESIGN.md section 2."""
+    behind it (local z in [-thickness, 0]), docs/model.md."""
     q = (p - pose[:3, 3]) @ pose[:3, :3]
     rho = np.hypot(q[:, 0], q[:, 1])
     dr = np.maximum(rho - radius, 0.0)
@@ -287,7 +287,7 @@ def test_contacts_of_real_plan_lie_on_surface_and_on_their_link(sphere_plan, sph
     palm = point_palm_distance(c.points[~links], traj.palm_pose[-1], hand.palm_radius, hand.palm_thickness)
     assert 1 <= palm.size <= 8
     assert palm.max() <= DIST + 1e-9
-    # gaps: in reach, and no penetration beyond the collision tolerance of DESIGN.md section 6
+    # gaps: in reach, and no penetration beyond the collision tolerance of docs/validation.md
     assert c.gap.max() <= DIST + 1e-9
     assert c.gap.min() >= -max(0.02 * r, 5e-5)
 

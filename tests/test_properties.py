@@ -1,4 +1,4 @@
-"""Property tests over many random cases (DESIGN.md section 3), each plan checked independently.
+"""Property tests over many random cases (docs/algorithm.md), each plan checked independently.
 
 Objects: sphere, ellipsoid, box, cylinder, a smooth non-convex blob, and the meshes in
 ../shared/data/objects; random start poses at a safe distance with random palm orientations;
@@ -34,7 +34,7 @@ RULES = ["paper", "hug"]
 
 
 def assert_design_properties(traj: hugger.Trajectory, hand: hugger.Hand) -> None:
-    """The invariants of DESIGN.md section 3, from the trajectory alone."""
+    """The invariants of docs/algorithm.md, from the trajectory alone."""
     J, P, ts, phase = traj.joints, traj.palm_pose, traj.tip_state, traj.phase
     # link lengths are exact
     lengths = np.linalg.norm(np.diff(J, axis=2), axis=-1)

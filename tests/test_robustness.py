@@ -1,4 +1,4 @@
-"""The bad-input battery (DESIGN.md section 6, "Robust"): every bad input gets a ValueError
+"""The bad-input battery (docs/validation.md, "Robust"): every bad input gets a ValueError
 that says what is wrong (or, for implausible sizes, a UserWarning), never a crash, a hang, a
 silent success or a run to max_iterations; and the same input gives bit-identical output, alone,
 on two threads and in another process, with the GIL released while the engine works.

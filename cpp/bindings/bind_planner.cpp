@@ -121,7 +121,7 @@ double optional_param(const py::object& value, const char* name) {
 }  // namespace
 
 void bind_planner(py::module_& m) {
-  py::class_<PyPlanner>(m, "Planner", "The Hugger planner (DESIGN.md section 3) over a simulated world.")
+  py::class_<PyPlanner>(m, "Planner", "The Hugger planner (docs/algorithm.md) over a simulated world.")
       .def(py::init([](const HandModel& hand, const py::object& source, const ArrayD& target,
                        const ArrayD& palm_pose, const py::object& step, const py::object& epsilon,
                        const py::object& contact_tolerance, const py::object& max_iterations,

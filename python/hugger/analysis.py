@@ -1,4 +1,4 @@
-"""Grasp analysis over *all* contacts of a configuration: the palm and every link (DESIGN.md section 6).
+"""Grasp analysis over *all* contacts of a configuration: the palm and every link (docs/validation.md).
 
 Three layers, each usable on its own:
 
@@ -13,7 +13,7 @@ Three layers, each usable on its own:
 CLI's ``--json`` output and the README tables are made from it.
 
 Units are metres and degrees (wrap angles) in the world frame; signed gaps are negative when the
-hand penetrates the object (FCL's convention, DESIGN.md section 2).
+hand penetrates the object (FCL's convention, docs/model.md).
 """
 from __future__ import annotations
 
@@ -282,7 +282,7 @@ def contacts_of(hand: dict, obj: Any, palm_pose: Any, joints: Any, distance: flo
 
     *Palm.* A solid cylinder of ``palm_radius`` and ``palm_thickness`` whose front face is centred
     at the palm pose origin with normal the pose's local z, its body behind (local z in [-t, 0]),
-    as in DESIGN.md section 2 and :meth:`Trajectory.palm_gap`. When its gap is within ``distance``,
+    as in docs/model.md and :meth:`Trajectory.palm_gap`. When its gap is within ``distance``,
     its front face disc and rim are sampled (spacing min(1 mm, radius/8, thickness/2)) and the
     surface points nearest the touching region's extreme samples in 8 in-plane directions are
     contacts (at most 8, fewer when they coincide).
@@ -364,7 +364,7 @@ def wrap_angle(traj: Any, k: int = -1, distance: float = CONTACT_DISTANCE, obj: 
     """(M,) degrees: how far each finger's contacts wrap around the target T in its finger plane.
 
     For finger m, each of its contact points (links only, not the palm) is projected onto the
-    finger plane Pi_m (DESIGN.md section 2: through the root R_m, spanned by the radial direction
+    finger plane Pi_m (docs/model.md: through the root R_m, spanned by the radial direction
     u_m and the palm normal p) and given its polar angle about T (projected onto Pi_m) in the
     in-plane coordinates (xi along u_m, eta along p). Walking the finger's contacts in order, root
     to tip, the angles are unwrapped (consecutive contacts differ by less than 180 degrees); the

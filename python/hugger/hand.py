@@ -1,4 +1,4 @@
-"""The hand model (DESIGN.md section 2): a round palm and M planar fingers of N links."""
+"""The hand model (docs/model.md): a round palm and M planar fingers of N links."""
 from __future__ import annotations
 
 import json
@@ -274,7 +274,7 @@ class Hand:
 
     def forward(self, palm_pose: Any, angles: Any) -> np.ndarray:
         """Joint positions (M, N+1, 3) in the world (m) from the rigid palm pose T_WP (4, 4) and joint
-        angles (M, N) in radians (DESIGN.md section 2)."""
+        angles (M, N) in radians (docs/model.md)."""
         a = _real_array("angles", angles)
         if a.shape != (self.fingers, self.links):
             raise ValueError(f"angles must have shape ({self.fingers}, {self.links}), got {a.shape}")

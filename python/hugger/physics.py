@@ -16,7 +16,7 @@ Units: metres, kilograms, seconds, radians; world frame = the trajectory's world
   L_mn (centred at z = L_mn / 2, so the geom's z axis is the link direction), and the hinge of
   link n sits at j_mn with axis ``a_m = u_m × p̂`` expressed in the palm frame (u_m the finger's
   radial direction), which is normal to the finger plane Π_m. With this axis a
-  positive hinge angle is flexion (DESIGN.md §2), so ``qpos`` of the hinges *is* the trajectory's
+  positive hinge angle is flexion (docs/model.md), so ``qpos`` of the hinges *is* the trajectory's
   ``angles`` and forward kinematics reproduces its ``joints``. A link radius of 0 (zero-thickness
   links, as in the paper) is simulated with a capsule of :data:`ZERO_RADIUS_SUBSTITUTE` = 0.2 mm: a
   capsule needs a positive radius, and 0.2 mm keeps the initial overlap with the object (the plan

@@ -18,7 +18,7 @@ FROZEN, CONTACT, DONE = 0, 1, 2
 
 @dataclass(frozen=True)
 class Configuration:
-    """One hand configuration (DESIGN.md section 2)."""
+    """One hand configuration (docs/model.md)."""
 
     palm_pose: np.ndarray  #: (4, 4) T_WP
     joints: np.ndarray  #: (M, N+1, 3) joint positions in the world, j_m0 (tail) .. j_mN (tip)

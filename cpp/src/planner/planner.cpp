@@ -283,7 +283,7 @@ double Planner::translation_free(int m, const Chain& chain, double sigma) const 
 bool Planner::swept_link_ok(int m, const Vec2& a, const Vec2& b) const {
   const double r = hand_.link_radius();
   // A straight line in joint space between two configurations that rest on O dips into it by
-  // a sagitta of micrometres; a quarter of the collision tolerance (DESIGN section 6:
+  // a sagitta of micrometres; a quarter of the collision tolerance (docs/validation.md:
   // max(2% of r, 0.05 mm)) is allowed there, and no more.
   const double allow = 0.25 * std::max(0.02 * r, 5e-5);
   const double g = link_gap(m, a, b, allow);

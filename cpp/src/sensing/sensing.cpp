@@ -202,7 +202,7 @@ RotateResult Sensing::rotate_until_free(const RotateRequest& req) const {
   // Newton steps on the measured gap, toward the side that opens it: a link resting a little
   // inside a smooth surface is freed in two or three probes. A step longer than a few sample
   // angles could pass over a thin part of O or the first free side: the sampled search decides.
-  // The rotation must be the smallest that frees the link (DESIGN decision 6): a Newton result
+  // The rotation must be the smallest that frees the link (docs/algorithm.md, decision 6): a Newton result
   // beyond the first sample angle is kept only if no sample nearer zero, either way, is free.
   Probe bad = start;
   int dir = 0;

@@ -1,5 +1,5 @@
 /// \file hand_model.hpp
-/// The hand (DESIGN.md section 2): a round palm and M planar fingers of N revolute links.
+/// The hand (docs/model.md): a round palm and M planar fingers of N revolute links.
 #pragma once
 
 #include <vector>

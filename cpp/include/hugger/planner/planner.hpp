@@ -1,5 +1,5 @@
 /// \file planner.hpp
-/// The Hugger algorithm (Reznik & Lumelsky 1994; DESIGN.md section 3) as an iterator.
+/// The Hugger algorithm (Reznik & Lumelsky 1994; docs/algorithm.md) as an iterator.
 #pragma once
 
 #include <memory>
@@ -41,7 +41,7 @@ struct PlannerParams {
   Rules rules = Rules::kHug;       ///< the rule set of Phase 2
 };
 
-/// One hand configuration (DESIGN.md section 2).
+/// One hand configuration (docs/model.md).
 struct Configuration {
   Pose palm = Pose::Identity();   ///< T_WP
   std::vector<Vec3> joints;       ///< M*(N+1) points in the world, finger-major

@@ -48,7 +48,7 @@ bool angle_within_limits(double lo, double hi, const Vec2& base, Vec2& dir, bool
 /// and returns true. Always true without limits.
 bool joint_within_limits(const SnakeRequest& req, const Chain& chain, int joint, Vec2& dir, bool clamp);
 
-/// Head2Tail (DESIGN.md decision 6): tip to `head`, then each joint on the ray toward its old
+/// Head2Tail (docs/algorithm.md, decision 6): tip to `head`, then each joint on the ray toward its old
 /// position at the link's length (turned, with joint limits, so that the joint just passed is
 /// within them); a link that would hit O is rotated about its distal joint by
 /// the smallest angle that frees it (Sensing::rotate_until_free), at most `max_rotation`. Returns false (chain partly

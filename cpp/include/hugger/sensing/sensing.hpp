@@ -1,6 +1,6 @@
 /// \file sensing.hpp
 /// The whole-sensitive skin: every fact the planner learns about the object comes through
-/// this interface (DESIGN.md section 4). The simulated world implements its two primitive
+/// this interface (docs/skins.md). The simulated world implements its two primitive
 /// queries; the higher-level queries (tip contact, boundary following, rotating a link until
 /// it touches or frees) are built on them here and may be overridden by a faster or a real
 /// implementation.
@@ -21,7 +21,7 @@ struct Touch {
   Vec3 normal = Vec3::UnitZ();     ///< gradient of the signed distance at on_hand (unit, outward)
 };
 
-/// Boundary following in a finger plane (DESIGN.md section 3, decision 5).
+/// Boundary following in a finger plane (docs/algorithm.md, decision 5).
 struct FollowRequest {
   FingerPlane plane;
   Vec2 tip = Vec2::Zero();       ///< current fingertip (xi, eta)

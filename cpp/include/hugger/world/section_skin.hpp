@@ -116,7 +116,7 @@ class PlaneRegion {
   mutable std::atomic<long> fallbacks_{0};
 };
 
-/// The section skin (DESIGN.md section 4): answers link queries given in finger-plane
+/// The section skin (docs/performance.md): answers link queries given in finger-plane
 /// coordinates from the plane's PlaneRegion (built on first use, once per plane and radius);
 /// capsule and palm queries in the world, and the higher-level queries' world-frame parts, go
 /// to the mesh world. Thread-safe: regions are built under a lock and then only read.
