@@ -3,7 +3,7 @@
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(CURDIR)/$(VENV)/bin
-APT_PACKAGES := libeigen3-dev libfcl-dev libgtest-dev
+APT_PACKAGES := libeigen3-dev libfcl-dev libgtest-dev libqhull-dev
 export PATH := $(BIN):$(PATH)
 
 .PHONY: help deps venv install demo test test-cpp test-py test-sanitize fuzz bench clean
