@@ -18,6 +18,7 @@ from . import objects, scenarios
 from .batch import CaseError, PlanManyError, plan_many
 from .hand import Hand
 from .planner import FROZEN, CONTACT, DONE, Configuration, Planner, look_at, plan
+from .search import Candidate, SearchResult, approach_directions, search
 from .trajectory import FORMAT_VERSION, Trajectory
 from .world import Object
 
@@ -37,6 +38,7 @@ def __getattr__(name: str):
 
 __all__ = [
     "CONTACT",
+    "Candidate",
     "CaseError",
     "DONE",
     "FORMAT_VERSION",
@@ -46,11 +48,14 @@ __all__ = [
     "Object",
     "PlanManyError",
     "Planner",
+    "SearchResult",
     "Trajectory",
+    "approach_directions",
     "look_at",
     "objects",
     "plan",
     "plan_many",
     "scenarios",
+    "search",
     "__version__",
 ]

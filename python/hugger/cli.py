@@ -135,6 +135,25 @@ def _plan(case, hand, params: dict[str, Any], label: str, timeout: float | None 
     return traj, time.perf_counter() - t0
 
 
+def _search(case, hand, args: argparse.Namespace):
+    """``hugger plan --approaches K``: the best of K approaches around T (hugger.search)."""
+    import hugger
+
+    if args.start is not None or args.normal is not None or args.turn:
+        raise UsageError("--approaches K > 1 chooses the start poses itself: not with --start, --normal or --turn")
+    pole = case.palm_pose[:3, 3] - case.target
+    with Progress(f"searching {args.approaches} approaches of {case.name}", total=args.approaches) as p:
+        result = hugger.search(hand, case.obj, case.target, approaches=args.approaches, threads=args.threads,
+                               pole=pole, timeout=args.timeout, progress=lambda i, n: p.update(i),
+                               **{k: v for k, v in _params(args).items() if v is not None})
+    chosen = result.chosen
+    summary = {"approaches": len(result.candidates), "best": result.best,
+               "direction": [float(x) for x in chosen.direction], "time_s": round(result.time_s, 6),
+               "judged": sum(c.epsilon is not None for c in result.candidates),
+               "candidates": [c.to_dict() for c in result.candidates]}
+    return result.trajectory, chosen.plan_time_s, summary
+
+
 # ---------------------------------------------------------------------------------------------
 # Commands
 
@@ -147,11 +166,21 @@ def cmd_plan(args: argparse.Namespace) -> int:
                         turn_deg=args.turn)
     for r in case.repairs:
         _note(f"repaired {case.name}: {r}")
-    traj, elapsed = _plan(case, hand, _params(args), case.name, args.timeout)
+    searched = None
+    if args.approaches != 1:
+        traj, elapsed, searched = _search(case, hand, args)
+    else:
+        traj, elapsed = _plan(case, hand, _params(args), case.name, args.timeout)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     traj.save(out)
     report = {"object": case.name, "out": str(out), **_report(traj, elapsed, case.obj)}
+    if searched is not None:
+        report["search"] = searched
+        if not args.json:  # the table: the search in three lines, not every candidate
+            report.pop("search")
+            report.update({"approaches": searched["approaches"], "chosen_approach": searched["best"],
+                           "approach_direction": searched["direction"], "search_time_s": searched["time_s"]})
     if args.json:
         print(json.dumps(report))
     else:
@@ -284,6 +313,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("object", help="a built-in object name (see 'hugger objects') or a mesh file (STL, OBJ, PLY, OFF, GLB)")
     p.add_argument("--out", required=True, help="trajectory file to write (.npz)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    p.add_argument("--approaches", type=_count, default=1, metavar="K",
+                   help="plan from K directions spread evenly around T and keep the firmest grasp "
+                        "(default 1: the single default approach; see docs/generation.md)")
+    p.add_argument("--threads", type=_count, default=None,
+                   help="planning threads for --approaches (default: the CPUs available)")
     _hand_options(p)
     _planner_options(p)
     _case_options(p)
@@ -317,6 +351,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--configuration", type=int, default=-1, help="configuration index (default -1, the last)")
     p.set_defaults(func=cmd_export_mjcf)
     return ap
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {value}")
+    return value
 
 
 def _version() -> str:
