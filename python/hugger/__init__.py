@@ -24,12 +24,17 @@ from .world import Object
 
 __version__ = "0.1.0"
 
-_LAZY = ("analysis", "viz", "physics", "cli")
+_LAZY = ("analysis", "viz", "physics", "cli", "dataset")
 
 
 def __getattr__(name: str):
     """Submodules with optional dependencies load on first use: ``hugger.analysis``, ``hugger.viz``,
-    ``hugger.physics`` (``import hugger`` itself needs only numpy)."""
+    ``hugger.physics``, ``hugger.dataset`` (``import hugger`` itself needs only numpy);
+    ``hugger.Dataset`` is ``hugger.dataset.Dataset``."""
+    if name == "Dataset":
+        from .dataset import Dataset
+
+        return Dataset
     if name in _LAZY:
         import importlib
 
@@ -41,6 +46,7 @@ __all__ = [
     "Candidate",
     "CaseError",
     "DONE",
+    "Dataset",
     "FORMAT_VERSION",
     "FROZEN",
     "Configuration",

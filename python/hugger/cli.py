@@ -291,6 +291,30 @@ def cmd_validate(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_generate(args: argparse.Namespace) -> int:
+    from . import dataset
+
+    if args.address is not None and args.backend != "ray":
+        raise UsageError("--address applies to --backend ray only")
+    interactive = sys.stderr.isatty()
+    log = None if interactive else dataset._log_line  # plain lines in logs, a bar on a terminal
+    argv = getattr(args, "argv", None) or sys.argv[1:]
+    with Progress("generating shards", total=1, delay=0.0) as p:
+        def progress(done: int, total: int) -> None:
+            p.total = total
+            p.update(done)
+
+        index = dataset.generate(args.objects, args.out, approaches=args.approaches, hands=args.hands or ["5x5"],
+                                 validate=args.validate, workers=args.workers, backend=args.backend,
+                                 address=args.address, scale=args.scale, params=_params(args),
+                                 command=["hugger", *argv], log=log, progress=progress)
+    grasps = 0
+    for s in index["shards"]:
+        grasps += int(index["parameters"]["approaches"])
+    print(f"wrote {args.out}/index.json: {len(index['shards'])} shards, {grasps} grasps")
+    return EXIT_OK
+
+
 def cmd_export_mjcf(args: argparse.Namespace) -> int:
     from . import physics
 
@@ -345,6 +369,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_validate)
 
+    p = sub.add_parser("generate", help="a dataset of grasps: K approaches per (object, hand), resumable")
+    p.add_argument("objects", nargs="+", metavar="OBJECT", help="built-in object names or mesh files")
+    p.add_argument("--out", required=True, help="dataset folder (index.json and shards/); an existing one is resumed")
+    p.add_argument("--approaches", type=_count, default=26, metavar="K", help="approaches per object and hand (default 26)")
+    p.add_argument("--hands", nargs="+", metavar="SPEC",
+                   help="hands as MxN or MxN:key=value,... (link_length, link_radius, palm_radius, palm_thickness; "
+                        "default 5x5, the default hand)")
+    p.add_argument("--validate", action="store_true", help="the six-direction physics test of every grasp (hugger[physics])")
+    p.add_argument("--workers", type=_count, default=None, help="worker processes or Ray tasks in flight (default: the CPUs)")
+    p.add_argument("--backend", choices=("local", "ray"), default="local",
+                   help="local: a process pool (default); ray: one Ray task per shard (hugger[cluster])")
+    p.add_argument("--address", default=None, help="Ray cluster address for --backend ray (default: start a local Ray)")
+    p.add_argument("--scale", type=float, default=1.0, help="multiply mesh coordinates (0.001 for millimetres)")
+    g = p.add_argument_group("planner (defaults as hugger.Planner; no timeout: datasets are deterministic)")
+    g.add_argument("--step", type=float, help="approach step, m (default shortest link / 20)")
+    g.add_argument("--epsilon", type=float, help="tip-to-surface distance epsilon, m (default step / 10)")
+    g.add_argument("--contact-tolerance", type=float, help="sensing distance delta, m (default 1e-4)")
+    g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
+    p.set_defaults(func=cmd_generate)
+
     p = sub.add_parser("export-mjcf", help="write the hand and object at a configuration as MJCF (hugger[physics])")
     p.add_argument("file", help="trajectory file (.npz)")
     p.add_argument("--out", required=True, help="MJCF file to write (.xml)")
@@ -385,6 +429,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _main(argv: Sequence[str] | None) -> int:
     try:
         args = build_parser().parse_args(argv)
+        args.argv = list(argv) if argv is not None else sys.argv[1:]
         return int(args.func(args))
     except (UsageError, ValueError, FileNotFoundError, IsADirectoryError, PermissionError, ImportError) as exc:
         print(f"hugger: error: {exc}", file=sys.stderr)
