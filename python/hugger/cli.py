@@ -276,6 +276,19 @@ def cmd_validate(args: argparse.Namespace) -> int:
     from . import physics
 
     traj = _load(args.file)
+    if args.robust:
+        with Progress("simulating the perturbations"):
+            result = physics.validate_robust(traj, workers=args.workers)
+        if args.json:
+            print(json.dumps(result))
+        else:
+            for name, r in result["perturbations"].items():
+                lost = [d for d, v in r["directions"].items() if not v["held"]]
+                print(f"{name:13s} {'held' if r['held'] else 'LOST ' + ' '.join(lost)}")
+            print(f"held fraction {result['held_fraction']:.3f}; largest push held {result['max_force_N']:.2f} N "
+                  f"({result['max_force_factor']:.1f} x weight)")
+            print(f"verdict: {'robustly held' if result['robust'] else 'not robustly held'}")
+        return EXIT_OK
     with Progress("simulating"):
         result = physics.validate(traj)
     if args.json:
@@ -367,6 +380,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("validate", help="hold test of the final grasp in MuJoCo (needs hugger[physics])")
     p.add_argument("file", help="trajectory file (.npz)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--robust", action="store_true",
+                   help="the test under perturbed mass, friction, servo stiffness and squeeze, and the largest push held")
+    p.add_argument("--workers", type=_count, default=None, help="processes for --robust (default: the CPUs)")
     p.set_defaults(func=cmd_validate)
 
     p = sub.add_parser("generate", help="a dataset of grasps: K approaches per (object, hand), resumable")
