@@ -113,7 +113,8 @@ def _npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:
             info.compress_type = zipfile.ZIP_DEFLATED
             info.external_attr = 0o644 << 16
             member = io.BytesIO()
-            np.lib.format.write_array(member, np.ascontiguousarray(arrays[key]), allow_pickle=False)
+            arr = np.asarray(arrays[key])  # (np.ascontiguousarray would turn scalars into (1,) arrays)
+            np.lib.format.write_array(member, arr if arr.flags.c_contiguous else arr.copy(), allow_pickle=False)
             zf.writestr(info, member.getvalue(), compresslevel=6)
     return buf.getvalue()
 
