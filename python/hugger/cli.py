@@ -321,9 +321,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
                                  validate=args.validate, workers=args.workers, backend=args.backend,
                                  address=args.address, scale=args.scale, params=_params(args),
                                  command=["hugger", *argv], log=log, progress=progress)
-    grasps = 0
-    for s in index["shards"]:
-        grasps += int(index["parameters"]["approaches"])
+    grasps = len(index["shards"]) * int(index["parameters"]["approaches"])
     print(f"wrote {args.out}/index.json: {len(index['shards'])} shards, {grasps} grasps")
     return EXIT_OK
 

@@ -125,7 +125,7 @@ def make_shard(task: dict) -> bytes:
     from . import analysis
     from .hand import Hand
     from .scenarios import default_case
-    from .search import _judge, search
+    from .search import RANK_MU, search
     from .trajectory import CONTACT_DISTANCE
 
     ob = task["object"]
@@ -165,9 +165,9 @@ def make_shard(task: dict) -> bytes:
         a["start_pose"][i], a["palm_pose"][i] = traj.palm_pose[0], traj.palm_pose[-1]
         a["joints"][i], a["angles"][i], a["tip_state"][i] = traj.joints[-1], traj.angles[-1], traj.tip_state[-1]
         a["links_in_contact"][i], a["palm_contact"][i] = cand.links_in_contact, cand.palm_contact
-        judged = _judge(cand, traj, hand, case.obj, case.target, torque_scale)
-        a["force_closure"][i], a["epsilon"][i] = judged.force_closure, judged.epsilon
         found = analysis.contacts_of(hand, case.obj, traj.palm_pose[-1], traj.joints[-1], CONTACT_DISTANCE)
+        q = analysis.grasp_quality(found, case.target, mu=RANK_MU, torque_scale=torque_scale, volume=False)
+        a["force_closure"][i], a["epsilon"][i] = q.force_closure, q.epsilon
         points.append(found.points)
         normals.append(found.normals)
         finger.append(found.finger)
