@@ -5,7 +5,8 @@
     hugger render plan.npz --out fig.png|.gif|.mp4
     hugger info plan.npz [--json]                 what a trajectory file holds, and its grasp
     hugger objects                                the built-in objects
-    hugger validate plan.npz [--json]             hold test in MuJoCo (extra: physics)
+    hugger validate plan.npz [--json] [--robust]  hold test in MuJoCo (extra: physics)
+    hugger generate OBJECT... --out DIR           a dataset: K approaches per object and hand
     hugger export-mjcf plan.npz --out hand.xml    the hand and object as MJCF
 
 Exit status: 0 success, 2 bad input or a missing optional dependency (one line on standard
