@@ -57,7 +57,7 @@ def row(name, obj, target, pole, hand, args, checker) -> dict:
     single = hugger.Planner(hand, obj, target, start_pose(obj, hand, target, pole), **params).plan()
     a1 = analysis.analyze(single, obj=obj, volume=False)
     res = hugger.search(hand, obj, target, approaches=args.approaches, threads=args.threads, pole=pole,
-                        rules=args.rules)
+                        rules=args.rules, verify=args.verify)
     best = res.trajectory
     a2 = analysis.analyze(best, obj=obj, volume=False)
     out = {"object": name, "triangles": len(obj.faces),
@@ -91,6 +91,8 @@ def main() -> int:
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--workers", type=int, default=None, help="processes of the robust verdict")
     ap.add_argument("--rules", default=None, help="the Phase 2 rule set, when the planner has one")
+    ap.add_argument("--verify", type=int, default=0, help="hugger.search(verify=V): physics check of the V best-ranked")
+    ap.add_argument("--objects", nargs="*", default=None, help="only these (names as in the table, without .obj)")
     ap.add_argument("--no-physics", dest="physics", action="store_false")
     ap.add_argument("--robust", action="store_true", help="the robust verdict of the chosen grasp")
     ap.add_argument("--blobs", type=int, default=0, help="also N generated bodies that fit the hand")
@@ -108,6 +110,8 @@ def main() -> int:
     cases = []
     if not args.only_generated:
         for spec in fitting_objects():
+            if args.objects is not None and Path(spec).stem not in args.objects:
+                continue
             c = default_case(spec, hand)
             cases.append((c.name, c.obj, c.target, c.palm_pose[:3, 3] - c.target))
     for name, obj in generated(args.blobs):

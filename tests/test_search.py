@@ -128,3 +128,30 @@ def test_cli_plan_approaches(tmp_path, capsys, checker):
     assert ok, failures
     assert main(["plan", "box", "--approaches", "3", "--turn", "10", "--out", str(out)]) == 2
     assert "--approaches" in capsys.readouterr().err
+
+
+def test_verify_chooses_the_first_ranked_grasp_that_holds(hand, monkeypatch):
+    pytest.importorskip("mujoco")
+    from hugger import physics
+
+    case = hugger.scenarios.default_case("box", hand)
+    plain = hugger.search(hand, case.obj, case.target, approaches=6, threads=1)
+    verdicts = []
+
+    def fake(traj, *args, **kwargs):  # the first two checked lose, the third holds
+        verdicts.append(len(traj))
+        return {"held": len(verdicts) == 3}
+
+    monkeypatch.setattr(physics, "validate", fake)
+    v = hugger.search(hand, case.obj, case.target, approaches=6, threads=1, verify=5)
+    assert len(verdicts) == 3
+    assert all(c.epsilon is not None for c in v.candidates if c.ok)  # every candidate judged
+    checked = [c for c in v.candidates if c.held is not None]
+    assert len(checked) == 3 and v.chosen.held is True and sum(c.held for c in checked) == 1
+    assert plain.chosen.index in [c.index for c in checked]  # the ranking's best was checked first
+    verdicts.clear()
+    monkeypatch.setattr(physics, "validate", lambda traj, *a, **k: {"held": False})
+    none = hugger.search(hand, case.obj, case.target, approaches=6, threads=1, verify=2)
+    assert none.best == plain.best  # nothing held: the ranking's choice stands
+    with pytest.raises(ValueError, match="verify"):
+        hugger.search(hand, case.obj, case.target, approaches=2, verify=-1)

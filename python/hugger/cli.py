@@ -146,7 +146,7 @@ def _search(case, hand, args: argparse.Namespace):
     with Progress(f"searching {args.approaches} approaches of {case.name}", total=args.approaches) as p:
         result = hugger.search(hand, case.obj, case.target, approaches=args.approaches, threads=args.threads,
                                pole=pole, timeout=args.timeout, progress=lambda i, n: p.update(i),
-                               **{k: v for k, v in _params(args).items() if v is not None})
+                               verify=args.verify, **{k: v for k, v in _params(args).items() if v is not None})
     chosen = result.chosen
     summary = {"approaches": len(result.candidates), "best": result.best,
                "direction": [float(x) for x in chosen.direction], "time_s": round(result.time_s, 6),
@@ -354,6 +354,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default 1: the single default approach; see docs/generation.md)")
     p.add_argument("--threads", type=_count, default=None,
                    help="planning threads for --approaches (default: the CPUs available)")
+    p.add_argument("--verify", type=int, default=0, metavar="V",
+                   help="with --approaches: put the V best-ranked grasps through the physics test in turn and "
+                        "keep the first that holds (hugger[physics]; default 0: no physics)")
     _hand_options(p)
     _planner_options(p)
     _case_options(p)

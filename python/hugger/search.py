@@ -60,6 +60,7 @@ class Candidate:
     force_closure: bool | None = None  #: force closure over all contacts (None: not judged)
     epsilon: float | None = None  #: Ferrari-Canny epsilon, mu = 0.5 (None: not judged)
     score: float | None = None  #: the custom score, when one was given
+    held: bool | None = None  #: the six-direction physics verdict, when ``verify`` checked it
     error: str | None = None  #: the exception message when planning failed
 
     @property
@@ -77,7 +78,7 @@ class Candidate:
                 "configurations": self.configurations, "plan_time_s": self.plan_time_s,
                 "links_in_contact": self.links_in_contact, "palm_contact": self.palm_contact, "hug": self.hug,
                 "contacts": self.contacts, "force_closure": self.force_closure, "epsilon": self.epsilon,
-                "score": self.score, "error": self.error}
+                "score": self.score, "held": self.held, "error": self.error}
 
 
 @dataclass(frozen=True, eq=False)
@@ -194,7 +195,7 @@ def rank(candidates: Sequence[Candidate], judge: Callable[[Candidate], Candidate
 def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, rules: str | None = None,
            threads: int | None = None, score: Callable[[Candidate], float] | None = None,
            pole: Any = (0.0, 0.0, 1.0), timeout: float | None = None, keep_all: bool = False,
-           progress: Callable[[int, int], Any] | None = None, **params: Any) -> SearchResult:
+           progress: Callable[[int, int], Any] | None = None, verify: int = 0, **params: Any) -> SearchResult:
     """The firmest of ``approaches`` grasps of ``obj``, approached evenly from all around T.
 
     ``target``: T (default :func:`hugger.scenarios.interior_target`). Direction 0 is ``pole``
@@ -205,6 +206,11 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
     ``score``: see :func:`rank`. ``keep_all`` keeps every candidate's trajectory in the result.
     ``progress(done, total)`` is called as plans finish. Deterministic: the same input gives the
     same result on any number of threads.
+
+    ``verify`` = V > 0 checks the ranking in physics (needs ``hugger[physics]``): every candidate
+    is judged, and the V best by the ranking are put through the six-direction test of
+    :func:`hugger.physics.validate` in ranking order; the first that holds is chosen (``held`` in
+    its figures), or the ranking's best when none of them does.
     """
     from .batch import _PARAMS
     from .planner import Planner, _timeout
@@ -218,6 +224,8 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
     bad = set(params) - set(_PARAMS)
     if bad:
         raise ValueError(f"unknown planner parameters {sorted(bad)}; expected some of {list(_PARAMS)}")
+    if isinstance(verify, bool) or not isinstance(verify, numbers.Integral) or verify < 0:
+        raise ValueError(f"verify must be a whole number >= 0, got {verify!r}")
     if score is not None and not callable(score):
         raise ValueError("score must be callable as score(candidate) -> float, or None")
     if rules is not None:
@@ -260,7 +268,22 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
                 if progress is not None:
                     progress(done, k)
     trajs = [r[1] for r in results]
-    best, ranked = rank([r[0] for r in results],
-                        lambda c: _judge(c, trajs[c.index], hand, obj, t, torque_scale), score)
+    judge = lambda c: _judge(c, trajs[c.index], hand, obj, t, torque_scale)  # noqa: E731
+    best, ranked = rank([r[0] for r in results], judge, score)
+    if verify:
+        from . import physics
+
+        physics._mujoco()  # fail early when MuJoCo is missing
+        ranked = [judge(c) if c.ok and c.epsilon is None else c for c in ranked]
+        key = (lambda c: (c.score, -c.index)) if score is not None else _default_key
+        order = sorted((c for c in ranked if c.ok), key=key, reverse=True)
+        for c in order[:int(verify)]:
+            held = bool(physics.validate(trajs[c.index])["held"])
+            ranked[c.index] = replace(c, held=held)
+            if held:
+                best = c.index
+                break
+        else:
+            best = order[0].index
     return SearchResult(best=best, trajectory=trajs[best], candidates=tuple(ranked), target=t,
                         time_s=time.perf_counter() - t0, trajectories=tuple(trajs) if keep_all else None)
