@@ -162,7 +162,7 @@ def make_shard(task: dict) -> bytes:
             offsets.append(offsets[-1])
             verdicts.append(None)
             continue
-        a["start_pose"][i], a["palm_pose"][i] = traj.palm_pose[0], traj.palm_pose[-1]
+        a["start_pose"][i], a["palm_pose"][i] = cand.start_pose, traj.palm_pose[-1]  # the pose given, exactly
         a["joints"][i], a["angles"][i], a["tip_state"][i] = traj.joints[-1], traj.angles[-1], traj.tip_state[-1]
         a["links_in_contact"][i], a["palm_contact"][i] = cand.links_in_contact, cand.palm_contact
         found = analysis.contacts_of(hand, case.obj, traj.palm_pose[-1], traj.joints[-1], CONTACT_DISTANCE)

@@ -52,6 +52,7 @@ class Candidate:
     index: int  #: position in the search's direction list
     direction: np.ndarray  #: (3,) unit vector from T toward the start palm centre
     status: str  #: the plan's status, or ``error`` when planning raised
+    start_pose: np.ndarray | None = None  #: (4, 4) the palm pose the plan was started from
     configurations: int = 0  #: length of the plan
     plan_time_s: float = 0.0  #: wall time of this plan (s), setup included
     links_in_contact: int = 0  #: links within 1 mm of the object at the end
@@ -241,14 +242,17 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
 
     def run(i: int) -> tuple[Candidate, Trajectory | None]:
         d = dirs[i]
+        pose = start_pose(obj, hand, t, d, distance=distance)
         t1 = time.perf_counter()
         try:
-            traj = Planner(hand, obj, t, start_pose(obj, hand, t, d, distance=distance), **params).plan(limit)
+            traj = Planner(hand, obj, t, pose, **params).plan(limit)
         except (ValueError, RuntimeError) as exc:
-            return Candidate(index=i, direction=d, status="error", error=f"{type(exc).__name__}: {exc}"), None
+            return Candidate(index=i, direction=d, status="error", start_pose=pose,
+                             error=f"{type(exc).__name__}: {exc}"), None
         elapsed = time.perf_counter() - t1
         s = traj.summary(obj=obj)
-        return Candidate(index=i, direction=d, status=traj.status, configurations=len(traj), plan_time_s=elapsed,
+        return Candidate(index=i, direction=d, status=traj.status, start_pose=pose, configurations=len(traj),
+                         plan_time_s=elapsed,
                          links_in_contact=int(s["links_in_contact"]), palm_contact=bool(s["palm_contact"])), traj
 
     k = len(dirs)
