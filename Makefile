@@ -3,8 +3,9 @@
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(CURDIR)/$(VENV)/bin
-# chromium and chromium-driver: the headless browser the viewer test drives (tests/test_viewer.py)
-APT_PACKAGES := libeigen3-dev libfcl-dev libgtest-dev chromium chromium-driver
+# chromium and chromium-driver: the headless browser the viewer test drives (tests/test_viewer.py);
+# libqhull-dev: the compiled grasp quality (cpp/src/analysis)
+APT_PACKAGES := libeigen3-dev libfcl-dev libgtest-dev libqhull-dev chromium chromium-driver
 export PATH := $(BIN):$(PATH)
 
 .PHONY: help deps venv install demo test test-cpp test-py test-sanitize fuzz bench clean

@@ -7,6 +7,7 @@ void bind_hand(py::module_& m);
 void bind_world(py::module_& m);
 void bind_sensing(py::module_& m);
 void bind_planner(py::module_& m);
+void bind_analysis(py::module_& m);
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "Hugger engine: hand kinematics, the simulated world and the planner (C++17)";
@@ -14,4 +15,5 @@ PYBIND11_MODULE(_core, m) {
   bind_world(m);
   bind_sensing(m);
   bind_planner(m);
+  bind_analysis(m);
 }

@@ -18,18 +18,24 @@ from . import hands, objects, scenarios, skins
 from .batch import CaseError, PlanManyError, plan_many
 from .hand import Hand
 from .planner import FROZEN, CONTACT, DONE, Configuration, Planner, look_at, plan
+from .search import Candidate, SearchResult, approach_directions, search
 from .trajectory import FORMAT_VERSION, Trajectory
 from .world import Object
 from .skins import Sensing, Touch
 
 __version__ = "0.1.0"
 
-_LAZY = ("analysis", "viz", "physics", "cli", "viewer")
+_LAZY = ("analysis", "viz", "physics", "cli", "viewer", "dataset")
 
 
 def __getattr__(name: str):
     """Submodules with optional dependencies load on first use: ``hugger.analysis``, ``hugger.viz``,
-    ``hugger.physics`` (``import hugger`` itself needs only numpy)."""
+    ``hugger.physics``, ``hugger.dataset`` (``import hugger`` itself needs only numpy);
+    ``hugger.Dataset`` is ``hugger.dataset.Dataset``."""
+    if name == "Dataset":
+        from .dataset import Dataset
+
+        return Dataset
     if name in _LAZY:
         import importlib
 
@@ -38,8 +44,10 @@ def __getattr__(name: str):
 
 __all__ = [
     "CONTACT",
+    "Candidate",
     "CaseError",
     "DONE",
+    "Dataset",
     "FORMAT_VERSION",
     "FROZEN",
     "Configuration",
@@ -47,9 +55,11 @@ __all__ = [
     "Object",
     "PlanManyError",
     "Planner",
+    "SearchResult",
     "Sensing",
     "Touch",
     "Trajectory",
+    "approach_directions",
     "hands",
     "look_at",
     "objects",
@@ -57,5 +67,6 @@ __all__ = [
     "plan_many",
     "scenarios",
     "skins",
+    "search",
     "__version__",
 ]

@@ -7,7 +7,7 @@ Three layers, each usable on its own:
   each belongs to, and the gap. numpy only.
 * :func:`wrap_angle` says how far each finger's contacts wrap around the target T. numpy only.
 * :func:`grasp_quality` builds the grasp wrench space of a set of contacts and reports force
-  closure, the Ferrari-Canny epsilon and the hull volume. Needs scipy (``pip install 'hugger[analysis]'``).
+  closure, the Ferrari-Canny epsilon and the hull volume (Qhull, in the compiled core). numpy only.
 
 :func:`analyze` runs all three on a trajectory's configuration and returns plain JSON types; the
 CLI's ``--json`` output and the README tables are made from it.
@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from . import _core
 from ._checks import positive
 from .trajectory import CONTACT_DISTANCE
 
@@ -409,19 +410,6 @@ class Quality:
     wrenches: int  #: number of distinct primitive contact wrenches the GWS is the hull of
 
 
-def _scipy_hull():
-    try:
-        from scipy.spatial import ConvexHull
-    except ImportError:
-        raise ImportError("grasp quality needs scipy (Qhull); install it with: "
-                          "pip install 'hugger[analysis]'") from None
-    try:
-        from scipy.spatial import QhullError
-    except ImportError:  # scipy < 1.8
-        from scipy.spatial.qhull import QhullError  # type: ignore[no-redef]
-    return ConvexHull, QhullError
-
-
 def _tangents(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Tangent bases (C, 3), (C, 3) of unit vectors n (C, 3): t1 = n x e_k / |.|, e_k the world axis
     least aligned with n (lowest index on ties), t2 = n x t1."""
@@ -463,7 +451,7 @@ def primitive_wrenches(points: Any, normals: Any, center: Any, mu: float, cone_e
 
 
 def grasp_quality(contacts: Contacts, center: Any, mu: float = 0.5, cone_edges: int = 8,
-                  torque_scale: float | None = None, obj: Any = None) -> Quality:
+                  torque_scale: float | None = None, obj: Any = None, volume: bool = True) -> Quality:
     """Force closure, Ferrari-Canny epsilon and volume of the L1 grasp wrench space of ``contacts``.
 
     Every contact pushes into the object (along -normal) with a unit normal force and Coulomb
@@ -482,7 +470,12 @@ def grasp_quality(contacts: Contacts, center: Any, mu: float = 0.5, cone_edges: 
     contacts' largest distance from ``center``). Scaling the grasp and the torque scale together
     leaves every figure unchanged.
 
-    Needs scipy (Qhull): ``pip install 'hugger[analysis]'``.
+    Computed in C++ with Qhull (reentrant, fixed joggle seed: deterministic on any thread; the GIL
+    is released). Coincident wrenches (agreeing to 1e-10) are kept once first. The volume needs the
+    whole 6D hull, tens of thousands of facets for a hugging grasp (~0.1 s). With ``volume=False``
+    the volume is reported as 0 and epsilon comes from a small hull grown only where it decides
+    (cutting planes: the facet nearest the origin is checked against every wrench, the wrench
+    furthest beyond it added, until none is; about 1-10 ms): the same epsilon and force closure.
     """
     if not isinstance(contacts, Contacts):
         raise ValueError(f"contacts must be hugger.analysis.Contacts, got {type(contacts).__name__}")
@@ -500,33 +493,10 @@ def grasp_quality(contacts: Contacts, center: Any, mu: float = 0.5, cone_edges: 
         else:
             torque_scale = float(np.linalg.norm(contacts.points - c, axis=1).max()) if len(contacts) else 1.0
     scale = positive("torque_scale", torque_scale)
-    hull_cls, qhull_error = _scipy_hull()
-
-    w = primitive_wrenches(contacts.points, contacts.normals, c, mu_f, int(cone_edges), scale)
-    # Coincident wrenches (a contact shared by the ends of two adjacent links) change nothing but
-    # Qhull's work: keep one of each (wrenches agreeing to 1e-10).
-    _, first = np.unique(np.round(w, 10), axis=0, return_index=True)
-    w = w[np.sort(first)]
-    none = Quality(force_closure=False, epsilon=0.0, volume=0.0, torque_scale=scale, wrenches=int(w.shape[0]))
-    if w.shape[0] < 7:
-        return none
-    spread = np.linalg.svd(w - w.mean(axis=0), compute_uv=False)
-    if spread[-1] <= 1e-9 * max(spread[0], 1e-300):
-        return none  # flat: lies in a hyperplane of R^6
-    try:
-        # Joggled input ("QJ"): every facet simplicial, no facet merging; about twice as fast as
-        # Qhull's merging on the many coplanar wrenches of symmetric grasps, and deterministic
-        # (fixed seed). It perturbs the wrenches by ~1e-11 relative, far below _CLOSURE_TOL.
-        hull = hull_cls(w, qhull_options="QJ")
-    except (qhull_error, ValueError):
-        return none
-    # Facets: normal . x + offset <= 0 inside, unit normals, so -offset is the origin's distance.
-    depth = -hull.equations[:, -1]
-    eps = float(depth.min())
-    tol = _CLOSURE_TOL * float(np.abs(w).max())
-    closure = eps > tol
-    return Quality(force_closure=bool(closure), epsilon=eps if closure else 0.0, volume=float(hull.volume),
-                   torque_scale=scale, wrenches=int(w.shape[0]))
+    r = _core.grasp_quality(contacts.points.reshape(-1, 3), contacts.normals.reshape(-1, 3), c, mu_f,
+                            int(cone_edges), scale, bool(volume))
+    return Quality(force_closure=bool(r.force_closure), epsilon=float(r.epsilon), volume=float(r.volume),
+                   torque_scale=scale, wrenches=int(r.wrenches))
 
 
 # --------------------------------------------------------------------------------------------
@@ -534,21 +504,21 @@ def grasp_quality(contacts: Contacts, center: Any, mu: float = 0.5, cone_edges: 
 # --------------------------------------------------------------------------------------------
 
 def analyze(traj: Any, k: int = -1, mu: float = 0.5, distance: float = CONTACT_DISTANCE, cone_edges: int = 8,
-            obj: Any = None) -> dict:
+            obj: Any = None, volume: bool = True) -> dict:
     """The grasp of configuration ``k`` of ``traj`` judged over all its contacts, as plain JSON types.
 
     Keys: ``contacts`` (number of contact points), ``links_in_contact``, ``links`` (M * N),
     ``palm_contact``, ``per_finger_contacts`` (links in contact per finger), ``wrap_angle_deg``
     (per finger, :func:`wrap_angle`), ``force_closure``, ``epsilon``, ``volume``
     (:func:`grasp_quality` with torques about T, torque scale the object's largest distance
-    from T), ``mu``, ``torque_scale_m``. Needs scipy: ``pip install 'hugger[analysis]'``.
+    from T), ``mu``, ``torque_scale_m``. ``volume=False`` skips the GWS volume (reported as 0),
+    the costly part (see :func:`grasp_quality`).
     """
     k = _trajectory_index(traj, k)
-    _scipy_hull()  # fail early, before the geometry, when scipy is missing
     obj = obj if obj is not None else traj.object()
     found = contacts(traj, k, distance, obj)
     target = np.asarray(traj.target, dtype=np.float64)
-    q = grasp_quality(found, target, mu=mu, cone_edges=cone_edges, obj=obj)
+    q = grasp_quality(found, target, mu=mu, cone_edges=cone_edges, obj=obj, volume=volume)
     hand = traj.hand
     return {
         "contacts": len(found),

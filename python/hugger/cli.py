@@ -5,7 +5,8 @@
     hugger render plan.npz --out fig.png|.pdf|.svg|.gif|.mp4 [--figure F --fps --frames --view --dpi]
     hugger info plan.npz [--json]                 what a trajectory file holds, and its grasp
     hugger objects                                the built-in objects
-    hugger validate plan.npz [--json]             hold test in MuJoCo (extra: physics); exit 1 if not held
+    hugger validate plan.npz [--json] [--robust]  hold test in MuJoCo (extra: physics); exit 1 if not held
+    hugger generate OBJECT... --out DIR           a dataset: K approaches per object and hand
     hugger export-mjcf plan.npz --out hand.xml    the hand and object as MJCF
     hugger view a.npz [b.npz ...] [--port P]      interactive 3D view in the browser (extra: view)
     hugger export-scene plan.npz --out grasp.glb  the grasp as a glTF scene (extra: view)
@@ -125,7 +126,7 @@ def _hand(args: argparse.Namespace):
 def _params(args: argparse.Namespace) -> dict[str, Any]:
     from .batch import _PARAMS
 
-    return {k: getattr(args, k) for k in _PARAMS}
+    return {k: v for k in _PARAMS if (v := getattr(args, k, None)) is not None}
 
 
 def _load(path: str):
@@ -212,6 +213,25 @@ def _plan(case, hand, params: dict[str, Any], label: str, timeout: float | None 
     return traj, time.perf_counter() - t0
 
 
+def _search(case, hand, args: argparse.Namespace):
+    """``hugger plan --approaches K``: the best of K approaches around T (hugger.search)."""
+    import hugger
+
+    if args.start is not None or args.normal is not None or args.turn:
+        raise UsageError("--approaches K > 1 chooses the start poses itself: not with --start, --normal or --turn")
+    pole = case.palm_pose[:3, 3] - case.target
+    with Progress(f"searching {args.approaches} approaches of {case.name}", total=args.approaches) as p:
+        result = hugger.search(hand, case.obj, case.target, approaches=args.approaches, threads=args.threads,
+                               pole=pole, timeout=args.timeout, progress=lambda i, n: p.update(i),
+                               verify=args.verify, **{k: v for k, v in _params(args).items() if v is not None})
+    chosen = result.chosen
+    summary = {"approaches": len(result.candidates), "best": result.best,
+               "direction": [float(x) for x in chosen.direction], "time_s": round(result.time_s, 6),
+               "judged": sum(c.epsilon is not None for c in result.candidates),
+               "candidates": [c.to_dict() for c in result.candidates]}
+    return result.trajectory, chosen.plan_time_s, summary
+
+
 # ---------------------------------------------------------------------------------------------
 # Commands
 
@@ -259,10 +279,20 @@ def cmd_plan(args: argparse.Namespace) -> int:
     out = _out_path(args.out, (".npz",))
     hand = _hand(args)
     case = _case(args, hand)
-    traj, elapsed = _plan(case, hand, _params(args), case.name, args.timeout)
-    traj = traj.with_provenance(**_provenance(args, getattr(args, "_argv", None)))
+    searched = None
+    if args.approaches != 1:
+        traj, elapsed, searched = _search(case, hand, args)
+    else:
+        traj, elapsed = _plan(case, hand, _params(args), case.name, args.timeout)
+    traj = traj.with_provenance(**_provenance(args, args._argv))
     traj.save(out)
     report = {"object": case.name, "out": str(out), **_report(traj, elapsed, case.obj)}
+    if searched is not None:
+        report["search"] = searched
+        if not args.json:  # the table: the search in three lines, not every candidate
+            report.pop("search")
+            report.update({"approaches": searched["approaches"], "chosen_approach": searched["best"],
+                           "approach_direction": searched["direction"], "search_time_s": searched["time_s"]})
     if args.json:
         print(json.dumps(report))
     else:
@@ -442,6 +472,19 @@ def cmd_validate(args: argparse.Namespace) -> int:
     from . import physics
 
     traj = _load(args.file)
+    if args.robust:
+        with Progress("simulating the perturbations"):
+            result = physics.validate_robust(traj, workers=args.workers)
+        if args.json:
+            print(json.dumps(result))
+        else:
+            for name, r in result["perturbations"].items():
+                lost = [d for d, v in r["directions"].items() if not v["held"]]
+                print(f"{name:13s} {'held' if r['held'] else 'LOST ' + ' '.join(lost)}")
+            print(f"held fraction {result['held_fraction']:.3f}; largest push held {result['max_force_N']:.2f} N "
+                  f"({result['max_force_factor']:.1f} x weight)")
+            print(f"verdict: {'robustly held' if result['robust'] else 'not robustly held'}")
+        return EXIT_OK if result["robust"] else EXIT_NOT_HELD
     with Progress("simulating"):
         result = physics.validate(traj)
     if args.json:
@@ -451,6 +494,28 @@ def cmd_validate(args: argparse.Namespace) -> int:
             print(f"{d:3s} {_moved(r)}")
         print(f"verdict: {'held' if result['held'] else 'not held'}")
     return EXIT_OK if result["held"] else EXIT_NOT_HELD
+
+
+def cmd_generate(args: argparse.Namespace) -> int:
+    from . import dataset
+
+    if args.address is not None and args.backend != "ray":
+        raise UsageError("--address applies to --backend ray only")
+    interactive = sys.stderr.isatty()
+    log = None if interactive else dataset._log_line  # plain lines in logs, a bar on a terminal
+    argv = args._argv
+    with Progress("generating shards", total=1, delay=0.0) as p:
+        def progress(done: int, total: int) -> None:
+            p.total = total
+            p.update(done)
+
+        index = dataset.generate(args.objects, args.out, approaches=args.approaches, hands=args.hands or ["5x5"],
+                                 validate=args.validate, workers=args.workers, backend=args.backend,
+                                 address=args.address, scale=args.scale, params=_params(args),
+                                 command=["hugger", *argv], log=log, progress=progress)
+    grasps = len(index["shards"]) * int(index["parameters"]["approaches"])
+    print(f"wrote {args.out}/index.json: {len(index['shards'])} shards, {grasps} grasps")
+    return EXIT_OK
 
 
 def cmd_export_mjcf(args: argparse.Namespace) -> int:
@@ -599,6 +664,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("object", help="a built-in object name (see 'hugger objects') or a mesh file (STL, OBJ, PLY, OFF, GLB)")
     p.add_argument("--out", required=True, help="trajectory file to write (.npz), in an existing directory")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    p.add_argument("--approaches", type=_count, default=1, metavar="K",
+                   help="plan from K directions spread evenly around T and keep the firmest grasp "
+                        "(default 1: the single default approach; see docs/generation.md)")
+    p.add_argument("--threads", type=_count, default=None,
+                   help="planning threads for --approaches (default: the CPUs available)")
+    p.add_argument("--verify", type=int, default=0, metavar="V",
+                   help="with --approaches: put the V best-ranked grasps through the physics test in turn and "
+                        "keep the first that holds (hugger[physics]; default 0: no physics)")
     _hand_options(p)
     _planner_options(p)
     _case_options(p)
@@ -636,6 +709,10 @@ def build_parser() -> argparse.ArgumentParser:
                                    "0 held, 1 not held, 2 bad input.")
     p.add_argument("file", help="trajectory file (.npz)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--robust", action="store_true",
+                   help="the test under perturbed mass, friction, servo stiffness and squeeze, and the largest push "
+                        "held; exit 0 only when held under every perturbation")
+    p.add_argument("--workers", type=_count, default=None, help="processes for --robust (default: the CPUs)")
     p.set_defaults(func=cmd_validate)
 
     p = sub.add_parser("simulate", help="closed-loop hugging in MuJoCo: plan from what a MuJoCo skin feels (hugger[physics])")
@@ -652,6 +729,27 @@ def build_parser() -> argparse.ArgumentParser:
     _planner_options(p)
     _case_options(p)
     p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("generate", help="a dataset of grasps: K approaches per (object, hand), resumable")
+    p.add_argument("objects", nargs="+", metavar="OBJECT", help="built-in object names or mesh files")
+    p.add_argument("--out", required=True, help="dataset folder (index.json and shards/); an existing one is resumed")
+    p.add_argument("--approaches", type=_count, default=26, metavar="K", help="approaches per object and hand (default 26)")
+    p.add_argument("--hands", nargs="+", metavar="SPEC",
+                   help="hands as MxN or MxN:key=value,... (link_length, link_radius, palm_radius, palm_thickness; "
+                        "default 5x5, the default hand)")
+    p.add_argument("--validate", action="store_true", help="the six-direction physics test of every grasp (hugger[physics])")
+    p.add_argument("--workers", type=_count, default=None, help="worker processes or Ray tasks in flight (default: the CPUs)")
+    p.add_argument("--backend", choices=("local", "ray"), default="local",
+                   help="local: a process pool (default); ray: one Ray task per shard (hugger[cluster])")
+    p.add_argument("--address", default=None, help="Ray cluster address for --backend ray (default: start a local Ray)")
+    p.add_argument("--scale", type=float, default=1.0, help="multiply mesh coordinates (0.001 for millimetres)")
+    g = p.add_argument_group("planner (defaults as hugger.Planner; no timeout: datasets are deterministic)")
+    g.add_argument("--step", type=float, help="approach step, m (default shortest link / 20)")
+    g.add_argument("--epsilon", type=float, help="overextension threshold epsilon of the planner, m (default step / 10)")
+    g.add_argument("--contact-tolerance", type=float, help="sensing distance delta, m (default 1e-4)")
+    g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
+    g.add_argument("--rules", choices=("hug", "paper"), default=None, help="Phase 2 rule set (default hug)")
+    p.set_defaults(func=cmd_generate)
 
     p = sub.add_parser("export-mjcf", help="write the hand and object at a configuration as MJCF (hugger[physics])")
     p.add_argument("file", help="trajectory file (.npz)")
@@ -686,6 +784,16 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {value}")
+    return value
+
+
 def _version() -> str:
     from . import __version__
 
@@ -708,7 +816,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _main(argv: Sequence[str] | None) -> int:
     try:
         args = build_parser().parse_args(argv)
-        args._argv = None if argv is None else [str(a) for a in argv]
+        args._argv = [str(a) for a in argv] if argv is not None else sys.argv[1:]
         return int(args.func(args))
     except (UsageError, ValueError, FileNotFoundError, IsADirectoryError, PermissionError, ImportError) as exc:
         print(f"hugger: error: {exc}", file=sys.stderr)

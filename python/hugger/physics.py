@@ -312,8 +312,8 @@ def joint_ranges(traj: Any, squeeze: float = SQUEEZE) -> np.ndarray:
     return np.stack([lo, hi], axis=-1)
 
 
-def _build_mjcf(traj, k: int, object_mass: float, friction: float, decompose: bool, cache_dir, squeeze: float
-                ) -> tuple[str, dict]:
+def _build_mjcf(traj, k: int, object_mass: float, friction: float, decompose: bool, cache_dir, squeeze: float,
+                kp: float = KP) -> tuple[str, dict]:
     hand = traj.hand
     m_count, n_count = int(hand["fingers"]), int(hand["links"])
     lengths = np.asarray(hand["link_lengths"], dtype=np.float64).reshape(m_count, n_count)
@@ -346,7 +346,7 @@ def _build_mjcf(traj, k: int, object_mass: float, friction: float, decompose: bo
     ET.SubElement(hand_default, "geom", contype="2", conaffinity="1", density=repr(LINK_DENSITY),
                   rgba="0.85 0.65 0.5 1")
     ET.SubElement(hand_default, "joint", type="hinge", armature=repr(ARMATURE))
-    ET.SubElement(hand_default, "position", kp=repr(KP), dampratio=repr(DAMPRATIO))
+    ET.SubElement(hand_default, "position", kp=repr(float(kp)), dampratio=repr(DAMPRATIO))
     obj_default = ET.SubElement(default, "default", {"class": "object"})
     ET.SubElement(obj_default, "geom", type="mesh", contype="1", conaffinity="2", rgba="0.3 0.5 0.8 1")
 
@@ -438,7 +438,7 @@ def touching_fingers(traj: Any, k: int = -1, distance: float = TOUCH_DISTANCE) -
 
 def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: float = 10.0, duration: float = 2.0,
              mu: float = 0.6, mass: float = 0.1, *, decompose: bool = True,
-             cache_dir: str | os.PathLike | None = None) -> dict:
+             cache_dir: str | os.PathLike | None = None, kp: float = KP, force: float | None = None) -> dict:
     """Six-direction hold test of configuration ``k`` of ``traj`` in MuJoCo.
 
     Protocol (as in current dexterous-grasp benchmarks):
@@ -455,7 +455,8 @@ def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: flo
        force of ``force_factor`` x weight is applied at the object's centre of mass along +x, -x,
        +y, -y, +z, -z (world axes) for ``duration`` s (default 2). The direction holds when the
        object's centre of mass moved less than 5 cm and it turned less than 15° from the settled
-       state.
+       state. ``force`` (N), when given, replaces ``force_factor`` x weight (so that the push
+       stays the same when ``mass`` is perturbed). ``kp`` is the servo stiffness (N·m/rad).
 
     Returns a JSON-serialisable dict: ``held`` (all six hold), ``directions`` (``"+x"`` ...
     each ``{"displacement_m", "rotation_deg", "held"}``), ``settle`` (how far the squeeze moved
@@ -471,8 +472,9 @@ def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: flo
     duration = _positive("duration", duration)
     mu = _positive("mu", mu)
     mass = _positive("mass", mass)
+    kp = _positive("kp", kp)
 
-    xml, info = _build_mjcf(traj, k, mass, mu, bool(decompose), cache_dir, squeeze)
+    xml, info = _build_mjcf(traj, k, mass, mu, bool(decompose), cache_dir, squeeze, kp)
     model = mujoco.MjModel.from_xml_string(xml)
     model.opt.gravity[:] = 0.0
     data = mujoco.MjData(model)
@@ -499,7 +501,7 @@ def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: flo
     pos_s, quat_s = data.xpos[obj].copy(), data.xquat[obj].copy()
 
     weight = mass * GRAVITY
-    force = force_factor * weight
+    force = force_factor * weight if force is None else _positive("force", force, allow_zero=True)
     steps = int(round(duration / TIMESTEP))
     directions = {}
     for name, axis in DIRECTIONS.items():
@@ -518,7 +520,7 @@ def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: flo
         "k": k, "mass_kg": mass, "mu": mu, "torsional_friction_m": TORSIONAL_FRICTION,
         "rolling_friction_m": ROLLING_FRICTION, "condim": CONDIM, "cone": "elliptic", "impratio": IMPRATIO,
         "solref": list(SOLREF), "solimp": list(SOLIMP), "timestep_s": TIMESTEP, "integrator": "implicitfast",
-        "solver": "Newton", "jacobian": "dense", "kp_Nm_per_rad": KP, "dampratio": DAMPRATIO, "armature_kgm2": ARMATURE,
+        "solver": "Newton", "jacobian": "dense", "kp_Nm_per_rad": kp, "dampratio": DAMPRATIO, "armature_kgm2": ARMATURE,
         "link_density_kg_m3": LINK_DENSITY, "link_radius_simulated_m": info["link_radius_simulated"],
         "squeeze_rad": squeeze, "touch_distance_m": TOUCH_DISTANCE, "squeeze_ramp_s": SQUEEZE_RAMP,
         "settle_s": SETTLE, "gravity": "off (hand held by an arm; the six directions replace gravity)",
@@ -533,6 +535,98 @@ def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: flo
         "settle": {"displacement_m": float(np.linalg.norm(pos_s - pos0)), "rotation_deg": _rotation_deg(quat0, quat_s)},
         "touching_fingers": [bool(x) for x in touching],
         "settings": settings,
+    }
+
+
+#: The perturbations of the robust verdict: name -> keyword arguments of :func:`validate`.
+PERTURBATIONS = {
+    "nominal": {},
+    "mass-10%": {"mass": 0.09}, "mass+10%": {"mass": 0.11},
+    "mu=0.5": {"mu": 0.5}, "mu=1.0": {"mu": 1.0},
+    "kp-20%": {"kp": 0.8 * KP}, "kp+20%": {"kp": 1.2 * KP},
+    "squeeze=0.03": {"squeeze": 0.03}, "squeeze=0.08": {"squeeze": 0.08},
+}
+
+
+def _validate_job(job: tuple) -> dict:
+    traj, k, kwargs = job
+    return validate(traj, k, **kwargs)
+
+
+def _run_jobs(jobs: list[tuple], workers: int) -> list[dict]:
+    """validate() over many (traj, k, kwargs) jobs: a process pool when workers > 1 (MuJoCo holds
+    the GIL through a whole mj_step batch, so threads would not help), in order."""
+    if workers <= 1 or len(jobs) <= 1:
+        return [_validate_job(j) for j in jobs]
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=multiprocessing.get_context("spawn")) as pool:
+        return list(pool.map(_validate_job, jobs))
+
+
+def validate_robust(traj: Any, k: int = -1, *, workers: int | None = None, bisect_steps: int = 4,
+                    max_factor: float = 40.0, cache_dir: str | os.PathLike | None = None) -> dict:
+    """The six-direction test of :func:`validate` under the perturbations that matter, and the
+    largest push the grasp holds.
+
+    Perturbations (:data:`PERTURBATIONS`): nominal; object mass 0.09 and 0.11 kg (±10%; the push
+    stays 10 x 0.1 kg x g = 9.81 N); friction mu 0.5 and 1.0; servo stiffness ±20%; squeeze 0.03 and
+    0.08 rad. They run in a process pool of ``workers`` processes (default: the CPUs available).
+    The grasp is *robustly held* when it holds (all six directions) under every perturbation;
+    ``held_fraction`` is the fraction of perturbations it holds under. ``max_force_N`` is the
+    largest push (N, nominal settings) under which all six directions hold, found by doubling from
+    9.81 N up to ``max_factor`` x the weight and then ``bisect_steps`` bisections (0 when even a
+    push of ``9.81 N / 2**bisect_steps`` is lost); ``max_force_factor`` is it over the weight.
+    Deterministic, like :func:`validate`.
+    """
+    traj = _trajectory(traj)
+    k = _index(traj, k)
+    if workers is None:
+        try:
+            workers = max(1, len(os.sched_getaffinity(0)))
+        except AttributeError:
+            workers = os.cpu_count() or 1
+    weight = 0.1 * GRAVITY
+    nominal_force = 10.0 * weight
+    names = list(PERTURBATIONS)
+    jobs = [(traj, k, {**PERTURBATIONS[n], "force": nominal_force, "cache_dir": cache_dir}) for n in names]
+    if workers > 1:
+        convex_pieces(traj.object_vertices, traj.object_faces, cache_dir=cache_dir)  # decompose once, cached
+    results = dict(zip(names, _run_jobs(jobs, workers)))
+
+    def held_at(force: float) -> bool:
+        return bool(validate(traj, k, force=force, cache_dir=cache_dir)["held"])
+
+    lo, hi = 0.0, None
+    if results["nominal"]["held"]:
+        lo = nominal_force
+        f = 2 * nominal_force
+        while f <= max_factor * weight + 1e-9:
+            if held_at(f):
+                lo, f = f, 2 * f
+            else:
+                hi = f
+                break
+    else:
+        hi = nominal_force
+    if hi is not None:
+        for _ in range(int(bisect_steps)):
+            mid = 0.5 * (lo + hi)
+            if held_at(mid):
+                lo = mid
+            else:
+                hi = mid
+    held = [bool(results[n]["held"]) for n in names]
+    return {
+        "robust": all(held),
+        "held_fraction": sum(held) / len(held),
+        "held": bool(results["nominal"]["held"]),
+        "max_force_N": lo,
+        "max_force_factor": lo / weight,
+        "nominal_force_N": nominal_force,
+        "perturbations": {n: {"held": bool(results[n]["held"]), "changed": PERTURBATIONS[n],
+                              "directions": results[n]["directions"]} for n in names},
     }
 
 
@@ -557,5 +651,6 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["MujocoSkin", "Simulation", "simulate", "replay", "export_mjcf", "validate", "load_model", "convex_pieces", "mass_properties", "hull_volume",
+__all__ = ["MujocoSkin", "Simulation", "simulate", "replay", "export_mjcf", "validate", "validate_robust", "PERTURBATIONS",
+           "load_model", "convex_pieces", "mass_properties", "hull_volume",
            "finger_frames", "joint_ranges", "touching_fingers", "default_cache_dir"]

@@ -1,0 +1,493 @@
+"""Grasp datasets: ``hugger generate`` writes them, :class:`Dataset` reads them.
+
+A dataset is a folder (the format is described in ``docs/generation.md``)::
+
+    DIR/index.json                     what was made, from what, by which command
+    DIR/shards/<object>__<hand>.npz    one shard per (object, hand): every approach's grasp
+
+Each shard holds the ``approaches`` grasps of :func:`hugger.search` for one object and one hand:
+start and final palm poses, joint angles and positions, every contact (points, normals, finger,
+link), quality figures (links and palm in contact, force closure, epsilon) and, with
+``validate``, the six-direction physics verdict of every grasp. Shards are written to a
+temporary name and renamed, so a shard under its final name is always whole: a run killed at
+any moment and started again makes only the missing shards. Shards are byte-identical for the
+same command, whatever the number of workers and the backend (``local`` process pool or ``ray``).
+"""
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+import re
+import sys
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterator, Sequence
+
+import numpy as np
+
+__all__ = ["Dataset", "Grasp", "generate", "parse_hand", "DATASET_FORMAT", "SHARD_FORMAT"]
+
+DATASET_FORMAT = "hugger-dataset"
+DATASET_VERSION = 1
+SHARD_FORMAT = 1
+_ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # fixed member timestamps: byte-identical shards
+_HAND_KEYS = {"link_length": float, "link_radius": float, "palm_radius": float, "palm_thickness": float}
+
+
+# --------------------------------------------------------------------------------------------
+# hands and tasks
+
+
+def parse_hand(spec: str) -> tuple[str, dict]:
+    """A hand spec ``MxN`` or ``MxN:key=value,...`` (keys ``link_length``, ``link_radius``,
+    ``palm_radius``, ``palm_thickness``, in m) -> (label for file names, Hand keyword arguments).
+    ``5x5`` is the default hand of ``hugger.Hand()``."""
+    m = re.fullmatch(r"\s*(\d+)x(\d+)\s*(?::(.*))?", str(spec))
+    if not m:
+        raise ValueError(f"hand spec must be MxN or MxN:key=value,... (e.g. 5x5, 4x3:link_length=0.025), got {spec!r}")
+    kwargs: dict[str, Any] = {"fingers": int(m.group(1)), "links": int(m.group(2))}
+    label = f"{kwargs['fingers']}x{kwargs['links']}"
+    for item in filter(None, (m.group(3) or "").split(",")):
+        key, _, value = item.partition("=")
+        key = key.strip()
+        if key not in _HAND_KEYS or not value:
+            raise ValueError(f"hand spec {spec!r}: unknown or empty setting {item!r}; expected some of "
+                             f"{sorted(_HAND_KEYS)}")
+        try:
+            kwargs[key] = _HAND_KEYS[key](value)
+        except ValueError:
+            raise ValueError(f"hand spec {spec!r}: {key} must be a number, got {value!r}") from None
+        label += f"_{key}{kwargs[key]:g}"
+    from .hand import Hand
+
+    Hand(**kwargs)  # checks the sizes now, not in a worker
+    return label, kwargs
+
+
+def _safe(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "object"
+
+
+def _sha256_file(path: str) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _object_entry(spec: str, scale: float) -> dict:
+    """Index entry of one object: name, path (as given, or the built-in name) and content hash."""
+    from . import objects
+    from .scenarios import load_object
+
+    if spec in objects.BUILTINS:
+        _, obj, _ = load_object(spec, scale)
+        digest = hashlib.sha256(np.ascontiguousarray(obj.vertices).tobytes() +
+                                np.ascontiguousarray(obj.faces).tobytes()).hexdigest()
+        return {"name": spec, "path": spec, "builtin": True, "sha256": digest, "scale": scale}
+    if not os.path.isfile(spec):
+        raise ValueError(f"{spec!r} is neither a built-in object nor a mesh file")
+    return {"name": Path(spec).stem, "path": spec, "builtin": False, "sha256": _sha256_file(spec), "scale": scale}
+
+
+def _task_key(task: dict) -> str:
+    """Hash of everything a shard depends on (not the worker count, backend or output folder)."""
+    keep = {k: task[k] for k in ("object", "hand", "approaches", "params", "rules", "validate", "format")}
+    return hashlib.sha256(json.dumps(keep, sort_keys=True).encode()).hexdigest()
+
+
+# --------------------------------------------------------------------------------------------
+# one shard
+
+
+def _npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:
+    """An .npz (loads with allow_pickle=False) whose bytes depend only on the arrays."""
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for key in sorted(arrays):
+            info = zipfile.ZipInfo(key + ".npy", date_time=_ZIP_DATE)
+            info.compress_type = zipfile.ZIP_DEFLATED
+            info.external_attr = 0o644 << 16
+            member = io.BytesIO()
+            arr = np.asarray(arrays[key])  # (np.ascontiguousarray would turn scalars into (1,) arrays)
+            np.lib.format.write_array(member, arr if arr.flags.c_contiguous else arr.copy(), allow_pickle=False)
+            zf.writestr(info, member.getvalue(), compresslevel=6)
+    return buf.getvalue()
+
+
+def make_shard(task: dict) -> bytes:
+    """The shard of one (object, hand) task, as the bytes of its .npz file. Pure: the same task
+    gives the same bytes in any process."""
+    from . import analysis
+    from .hand import Hand
+    from .scenarios import default_case
+    from .search import RANK_MU, search
+    from .trajectory import CONTACT_DISTANCE
+
+    ob = task["object"]
+    hand = Hand(**task["hand"]["kwargs"])
+    case = default_case(ob["path"], hand, scale=ob["scale"])
+    if ob["builtin"] is False and _sha256_file(ob["path"]) != ob["sha256"]:
+        raise ValueError(f"{ob['path']} changed since the dataset was started (content hash differs)")
+    pole = case.palm_pose[:3, 3] - case.target
+    params = {k: v for k, v in task["params"].items() if v is not None}
+    result = search(hand, case.obj, case.target, approaches=task["approaches"], rules=task["rules"], threads=1,
+                    pole=pole, keep_all=True, **params)
+    k = len(result.candidates)
+    m, n = hand.fingers, hand.links
+    torque_scale = float(np.linalg.norm(case.obj.vertices - case.target, axis=1).max())
+    nan = np.nan
+    a: dict[str, Any] = {
+        "format_version": np.int64(SHARD_FORMAT), "task_sha256": np.str_(_task_key(task)),
+        "object_name": np.str_(ob["name"]), "object_sha256": np.str_(ob["sha256"]),
+        "hand_json": np.str_(hand.to_json()), "params_json": np.str_(json.dumps(task["params"], sort_keys=True)),
+        "target": np.asarray(case.target, dtype=np.float64), "best": np.int64(result.best),
+        "direction": np.stack([c.direction for c in result.candidates]).astype(np.float64),
+        "status": np.array([c.status for c in result.candidates], dtype=np.str_),
+        "configurations": np.array([c.configurations for c in result.candidates], dtype=np.int64),
+        "start_pose": np.full((k, 4, 4), nan), "palm_pose": np.full((k, 4, 4), nan),
+        "joints": np.full((k, m, n + 1, 3), nan), "angles": np.full((k, m, n), nan),
+        "tip_state": np.full((k, m), -1, dtype=np.int8),
+        "links_in_contact": np.zeros(k, dtype=np.int64), "palm_contact": np.zeros(k, dtype=bool),
+        "force_closure": np.zeros(k, dtype=bool), "epsilon": np.zeros(k),
+    }
+    points, normals, finger, link, offsets = [], [], [], [], [0]
+    verdicts: list[dict | None] = []
+    for i, (cand, traj) in enumerate(zip(result.candidates, result.trajectories or ())):
+        if traj is None:
+            offsets.append(offsets[-1])
+            verdicts.append(None)
+            continue
+        a["start_pose"][i], a["palm_pose"][i] = cand.start_pose, traj.palm_pose[-1]  # the pose given, exactly
+        a["joints"][i], a["angles"][i], a["tip_state"][i] = traj.joints[-1], traj.angles[-1], traj.tip_state[-1]
+        a["links_in_contact"][i], a["palm_contact"][i] = cand.links_in_contact, cand.palm_contact
+        found = analysis.contacts_of(hand, case.obj, traj.palm_pose[-1], traj.joints[-1], CONTACT_DISTANCE)
+        q = analysis.grasp_quality(found, case.target, mu=RANK_MU, torque_scale=torque_scale, volume=False)
+        a["force_closure"][i], a["epsilon"][i] = q.force_closure, q.epsilon
+        points.append(found.points)
+        normals.append(found.normals)
+        finger.append(found.finger)
+        link.append(found.link)
+        offsets.append(offsets[-1] + len(found))
+        verdicts.append(None)
+        if task["validate"]:
+            from . import physics
+
+            verdicts[-1] = physics.validate(traj, cache_dir=task.get("cache_dir"))
+    a["contact_offsets"] = np.asarray(offsets, dtype=np.int64)
+    a["contact_points"] = np.concatenate(points) if points else np.zeros((0, 3))
+    a["contact_normals"] = np.concatenate(normals) if normals else np.zeros((0, 3))
+    a["contact_finger"] = np.concatenate(finger).astype(np.int64) if finger else np.zeros(0, np.int64)
+    a["contact_link"] = np.concatenate(link).astype(np.int64) if link else np.zeros(0, np.int64)
+    if task["validate"]:
+        from .physics import DIRECTIONS
+
+        names = list(DIRECTIONS)
+        a["held"] = np.array([bool(v and v["held"]) for v in verdicts])
+        a["held_directions"] = np.array([[bool(v and v["directions"][d]["held"]) for d in names] for v in verdicts],
+                                        dtype=bool).reshape(k, len(names))
+        a["displacement_m"] = np.array([[(v["directions"][d]["displacement_m"] if v else None) or nan for d in names]
+                                        for v in verdicts], dtype=np.float64).reshape(k, len(names))
+        a["validate_directions"] = np.array(names, dtype=np.str_)
+    return _npz_bytes(a)
+
+
+def _atomic_write(path: Path, data: bytes) -> None:
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    with open(tmp, "wb") as f:
+        f.write(data)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+def _shard_done(path: Path, key: str) -> bool:
+    """Whether the shard under its final name exists and was made for this task."""
+    if not path.is_file():
+        return False
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            stored = str(z["task_sha256"])
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile):
+        return False  # not ours or damaged: made again
+    if stored != key:
+        raise ValueError(f"{path} was made with other settings (objects, hand, approaches, planner parameters or "
+                         f"--validate); write this dataset to a new --out folder")
+    return True
+
+
+# --------------------------------------------------------------------------------------------
+# the run
+
+
+def _ray():
+    try:
+        import ray
+    except ImportError:
+        raise ImportError("--backend ray needs Ray: pip install 'hugger[cluster]'") from None
+    return ray
+
+
+def generate(objects: Sequence[str], out: str | os.PathLike, approaches: int = 26, hands: Sequence[str] = ("5x5",),
+             validate: bool = False, workers: int | None = None, backend: str = "local", address: str | None = None,
+             scale: float = 1.0, rules: str | None = None, params: dict | None = None,
+             command: Sequence[str] | None = None, log: Callable[[str], Any] | None = None,
+             progress: Callable[[int, int], Any] | None = None) -> dict:
+    """Make (or finish) the dataset in ``out``: one shard per (object, hand); returns the index.
+
+    ``objects``: built-in names or mesh files; ``hands``: specs of :func:`parse_hand`;
+    ``approaches``: K of :func:`hugger.search`; ``validate``: run :func:`hugger.physics.validate` on
+    every grasp. ``workers``: processes (``local``, default the CPUs available) or the Ray tasks
+    in flight (``ray``). ``backend="ray"`` runs one Ray task per shard on ``ray.init(address)``
+    (a local Ray when ``address`` is None). Shards already present are kept; the index is written
+    last. ``command``: the command line recorded in the index.
+    """
+    from .search import approach_directions
+
+    approach_directions(approaches)  # checks K
+    if backend not in ("local", "ray"):
+        raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
+    if not objects:
+        raise ValueError("give at least one object")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise ValueError(f"workers must be a whole number >= 1, got {workers!r}")
+    ray = _ray() if backend == "ray" else None
+    from . import __version__
+    from .batch import _PARAMS
+
+    params = dict(params or {})
+    bad = set(params) - set(_PARAMS)
+    if bad:
+        raise ValueError(f"unknown planner parameters {sorted(bad)}")
+    params = {k: params.get(k) for k in _PARAMS}
+    hand_list = [parse_hand(h) for h in hands]
+    if len({label for label, _ in hand_list}) != len(hand_list):
+        raise ValueError("the same hand is given twice")
+    obj_list = [_object_entry(os.fspath(o), float(scale)) for o in objects]
+    names = [_safe(o["name"]) for o in obj_list]
+    if len(set(names)) != len(names):
+        raise ValueError(f"two objects share a name: {sorted(x for x in names if names.count(x) > 1)}")
+    root = Path(out)
+    shard_dir = root / "shards"
+    shard_dir.mkdir(parents=True, exist_ok=True)
+    for stale in shard_dir.glob(".*.tmp-*"):  # left by a killed run
+        stale.unlink(missing_ok=True)
+    tasks = []
+    from .hand import Hand
+
+    for ob, safe_name in zip(obj_list, names):
+        for label, kwargs in hand_list:
+            task = {"format": SHARD_FORMAT, "object": ob, "hand": {"label": label, "kwargs": kwargs,
+                                                                   "json": Hand(**kwargs).to_json()},
+                    "approaches": int(approaches), "params": params, "rules": rules, "validate": bool(validate)}
+            task["file"] = f"{safe_name}__{label}.npz"
+            task["key"] = _task_key(task)
+            tasks.append(task)
+    todo = [t for t in tasks if not _shard_done(shard_dir / t["file"], t["key"])]
+    say = log or (lambda s: None)
+    say(f"{len(tasks) - len(todo)} of {len(tasks)} shards already done; making {len(todo)}")
+    if workers is None:
+        try:
+            workers = max(1, len(os.sched_getaffinity(0)))
+        except AttributeError:
+            workers = os.cpu_count() or 1
+    done = len(tasks) - len(todo)
+    if progress is not None:
+        progress(done, len(tasks))
+
+    def finished(task: dict, data: bytes) -> None:
+        nonlocal done
+        _atomic_write(shard_dir / task["file"], data)
+        done += 1
+        say(f"shard {done}/{len(tasks)} written: {task['file']}")
+        if progress is not None:
+            progress(done, len(tasks))
+
+    if todo and backend == "local":
+        if workers == 1 or len(todo) == 1:
+            for t in todo:
+                finished(t, make_shard(t))
+        else:
+            import multiprocessing
+            from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+            ctx = multiprocessing.get_context("spawn")
+            with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx) as pool:
+                pending = {pool.submit(make_shard, t): t for t in todo}
+                try:
+                    while pending:
+                        ready, _ = wait(pending, return_when=FIRST_COMPLETED)
+                        for fut in sorted(ready, key=lambda f: pending[f]["file"]):
+                            finished(pending.pop(fut), fut.result())
+                except BaseException:
+                    for fut in pending:
+                        fut.cancel()
+                    raise
+    elif todo:
+        started_here = not ray.is_initialized()
+        if started_here:
+            if address is None:
+                ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+            else:
+                ray.init(address=address, log_to_driver=False)
+        try:
+            remote = ray.remote(num_cpus=1, max_retries=2)(make_shard)
+            waiting = {}
+            queue = list(todo)
+            while queue or waiting:
+                while queue and len(waiting) < max(1, workers):
+                    t = queue.pop(0)
+                    waiting[remote.remote(t)] = t
+                ready, _ = ray.wait(list(waiting), num_returns=1)
+                for ref in ready:
+                    finished(waiting.pop(ref), ray.get(ref))
+        finally:
+            if started_here:
+                ray.shutdown()
+    index = {
+        "format": DATASET_FORMAT, "format_version": DATASET_VERSION, "hugger_version": __version__,
+        "command": list(command) if command is not None else None,
+        "parameters": {"approaches": int(approaches), "validate": bool(validate), "rules": rules, "scale": float(scale),
+                       "planner": params},
+        "objects": obj_list,
+        "hands": [{"label": label, "kwargs": kwargs, "json": Hand(**kwargs).to_json()} for label, kwargs in hand_list],
+        "shards": [{"file": f"shards/{t['file']}", "object": t["object"]["name"], "hand": t["hand"]["label"],
+                    "task_sha256": t["key"], "sha256": _sha256_file(str(shard_dir / t["file"]))} for t in tasks],
+    }
+    _atomic_write(root / "index.json", (json.dumps(index, indent=1, sort_keys=True) + "\n").encode())
+    return index
+
+
+# --------------------------------------------------------------------------------------------
+# reading
+
+
+@dataclass(frozen=True, eq=False)
+class Grasp:
+    """One grasp of a dataset (arrays in the world frame, m, rad)."""
+
+    object: str  #: object name
+    hand: str  #: hand label
+    shard: int  #: shard index in the dataset
+    index: int  #: approach index within the shard
+    best: bool  #: the one :func:`hugger.search` chose for this (object, hand)
+    status: str  #: the plan's status (``error`` when it failed)
+    direction: np.ndarray  #: (3,) approach direction from T
+    start_pose: np.ndarray  #: (4, 4) palm pose the plan started from
+    palm_pose: np.ndarray  #: (4, 4) final palm pose T_WP
+    joints: np.ndarray  #: (M, N+1, 3) final joint positions
+    angles: np.ndarray  #: (M, N) final joint angles
+    links_in_contact: int
+    palm_contact: bool
+    force_closure: bool
+    epsilon: float  #: Ferrari-Canny epsilon (mu = 0.5) over all contacts
+    contact_points: np.ndarray  #: (C, 3) contact points on the object
+    contact_normals: np.ndarray  #: (C, 3) outward normals there
+    contact_finger: np.ndarray  #: (C,) finger of each contact, -1 the palm
+    contact_link: np.ndarray  #: (C,) link of each contact, -1 the palm
+    held: bool | None  #: six-direction physics verdict (None: not validated)
+
+
+class Dataset:
+    """A dataset written by :func:`generate` / ``hugger generate``: ``len(ds)`` grasps over
+    ``ds.shards``; ``ds[i]`` is a :class:`Grasp`; ``ds.trajectory(i)`` re-plans grasp i
+    (deterministic, checked against the stored grasp); ``ds.export_mjcf(i, path)`` writes it as
+    MJCF with the ``grasp`` keyframe (as ``hugger export-mjcf``)."""
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        self.root = Path(path)
+        index_path = self.root / "index.json"
+        if not index_path.is_file():
+            raise ValueError(f"{self.root} holds no dataset index (index.json); make one with 'hugger generate'")
+        self.index = json.loads(index_path.read_text())
+        if self.index.get("format") != DATASET_FORMAT or self.index.get("format_version") != DATASET_VERSION:
+            raise ValueError(f"{index_path} is not a hugger dataset index of version {DATASET_VERSION}")
+        self.shards: list[dict] = list(self.index["shards"])
+        self._cache: dict[int, dict] = {}
+        self._sizes = [int(self.shard(i)["status"].shape[0]) for i in range(len(self.shards))]
+        self._starts = np.concatenate([[0], np.cumsum(self._sizes)]).astype(int)
+
+    def __len__(self) -> int:
+        return int(self._starts[-1])
+
+    def shard(self, i: int) -> dict:
+        """Every array of shard i (see docs/generation.md), loaded without pickles."""
+        if i not in self._cache:
+            with np.load(self.root / self.shards[i]["file"], allow_pickle=False) as z:
+                self._cache[i] = {k: z[k] for k in z.files}
+        return self._cache[i]
+
+    def _locate(self, i: int) -> tuple[int, int]:
+        if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not -len(self) <= i < len(self):
+            raise IndexError(f"grasp {i!r} is out of range for a dataset of {len(self)} grasps")
+        i = int(i) % len(self)
+        s = int(np.searchsorted(self._starts, i, side="right") - 1)
+        return s, i - int(self._starts[s])
+
+    def __getitem__(self, i: int) -> Grasp:
+        s, j = self._locate(i)
+        z = self.shard(s)
+        lo, hi = int(z["contact_offsets"][j]), int(z["contact_offsets"][j + 1])
+        return Grasp(object=self.shards[s]["object"], hand=self.shards[s]["hand"], shard=s, index=j,
+                     best=j == int(z["best"]), status=str(z["status"][j]), direction=z["direction"][j],
+                     start_pose=z["start_pose"][j], palm_pose=z["palm_pose"][j], joints=z["joints"][j],
+                     angles=z["angles"][j], links_in_contact=int(z["links_in_contact"][j]),
+                     palm_contact=bool(z["palm_contact"][j]), force_closure=bool(z["force_closure"][j]),
+                     epsilon=float(z["epsilon"][j]), contact_points=z["contact_points"][lo:hi],
+                     contact_normals=z["contact_normals"][lo:hi], contact_finger=z["contact_finger"][lo:hi],
+                     contact_link=z["contact_link"][lo:hi], held=bool(z["held"][j]) if "held" in z else None)
+
+    def __iter__(self) -> Iterator[Grasp]:
+        for i in range(len(self)):
+            yield self[i]
+
+    def object(self, name: str):
+        """The object ``name`` as a :class:`hugger.Object`, checked against its recorded hash."""
+        from .scenarios import load_object
+
+        entry = next((o for o in self.index["objects"] if o["name"] == name), None)
+        if entry is None:
+            raise ValueError(f"no object {name!r} in this dataset")
+        if not entry["builtin"]:
+            path = entry["path"]
+            if not os.path.isabs(path) and not os.path.isfile(path) and (self.root / path).is_file():
+                path = str(self.root / path)
+            if _sha256_file(path) != entry["sha256"]:
+                raise ValueError(f"{path} is not the mesh this dataset was made from (content hash differs)")
+            entry = {**entry, "path": path}
+        return load_object(entry["path"], entry["scale"])[1]
+
+    def trajectory(self, i: int):
+        """Grasp i's whole plan, made again from its stored start pose with the recorded hand and
+        parameters (plans are deterministic); raises ``ValueError`` if it does not end in the stored grasp."""
+        from .hand import Hand
+        from .planner import Planner
+
+        g = self[i]
+        if g.status == "error":
+            raise ValueError(f"grasp {i} has no plan (planning failed)")
+        z = self.shard(g.shard)
+        hand = Hand(**next(h["kwargs"] for h in self.index["hands"] if h["label"] == g.hand))
+        params = {k: v for k, v in json.loads(str(z["params_json"])).items() if v is not None}
+        rules = self.index["parameters"].get("rules")
+        if rules is not None:
+            params["rules"] = rules
+        obj = self.object(g.object)
+        traj = Planner(hand, obj, z["target"], g.start_pose, **params).plan()
+        if not (np.array_equal(traj.palm_pose[-1], g.palm_pose) and np.array_equal(traj.joints[-1], g.joints)):
+            raise ValueError(f"grasp {i}: re-planning did not reproduce the stored grasp (another hugger version?)")
+        return traj
+
+    def export_mjcf(self, i: int, path: str | os.PathLike | None = None, **kwargs: Any) -> str:
+        """Grasp i as MJCF (hand, object, the ``grasp`` keyframe): :func:`hugger.physics.export_mjcf`."""
+        from . import physics
+
+        return physics.export_mjcf(self.trajectory(i), path, **kwargs)
+
+
+def _log_line(message: str) -> None:
+    print(f"hugger: {message}", file=sys.stderr, flush=True)

@@ -1,0 +1,293 @@
+"""Approach search: plan from many directions around T and keep the firmest grasp.
+
+``hugger.search(hand, obj)`` spreads ``approaches`` directions evenly over the sphere around the
+target T (:func:`approach_directions`, deterministic), starts the hand on each at the safe
+distance facing T (:func:`hugger.scenarios.start_pose`), plans them all in parallel threads (the
+engine releases the GIL) and ranks the final grasps (:func:`rank`). The result holds the best
+trajectory and every candidate's figures.
+
+The ranking (the default score) is lexicographic, cheap figures first:
+
+1. the plan ended without an error (``done``, ``stalled``, ``max_iterations``, ``timeout`` all count);
+2. force closure of the grasp over all its contacts (:func:`hugger.analysis.grasp_quality`);
+3. *hug* = links in contact + 2 if the palm touches (a link or the palm within 1 mm, as in
+   :meth:`hugger.Trajectory.summary`): enveloping grasps hold;
+4. the Ferrari-Canny epsilon (mu = 0.5), then the lowest candidate index.
+
+Hug comes from 25 segment distances and one palm distance per candidate. Contacts, force closure
+and epsilon (about 20 ms together) are computed only where they can decide: candidates are visited
+by decreasing hug, and once one with force closure is found, candidates of lower hug cannot win
+and are never judged further (their ``force_closure`` and ``epsilon`` stay ``None``).
+
+A custom ``score(candidate) -> float`` (larger is better) judges every candidate fully and ranks
+by it (ties: lowest index).
+"""
+from __future__ import annotations
+
+import math
+import numbers
+import os
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from .hand import Hand
+from .trajectory import CONTACT_DISTANCE, Trajectory
+from .world import Object
+
+__all__ = ["Candidate", "SearchResult", "approach_directions", "rank", "search"]
+
+#: Friction coefficient of the epsilon used for ranking (as :func:`hugger.analysis.analyze`).
+RANK_MU = 0.5
+_GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))
+_FAILED = ("error",)
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One approach: where the hand started and the grasp it ended in."""
+
+    index: int  #: position in the search's direction list
+    direction: np.ndarray  #: (3,) unit vector from T toward the start palm centre
+    status: str  #: the plan's status, or ``error`` when planning raised
+    start_pose: np.ndarray | None = None  #: (4, 4) the palm pose the plan was started from
+    configurations: int = 0  #: length of the plan
+    plan_time_s: float = 0.0  #: wall time of this plan (s), setup included
+    links_in_contact: int = 0  #: links within 1 mm of the object at the end
+    palm_contact: bool = False  #: the palm within 1 mm of the object at the end
+    contacts: int | None = None  #: contact points (None: not judged, see the module docstring)
+    force_closure: bool | None = None  #: force closure over all contacts (None: not judged)
+    epsilon: float | None = None  #: Ferrari-Canny epsilon, mu = 0.5 (None: not judged)
+    score: float | None = None  #: the custom score, when one was given
+    held: bool | None = None  #: the six-direction physics verdict, when ``verify`` checked it
+    error: str | None = None  #: the exception message when planning failed
+
+    @property
+    def hug(self) -> int:
+        """Links in contact + 2 for the palm: the cheap ranking figure."""
+        return int(self.links_in_contact) + (2 if self.palm_contact else 0)
+
+    @property
+    def ok(self) -> bool:
+        return self.status not in _FAILED
+
+    def to_dict(self) -> dict:
+        """Plain JSON types."""
+        return {"index": self.index, "direction": [float(x) for x in self.direction], "status": self.status,
+                "configurations": self.configurations, "plan_time_s": self.plan_time_s,
+                "links_in_contact": self.links_in_contact, "palm_contact": self.palm_contact, "hug": self.hug,
+                "contacts": self.contacts, "force_closure": self.force_closure, "epsilon": self.epsilon,
+                "score": self.score, "held": self.held, "error": self.error}
+
+
+@dataclass(frozen=True, eq=False)
+class SearchResult:
+    """The outcome of :func:`search`."""
+
+    best: int  #: index of the chosen candidate
+    trajectory: Trajectory  #: its plan
+    candidates: tuple[Candidate, ...]  #: every approach, in direction order
+    target: np.ndarray  #: T (3,)
+    time_s: float  #: wall time of the whole search (s): planning and ranking
+    trajectories: tuple[Trajectory | None, ...] | None = field(default=None, repr=False)
+    #: every candidate's plan (None where planning failed) when ``keep_all``; else None
+
+    @property
+    def chosen(self) -> Candidate:
+        return self.candidates[self.best]
+
+    @property
+    def directions(self) -> np.ndarray:
+        """(K, 3) the approach directions."""
+        return np.stack([c.direction for c in self.candidates])
+
+
+def approach_directions(count: int, pole: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
+    """``count`` unit vectors (count, 3) spread evenly over the sphere, the first one ``pole``.
+
+    A spherical Fibonacci lattice from the pole to its antipode: direction i has height
+    z_i = 1 - 2 i / (count - 1) along the pole and turns by the golden angle (pi (3 - sqrt 5))
+    about it from one to the next; the frame about the pole is that of :func:`hugger.look_at`
+    (deterministic). ``count`` = 1 gives the pole alone (the default single approach).
+    """
+    if isinstance(count, bool) or not isinstance(count, numbers.Integral) or not 1 <= int(count) <= 10000:
+        raise ValueError(f"approaches must be a whole number from 1 to 10000, got {count!r}")
+    p = np.asarray(pole, dtype=np.float64).reshape(3)
+    if not np.all(np.isfinite(p)) or np.linalg.norm(p) == 0:
+        raise ValueError(f"pole must be a finite non-zero 3-vector, got {pole!r}")
+    p = p / np.linalg.norm(p)
+    n = int(count)
+    if n == 1:
+        return p[None].copy()
+    from .planner import look_at
+
+    frame = look_at(np.zeros(3), p)[:3, :3]  # columns x, y, z = p
+    i = np.arange(n)
+    z = 1.0 - 2.0 * i / (n - 1)
+    r = np.sqrt(np.clip(1.0 - z * z, 0.0, None))
+    phi = _GOLDEN_ANGLE * i
+    local = np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+    out = local @ frame.T
+    out /= np.linalg.norm(out, axis=1, keepdims=True)
+    out[0] = p  # exactly the pole
+    return out
+
+
+def _threads(threads: Any) -> int:
+    if threads is None:
+        try:
+            return max(1, len(os.sched_getaffinity(0)))
+        except AttributeError:
+            return os.cpu_count() or 1
+    if isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1:
+        raise ValueError(f"threads must be a whole number >= 1 or None, got {threads!r}")
+    return int(threads)
+
+
+def _judge(cand: Candidate, traj: Trajectory, hand: Hand, obj: Object, target: np.ndarray,
+           torque_scale: float) -> Candidate:
+    """The candidate with its contacts, force closure and epsilon filled in."""
+    from . import analysis
+
+    found = analysis.contacts_of(hand, obj, traj.palm_pose[-1], traj.joints[-1], CONTACT_DISTANCE)
+    q = analysis.grasp_quality(found, target, mu=RANK_MU, torque_scale=torque_scale, volume=False)
+    return replace(cand, contacts=len(found), force_closure=bool(q.force_closure), epsilon=float(q.epsilon))
+
+
+def _default_key(c: Candidate) -> tuple:
+    return (c.ok, bool(c.force_closure), c.hug, c.epsilon if c.epsilon is not None else -1.0, -c.index)
+
+
+def rank(candidates: Sequence[Candidate], judge: Callable[[Candidate], Candidate],
+         score: Callable[[Candidate], float] | None = None) -> tuple[int, list[Candidate]]:
+    """The index of the best candidate and the candidates, judged where it decides.
+
+    ``judge(c)`` returns c with ``contacts``, ``force_closure`` and ``epsilon`` filled in. Default
+    ranking: see the module docstring; with ``score``, every working candidate is judged and the
+    largest ``score(c)`` wins (ties: lowest index).
+    """
+    out = list(candidates)
+    working = [c for c in out if c.ok]
+    if not working:
+        raise ValueError("no approach could be planned: " + "; ".join(f"{c.index}: {c.error}" for c in out))
+    if score is not None:
+        for c in working:
+            j = judge(c)
+            s = float(score(j))
+            if not math.isfinite(s):
+                raise ValueError(f"score must return a finite number, got {s!r} for candidate {c.index}")
+            out[c.index] = replace(j, score=s)
+        best = max((c for c in out if c.ok), key=lambda c: (c.score, -c.index))
+        return best.index, out
+    best: Candidate | None = None
+    for c in sorted(working, key=lambda c: (-c.hug, c.index)):
+        if best is not None and best.force_closure and c.hug < best.hug:
+            break  # cannot beat a force-closure grasp that hugs more
+        j = judge(c)
+        out[c.index] = j
+        if best is None or _default_key(j) > _default_key(best):
+            best = j
+    assert best is not None
+    return best.index, out
+
+
+def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, rules: str | None = None,
+           threads: int | None = None, score: Callable[[Candidate], float] | None = None,
+           pole: Any = (0.0, 0.0, 1.0), timeout: float | None = None, keep_all: bool = False,
+           progress: Callable[[int, int], Any] | None = None, verify: int = 0, **params: Any) -> SearchResult:
+    """The firmest of ``approaches`` grasps of ``obj``, approached evenly from all around T.
+
+    ``target``: T (default :func:`hugger.scenarios.interior_target`). Direction 0 is ``pole``
+    (default +z, the command line's default approach), so ``approaches=1`` is the single default
+    plan. ``rules`` is passed to :class:`hugger.Planner` when given (the Phase 2 rule set), as are
+    ``params`` (``step``, ``epsilon``, ``contact_tolerance``, ``max_iterations``) and ``timeout``
+    (seconds per plan). ``threads``: worker threads (default: the CPUs this process may use).
+    ``score``: see :func:`rank`. ``keep_all`` keeps every candidate's trajectory in the result.
+    ``progress(done, total)`` is called as plans finish. Deterministic: the same input gives the
+    same result on any number of threads.
+
+    ``verify`` = V > 0 checks the ranking in physics (needs ``hugger[physics]``): every candidate
+    is judged, and the V best by the ranking are put through the six-direction test of
+    :func:`hugger.physics.validate` in ranking order; the first that holds is chosen (``held`` in
+    its figures), or the ranking's best when none of them does.
+    """
+    from .batch import _PARAMS
+    from .planner import Planner, _timeout
+    from .scenarios import interior_target, safe_distance, start_pose
+
+    t0 = time.perf_counter()
+    if not isinstance(hand, Hand):
+        raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
+    if not isinstance(obj, Object):
+        raise ValueError(f"obj must be a hugger.Object, got {type(obj).__name__}")
+    bad = set(params) - set(_PARAMS)
+    if bad:
+        raise ValueError(f"unknown planner parameters {sorted(bad)}; expected some of {list(_PARAMS)}")
+    if isinstance(verify, bool) or not isinstance(verify, numbers.Integral) or verify < 0:
+        raise ValueError(f"verify must be a whole number >= 0, got {verify!r}")
+    if score is not None and not callable(score):
+        raise ValueError("score must be callable as score(candidate) -> float, or None")
+    if rules is not None:
+        params = {**params, "rules": rules}
+    limit = _timeout(timeout)
+    workers = _threads(threads)
+    t = interior_target(obj) if target is None else np.asarray(target, dtype=np.float64).reshape(3)
+    if not np.all(np.isfinite(t)) or not bool(obj.inside(t[None])[0]):
+        raise ValueError(f"target T {t.tolist()} is not inside the object")
+    dirs = approach_directions(approaches, pole)
+    distance = safe_distance(obj, hand, t)
+    torque_scale = float(np.linalg.norm(obj.vertices - t, axis=1).max())
+
+    def run(i: int) -> tuple[Candidate, Trajectory | None]:
+        d = dirs[i]
+        pose = start_pose(obj, hand, t, d, distance=distance)
+        t1 = time.perf_counter()
+        try:
+            traj = Planner(hand, obj, t, pose, **params).plan(limit)
+        except (ValueError, RuntimeError) as exc:
+            return Candidate(index=i, direction=d, status="error", start_pose=pose,
+                             error=f"{type(exc).__name__}: {exc}"), None
+        elapsed = time.perf_counter() - t1
+        s = traj.summary(obj=obj)
+        return Candidate(index=i, direction=d, status=traj.status, start_pose=pose, configurations=len(traj),
+                         plan_time_s=elapsed,
+                         links_in_contact=int(s["links_in_contact"]), palm_contact=bool(s["palm_contact"])), traj
+
+    k = len(dirs)
+    results: list[tuple[Candidate, Trajectory | None]] = [None] * k  # type: ignore[list-item]
+    if workers == 1 or k == 1:
+        for i in range(k):
+            results[i] = run(i)
+            if progress is not None:
+                progress(i + 1, k)
+    else:
+        from concurrent.futures import ThreadPoolExecutor, as_completed
+
+        with ThreadPoolExecutor(max_workers=min(workers, k), thread_name_prefix="hugger-search") as pool:
+            futures = {pool.submit(run, i): i for i in range(k)}
+            for done, fut in enumerate(as_completed(futures), 1):
+                results[futures[fut]] = fut.result()
+                if progress is not None:
+                    progress(done, k)
+    trajs = [r[1] for r in results]
+    judge = lambda c: _judge(c, trajs[c.index], hand, obj, t, torque_scale)  # noqa: E731
+    best, ranked = rank([r[0] for r in results], judge, score)
+    if verify:
+        from . import physics
+
+        physics._mujoco()  # fail early when MuJoCo is missing
+        ranked = [judge(c) if c.ok and c.epsilon is None else c for c in ranked]
+        key = (lambda c: (c.score, -c.index)) if score is not None else _default_key
+        order = sorted((c for c in ranked if c.ok), key=key, reverse=True)
+        for c in order[:int(verify)]:
+            held = bool(physics.validate(trajs[c.index])["held"])
+            ranked[c.index] = replace(c, held=held)
+            if held:
+                best = c.index
+                break
+        else:
+            best = order[0].index
+    return SearchResult(best=best, trajectory=trajs[best], candidates=tuple(ranked), target=t,
+                        time_s=time.perf_counter() - t0, trajectories=tuple(trajs) if keep_all else None)

@@ -1,0 +1,160 @@
+"""hugger generate / hugger.Dataset: determinism over workers and backends, resuming after a kill,
+the loader, the MJCF export, and the independent checker on every saved grasp."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hugger
+from hugger import dataset
+from hugger.cli import main
+
+from helpers import check_file
+
+OBJECTS = ["box", "torus", "cylinder"]
+
+
+def shard_bytes(root: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted((root / "shards").iterdir())}
+
+
+def index_without_command(root: Path) -> dict:
+    d = json.loads((root / "index.json").read_text())
+    d.pop("command")
+    return d
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory) -> Path:
+    """The uninterrupted run, one worker."""
+    out = tmp_path_factory.mktemp("ref") / "ds"
+    assert main(["generate", *OBJECTS, "--approaches", "3", "--out", str(out), "--workers", "1"]) == 0
+    return out
+
+
+def test_shards_are_byte_identical_whatever_the_workers(reference, tmp_path):
+    out = tmp_path / "ds"
+    assert main(["generate", *OBJECTS, "--approaches", "3", "--out", str(out), "--workers", "2"]) == 0
+    assert shard_bytes(out) == shard_bytes(reference)
+    assert index_without_command(out) == index_without_command(reference)
+    index = json.loads((out / "index.json").read_text())
+    assert index["command"][:2] == ["hugger", "generate"] and "--workers" in index["command"]
+    assert [o["name"] for o in index["objects"]] == OBJECTS and all(len(o["sha256"]) == 64 for o in index["objects"])
+    assert index["hugger_version"] == hugger.__version__
+
+
+def _run_until_first_shard(out: Path, sig: int) -> int:
+    cmd = [sys.executable, "-m", "hugger", "generate", *OBJECTS, "--approaches", "3", "--out", str(out),
+           "--workers", "1"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    deadline = time.monotonic() + 120
+    try:
+        while time.monotonic() < deadline and proc.poll() is None:
+            if (out / "shards").is_dir() and any(p.suffix == ".npz" for p in (out / "shards").iterdir()):
+                break
+            time.sleep(0.01)
+        os.killpg(proc.pid, sig)
+    except ProcessLookupError:
+        pass
+    proc.wait(timeout=60)
+    return proc.returncode
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT])
+def test_a_killed_run_resumes_to_the_same_dataset(reference, tmp_path, sig):
+    out = tmp_path / "ds"
+    code = _run_until_first_shard(out, sig)
+    assert code != 0
+    assert not (out / "index.json").exists()
+    finished = [p for p in (out / "shards").iterdir() if p.suffix == ".npz"]
+    assert 1 <= len(finished) < len(OBJECTS)  # killed part-way
+    for p in finished:  # whatever has its final name is whole
+        assert p.read_bytes() == (reference / "shards" / p.name).read_bytes()
+    before = {p.name: p.stat().st_mtime_ns for p in finished}
+    assert main(["generate", *OBJECTS, "--approaches", "3", "--out", str(out), "--workers", "1"]) == 0
+    assert shard_bytes(out) == shard_bytes(reference)
+    assert index_without_command(out) == index_without_command(reference)
+    assert not any(p.name.startswith(".") for p in (out / "shards").iterdir())  # no temporary files left
+    for p in finished:  # done shards were kept, not made again
+        assert (out / "shards" / p.name).stat().st_mtime_ns == before[p.name]
+
+
+def test_other_settings_in_the_same_folder_are_refused(reference, tmp_path):
+    import shutil
+
+    out = tmp_path / "ds"
+    shutil.copytree(reference, out)
+    with pytest.raises(ValueError, match="other settings"):
+        dataset.generate(OBJECTS, out, approaches=4, workers=1)
+
+
+def test_loader_and_every_saved_grasp_passes_the_checker(reference, tmp_path, checker):
+    ds = hugger.Dataset(reference)
+    assert len(ds) == 3 * len(OBJECTS)
+    assert [ds.shards[i]["object"] for i in range(len(ds.shards))] == OBJECTS
+    for i, g in enumerate(ds):
+        z = ds.shard(g.shard)
+        assert g.status != "error"
+        assert g.joints.shape == (5, 6, 3) and g.angles.shape == (5, 5) and g.palm_pose.shape == (4, 4)
+        assert len(g.contact_points) == len(g.contact_normals) == len(g.contact_finger)
+        assert np.allclose(np.linalg.norm(g.contact_normals, axis=1), 1.0)
+        assert (g.epsilon > 0) == g.force_closure
+        assert g.best == (g.index == int(z["best"]))
+        traj = ds.trajectory(i)  # re-planned from the stored start, checked against the stored grasp
+        assert np.array_equal(traj.angles[-1], g.angles)
+        path = tmp_path / f"g{i}.npz"
+        traj.save(path)
+        ok, failures, _ = check_file(checker, path)
+        assert ok, (i, failures)
+    with pytest.raises(IndexError):
+        ds[len(ds)]
+
+
+def test_export_mjcf_keyframe(reference, tmp_path):
+    mujoco = pytest.importorskip("mujoco")
+    ds = hugger.Dataset(reference)
+    path = tmp_path / "grasp.xml"
+    xml = ds.export_mjcf(0, path, decompose=False)
+    assert path.read_text() == xml
+    model = mujoco.MjModel.from_xml_path(str(path))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, 0)
+    assert np.allclose(data.qpos[:25], ds[0].angles.ravel())
+
+
+def test_validate_stores_physics_verdicts(tmp_path):
+    pytest.importorskip("mujoco")
+    out = tmp_path / "ds"
+    dataset.generate(["box"], out, approaches=2, validate=True, workers=1)
+    z = hugger.Dataset(out).shard(0)
+    assert z["held"].shape == (2,) and z["held_directions"].shape == (2, 6)
+    assert np.array_equal(z["held"], z["held_directions"].all(axis=1))
+    assert list(z["validate_directions"]) == ["+x", "-x", "+y", "-y", "+z", "-z"]
+    assert hugger.Dataset(out)[0].held == bool(z["held"][0])
+
+
+def test_ray_backend_gives_the_same_shards(reference, tmp_path):
+    pytest.importorskip("ray", reason="the Ray backend needs ray (pip install 'hugger[cluster]')")
+    out = tmp_path / "ds"
+    dataset.generate(OBJECTS, out, approaches=3, workers=2, backend="ray")
+    assert shard_bytes(out) == shard_bytes(reference)
+
+
+def test_bad_input(tmp_path, capsys):
+    assert main(["generate", "box", "--out", str(tmp_path), "--hands", "5y5"]) == 2
+    assert "hand spec" in capsys.readouterr().err
+    assert main(["generate", "nothing.stl", "--out", str(tmp_path)]) == 2
+    assert main(["generate", "box", "--out", str(tmp_path), "--address", "x:1"]) == 2
+    with pytest.raises(ValueError, match="twice"):
+        dataset.generate(["box"], tmp_path, hands=["5x5", "5x5"])
+    assert dataset.parse_hand("4x3:link_length=0.025,palm_radius=0.035") == (
+        "4x3_link_length0.025_palm_radius0.035",
+        {"fingers": 4, "links": 3, "link_length": 0.025, "palm_radius": 0.035})

@@ -1,0 +1,157 @@
+"""hugger.search and 'hugger plan --approaches': directions, ranking, determinism, the CLI."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import hugger
+from hugger.search import Candidate, approach_directions, rank
+
+
+def test_directions_are_unit_spread_and_start_at_the_pole():
+    for k in (1, 2, 6, 26, 100):
+        d = approach_directions(k, pole=(1.0, 2.0, 2.0))
+        assert d.shape == (k, 3)
+        assert np.allclose(np.linalg.norm(d, axis=1), 1.0)
+        assert np.allclose(d[0], np.array([1.0, 2.0, 2.0]) / 3.0)
+        if k >= 6:
+            # evenly spread: the mean is near the centre, every direction has a near neighbour,
+            # and no two coincide
+            cos = d @ d.T - 2 * np.eye(k)
+            assert np.linalg.norm(d.mean(axis=0)) < 0.15
+            nearest = np.arccos(np.clip(cos.max(axis=1), -1, 1))
+            assert nearest.max() < 3.0 * np.sqrt(4 * np.pi / k)
+            assert nearest.min() > 0.3 * np.sqrt(4 * np.pi / k)
+    assert np.array_equal(approach_directions(26), approach_directions(26))
+    for bad in (0, -1, 2.5, True):
+        with pytest.raises(ValueError, match="approaches"):
+            approach_directions(bad)
+
+
+def _cand(i, hug, closure=None, eps=None, status="done"):
+    return Candidate(index=i, direction=np.zeros(3), status=status, links_in_contact=hug)
+
+
+def test_rank_judges_only_where_it_decides():
+    cands = [_cand(0, 5), _cand(1, 9), _cand(2, 9), _cand(3, 3), _cand(4, 12, status="error")]
+    truth = {0: (True, 0.5), 1: (True, 0.1), 2: (True, 0.2), 3: (True, 0.9)}
+    judged = []
+
+    def judge(c):
+        judged.append(c.index)
+        fc, eps = truth[c.index]
+        return Candidate(**{**c.__dict__, "force_closure": fc, "epsilon": eps, "contacts": 4})
+
+    best, out = rank(cands, judge)
+    assert best == 2  # most links; epsilon breaks the tie
+    assert sorted(judged) == [1, 2]  # candidates of fewer links cannot win: never judged
+    assert out[0].epsilon is None and out[2].epsilon == 0.2
+    # without force closure at the top, judging goes on down the list
+    truth.update({1: (False, 0.0), 2: (False, 0.0)})
+    judged.clear()
+    best, _ = rank(cands, judge)
+    assert best == 0 and sorted(judged) == [0, 1, 2]
+    # a custom score judges everything that planned
+    judged.clear()
+    best, out = rank(cands, judge, score=lambda c: c.epsilon)
+    assert best == 3 and sorted(judged) == [0, 1, 2, 3] and out[3].score == 0.9
+    with pytest.raises(ValueError, match="no approach"):
+        rank([_cand(0, 1, status="error")], judge)
+
+
+def test_search_is_deterministic_and_single_approach_is_the_default_plan(hand):
+    case = hugger.scenarios.default_case("box", hand)
+    one = hugger.search(hand, case.obj, case.target, approaches=1)
+    default = hugger.Planner(hand, case.obj, case.target, case.palm_pose).plan()
+    assert np.array_equal(one.trajectory.joints, default.joints)
+    a = hugger.search(hand, case.obj, case.target, approaches=8, threads=1, keep_all=True)
+    b = hugger.search(hand, case.obj, case.target, approaches=8, threads=3)
+    assert a.best == b.best
+    assert np.array_equal(a.trajectory.joints, b.trajectory.joints)
+    assert [c.to_dict() | {"plan_time_s": 0} for c in a.candidates] == \
+           [c.to_dict() | {"plan_time_s": 0} for c in b.candidates]
+    chosen = a.chosen
+    assert chosen.force_closure is not None
+    # the chosen one is best by the documented key among everything judged
+    for c in a.candidates:
+        if c.epsilon is not None:
+            assert (bool(c.force_closure), c.hug, c.epsilon) <= (bool(chosen.force_closure), chosen.hug, chosen.epsilon)
+        elif chosen.force_closure:
+            assert c.hug < chosen.hug or not c.ok
+    assert len(a.trajectories) == 8 and a.trajectories[a.best] is a.trajectory
+    assert a.directions.shape == (8, 3)
+
+
+def test_search_passes_rules_only_when_given(hand, monkeypatch):
+    seen = []
+    import hugger.planner as P
+
+    original = P.Planner.__init__
+
+    def spy(self, *args, **kwargs):
+        seen.append(kwargs.get("rules", "absent"))
+        original(self, *args, **{k: v for k, v in kwargs.items() if k != "rules"})
+
+    monkeypatch.setattr(P.Planner, "__init__", spy)
+    case = hugger.scenarios.default_case("box", hand)
+    hugger.search(hand, case.obj, case.target, approaches=2, threads=1)
+    hugger.search(hand, case.obj, case.target, approaches=2, threads=1, rules="paper")
+    assert seen == ["absent", "absent", "paper", "paper"]
+
+
+def test_search_rejects_bad_input(hand):
+    obj = hugger.objects.get("box")
+    with pytest.raises(ValueError, match="inside"):
+        hugger.search(hand, obj, target=[1.0, 0, 0], approaches=2)
+    with pytest.raises(ValueError, match="parameters"):
+        hugger.search(hand, obj, approaches=2, bogus=1)
+    with pytest.raises(ValueError, match="threads"):
+        hugger.search(hand, obj, approaches=2, threads=0)
+    with pytest.raises(ValueError, match="hand"):
+        hugger.search("hand", obj)
+
+
+def test_cli_plan_approaches(tmp_path, capsys, checker):
+    from hugger.cli import main
+
+    from helpers import check_file
+
+    out = tmp_path / "p.npz"
+    assert main(["plan", "box", "--approaches", "6", "--threads", "2", "--out", str(out), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    s = report["search"]
+    assert s["approaches"] == 6 and len(s["candidates"]) == 6 and 0 <= s["best"] < 6
+    assert report["links_in_contact"] == s["candidates"][s["best"]]["links_in_contact"]
+    ok, failures, _ = check_file(checker, out)
+    assert ok, failures
+    assert main(["plan", "box", "--approaches", "3", "--turn", "10", "--out", str(out)]) == 2
+    assert "--approaches" in capsys.readouterr().err
+
+
+def test_verify_chooses_the_first_ranked_grasp_that_holds(hand, monkeypatch):
+    pytest.importorskip("mujoco")
+    from hugger import physics
+
+    case = hugger.scenarios.default_case("box", hand)
+    plain = hugger.search(hand, case.obj, case.target, approaches=6, threads=1)
+    verdicts = []
+
+    def fake(traj, *args, **kwargs):  # the first two checked lose, the third holds
+        verdicts.append(len(traj))
+        return {"held": len(verdicts) == 3}
+
+    monkeypatch.setattr(physics, "validate", fake)
+    v = hugger.search(hand, case.obj, case.target, approaches=6, threads=1, verify=5)
+    assert len(verdicts) == 3
+    assert all(c.epsilon is not None for c in v.candidates if c.ok)  # every candidate judged
+    checked = [c for c in v.candidates if c.held is not None]
+    assert len(checked) == 3 and v.chosen.held is True and sum(c.held for c in checked) == 1
+    assert plain.chosen.index in [c.index for c in checked]  # the ranking's best was checked first
+    verdicts.clear()
+    monkeypatch.setattr(physics, "validate", lambda traj, *a, **k: {"held": False})
+    none = hugger.search(hand, case.obj, case.target, approaches=6, threads=1, verify=2)
+    assert none.best == plain.best  # nothing held: the ranking's choice stands
+    with pytest.raises(ValueError, match="verify"):
+        hugger.search(hand, case.obj, case.target, approaches=2, verify=-1)
