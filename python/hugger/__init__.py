@@ -24,7 +24,7 @@ from .skins import Sensing, Touch
 
 __version__ = "0.1.0"
 
-_LAZY = ("analysis", "viz", "physics", "cli", "viewer")
+_LAZY = ("analysis", "viz", "physics", "cli", "viewer", "baselines")
 
 
 def __getattr__(name: str):
