@@ -17,7 +17,8 @@ from __future__ import annotations
 from . import hands, objects, scenarios, skins
 from .batch import CaseError, PlanManyError, plan_many
 from .hand import Hand
-from .planner import FROZEN, CONTACT, DONE, Configuration, Planner, look_at, plan
+from ._types import CONTACT, DONE, FROZEN, Configuration, TipState
+from .planner import Planner, look_at, plan
 from .trajectory import FORMAT_VERSION, Trajectory
 from .world import Object
 from .skins import Sensing, Touch
@@ -47,6 +48,7 @@ __all__ = [
     "Object",
     "PlanManyError",
     "Planner",
+    "TipState",
     "Sensing",
     "Touch",
     "Trajectory",

@@ -10,11 +10,7 @@ import numpy as np
 
 from . import _core
 
-#: Largest number of fingers M and of links per finger N. The engine checks every pair of
-#: fingers each iteration (O(M^2 N^2)), so a plan with more fingers would be unusably slow; the
-#: limits are checked before anything is allocated, so ``Hand(fingers=10**6)`` fails at once.
-MAX_FINGERS = 64
-MAX_LINKS = 256
+from ._types import MAX_FINGERS, MAX_LINKS  # noqa: F401  (hugger.hand.MAX_FINGERS as before)
 
 #: Hard limits (m) on the hand's lengths (link lengths, palm radius and thickness). Below
 #: ``MIN_LENGTH`` the engine's absolute tolerances (1e-7 m keeps two links apart) are no longer

@@ -15,12 +15,10 @@ from typing import Any
 import numpy as np
 
 from ._files import atomic_path
-from .hand import MAX_FINGERS, MAX_LINKS
+from ._types import CONTACT_DISTANCE, MAX_FINGERS, MAX_LINKS, Configuration
+from .world import Object
 
 FORMAT_VERSION = 1
-#: Gap (m) at or below which a link or the palm counts as touching O, in summaries, analysis,
-#: figures and the physics squeeze.
-CONTACT_DISTANCE = 1e-3
 
 #: Largest hand a trajectory file may describe (the limits of :class:`hugger.Hand`).
 #: What reading a damaged zip/npy can raise; ``load`` turns each into a ``ValueError``. (numpy
@@ -234,8 +232,6 @@ class Trajectory:
 
     def configuration(self, k: int):
         """Configuration k (negative counts from the end)."""
-        from .planner import Configuration
-
         k = range(len(self))[k]
         return Configuration(palm_pose=self.palm_pose[k], joints=self.joints[k], angles=self.angles[k],
                              tip_state=self.tip_state[k], phase=int(self.phase[k]), iteration=k)
@@ -252,8 +248,6 @@ class Trajectory:
         so that reports, figures and checks of one trajectory share it. The arrays are the plan's
         record; edit a copy (``dataclasses.replace``), not the arrays in place."""
         if self._object is None:
-            from .world import Object
-
             if not self.has_object:
                 raise ValueError("this plan is object-free (made with a skin that has no mesh): give the planner "
                                  "record_object= to judge its contacts")
