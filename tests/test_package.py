@@ -129,3 +129,19 @@ def test_tip_states_keep_their_values():
     assert (int(hugger.FROZEN), int(hugger.CONTACT), int(hugger.DONE)) == (0, 1, 2)
     assert hugger.TipState(2) is hugger.DONE and hugger.FROZEN == 0
     assert hugger.planner.CONTACT is hugger.CONTACT and hugger.Configuration is hugger.planner.Configuration
+
+
+def test_core_stub_matches_the_compiled_module():
+    """python/hugger/_core.pyi names every class, method and property of ``hugger._core``, and nothing else."""
+    from hugger import _core
+
+    assert (PACKAGE / "py.typed").is_file()
+    tree = ast.parse((PACKAGE / "_core.pyi").read_text(encoding="utf-8"))
+    stub = {c.name: {f.name for f in c.body if isinstance(f, ast.FunctionDef)}
+            for c in tree.body if isinstance(c, ast.ClassDef)}
+    compiled = {name for name in dir(_core) if isinstance(getattr(_core, name), type)}
+    assert set(stub) == compiled
+    for name, members in stub.items():
+        cls = getattr(_core, name)
+        own = {m for m in vars(cls) if not m.startswith("_") or m in ("__init__", "__repr__")}
+        assert members == own, (name, sorted(members ^ own))
