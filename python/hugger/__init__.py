@@ -14,6 +14,8 @@ this package holds the Python API::
 """
 from __future__ import annotations
 
+from typing import Any as _Any
+
 from . import hands, objects, scenarios, skins
 from .batch import CaseError, PlanManyError, plan_many
 from .hand import Hand
@@ -28,7 +30,7 @@ __version__ = "0.1.0"
 _LAZY = ("analysis", "viz", "physics", "cli", "viewer", "baselines")
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> _Any:
     """Submodules with optional dependencies load on first use: ``hugger.analysis``, ``hugger.viz``,
     ``hugger.physics`` (``import hugger`` itself needs only numpy)."""
     if name in _LAZY:

@@ -143,12 +143,12 @@ class Planner:
         return self._core.status
 
     @property
-    def params(self) -> dict:
+    def params(self) -> dict[str, Any]:
         """The parameters in force, defaults resolved."""
         return dict(self._core.params)
 
     @property
-    def stats(self) -> dict:
+    def stats(self) -> dict[str, Any]:
         """Counters: Phase 1 configurations, Phase 2 iterations, first and palm contact, ..."""
         return dict(self._core.stats)
 
