@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import time
 from pathlib import Path
 
@@ -30,10 +29,9 @@ import numpy as np
 import hugger
 from hugger import physics
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
+from hugger import baselines
 
-import baseline  # noqa: E402
+HERE = Path(__file__).resolve().parent
 
 ROOT = HERE.parent
 SHARED_OBJECTS = ROOT.parent / "shared" / "data" / "objects"
@@ -84,7 +82,7 @@ def run_one(name: str, spec: str, hand: hugger.Hand, max_extent: float, do_valid
                 t2 = time.perf_counter()
                 r["setup_s"], r["plan_s"] = t1 - t0, t2 - t1
             else:
-                traj = baseline.plan_baseline(hand, case.obj, case.target, case.palm_pose)
+                traj = baselines.plan_baseline(hand, case.obj, case.target, case.palm_pose)
                 r["setup_s"], r["plan_s"] = traj.stats["setup_time_s"], traj.stats["plan_time_s"]
         except ValueError as exc:
             results[planner] = {"error": str(exc)}

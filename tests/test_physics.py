@@ -1,4 +1,4 @@
-"""MuJoCo physics check (hugger.physics) and the close-until-contact baseline (bench/baseline.py)."""
+"""MuJoCo physics check (hugger.physics) and the close-until-contact baseline (hugger.baselines)."""
 from __future__ import annotations
 
 import dataclasses
@@ -14,7 +14,7 @@ import hugger
 
 mujoco = pytest.importorskip("mujoco", reason="the physics extra is not installed (pip install 'hugger[physics]')")
 
-from hugger import physics  # noqa: E402
+from hugger import baselines, physics  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "bench"
@@ -269,9 +269,8 @@ def test_validate_reads_trajectory_files(sphere_plan, tmp_path):
 
 @pytest.fixture(scope="module")
 def baseline_sphere(hand):
-    mod = _bench_module("baseline")
     obj = hugger.objects.sphere(0.04, subdivisions=3)
-    return mod.plan_baseline(hand, obj, [0, 0, 0], hugger.look_at([0, 0, 0.2], [0, 0, 0]))
+    return baselines.plan_baseline(hand, obj, [0, 0, 0], hugger.look_at([0, 0, 0.2], [0, 0, 0]))
 
 
 def test_baseline_is_a_valid_trajectory(baseline_sphere, checker, tmp_path):
@@ -302,10 +301,9 @@ def test_baseline_touches_less_than_hugger(baseline_sphere, sphere_plan):
 def test_baseline_turns_to_face_the_target_first(hand, checker, tmp_path):
     import helpers
 
-    mod = _bench_module("baseline")
     obj = hugger.objects.sphere(0.03, subdivisions=2)
     start = hugger.look_at([0.0, 0.0, 0.2], [0.05, 0.0, 0.0])  # not facing T
-    traj = mod.plan_baseline(hand, obj, [0, 0, 0], start, step=0.002)
+    traj = baselines.plan_baseline(hand, obj, [0, 0, 0], start, step=0.002)
     assert np.sum(traj.phase == 1) > 0
     path = tmp_path / "turn.npz"
     traj.save(path)
@@ -314,12 +312,11 @@ def test_baseline_turns_to_face_the_target_first(hand, checker, tmp_path):
 
 
 def test_baseline_rejects_bad_starts(hand):
-    mod = _bench_module("baseline")
     obj = hugger.objects.sphere(0.03, subdivisions=2)
     with pytest.raises(ValueError, match="inside the object"):
-        mod.plan_baseline(hand, obj, [0.1, 0, 0], hugger.look_at([0, 0, 0.2], [0.1, 0, 0]))
+        baselines.plan_baseline(hand, obj, [0.1, 0, 0], hugger.look_at([0, 0, 0.2], [0.1, 0, 0]))
     with pytest.raises(ValueError, match="at the start"):
-        mod.plan_baseline(hand, obj, [0, 0, 0], hugger.look_at([0, 0, 0.05], [0, 0, 0]))
+        baselines.plan_baseline(hand, obj, [0, 0, 0], hugger.look_at([0, 0, 0.05], [0, 0, 0]))
 
 
 def test_compare_script_writes_a_table(tmp_path, capsys):

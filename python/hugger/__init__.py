@@ -14,10 +14,13 @@ this package holds the Python API::
 """
 from __future__ import annotations
 
+from typing import Any as _Any
+
 from . import hands, objects, scenarios, skins
 from .batch import CaseError, PlanManyError, plan_many
 from .hand import Hand
-from .planner import FROZEN, CONTACT, DONE, Configuration, Planner, look_at, plan
+from ._types import CONTACT, DONE, FROZEN, Configuration, TipState
+from .planner import Planner, look_at, plan
 from .search import Candidate, SearchResult, approach_directions, search
 from .trajectory import FORMAT_VERSION, Trajectory
 from .world import Object
@@ -25,10 +28,10 @@ from .skins import Sensing, Touch
 
 __version__ = "0.1.0"
 
-_LAZY = ("analysis", "viz", "physics", "cli", "viewer", "dataset")
+_LAZY = ("analysis", "viz", "physics", "cli", "viewer", "dataset", "baselines")
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> _Any:
     """Submodules with optional dependencies load on first use: ``hugger.analysis``, ``hugger.viz``,
     ``hugger.physics``, ``hugger.dataset`` (``import hugger`` itself needs only numpy);
     ``hugger.Dataset`` is ``hugger.dataset.Dataset``."""
@@ -56,6 +59,7 @@ __all__ = [
     "PlanManyError",
     "Planner",
     "SearchResult",
+    "TipState",
     "Sensing",
     "Touch",
     "Trajectory",

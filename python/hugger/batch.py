@@ -51,14 +51,14 @@ class _Job:
     obj: Object
     target: Any
     palm_pose: Any
-    params: dict
+    params: dict[str, Any]
     timeout: float | None
 
 
-def _job(index: int, case: Any, hand: Hand | None, params: dict, timeout: float | None) -> _Job:
+def _job(index: int, case: Any, hand: Hand | None, params: dict[str, Any], timeout: float | None) -> _Job:
     """Normalise one case: a mapping, a (hand, obj, target, palm_pose[, params]) tuple, or an
     object with ``obj``, ``target`` and ``palm_pose`` attributes (like ``hugger.scenarios.Case``)."""
-    own: dict = {}
+    own: dict[str, Any] = {}
     if isinstance(case, Mapping):
         unknown = set(case) - {"hand", "obj", "target", "palm_pose", "timeout", *_PARAMS}
         if unknown:
@@ -164,7 +164,7 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
         from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 
         with ThreadPoolExecutor(max_workers=min(int(threads), total), thread_name_prefix="hugger") as pool:
-            index_of: dict[Future, int] = {pool.submit(_run, job): i for i, job in enumerate(jobs)}
+            index_of: dict[Future[Any], int] = {pool.submit(_run, job): i for i, job in enumerate(jobs)}
             pending = set(index_of)
             done = 0
             try:

@@ -10,11 +10,7 @@ import numpy as np
 
 from . import _core
 
-#: Largest number of fingers M and of links per finger N. The engine checks every pair of
-#: fingers each iteration (O(M^2 N^2)), so a plan with more fingers would be unusably slow; the
-#: limits are checked before anything is allocated, so ``Hand(fingers=10**6)`` fails at once.
-MAX_FINGERS = 64
-MAX_LINKS = 256
+from ._types import MAX_FINGERS, MAX_LINKS  # noqa: F401  (hugger.hand.MAX_FINGERS as before)
 
 #: Hard limits (m) on the hand's lengths (link lengths, palm radius and thickness). Below
 #: ``MIN_LENGTH`` the engine's absolute tolerances (1e-7 m keeps two links apart) are no longer
@@ -295,7 +291,7 @@ class Hand:
         """Finger roots R_m (M, 3) in the world (m) for the rigid palm pose T_WP (4, 4)."""
         return self._core.roots(rigid_pose(palm_pose))
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """The hand as in the trajectory file's ``hand_json``. A general layout adds
         ``finger_roots`` (M x 3), ``finger_directions`` (M x 3), ``rest_angles`` (M x N) and, when
         a joint is limited, ``joint_limits`` (M x N x 2, finite: an unlimited bound is written as
@@ -323,7 +319,7 @@ class Hand:
         return json.dumps(self.to_dict())
 
     @classmethod
-    def from_dict(cls, d: dict) -> Hand:
+    def from_dict(cls, d: dict[str, Any]) -> Hand:
         """The hand of :meth:`to_dict` (or a trajectory file's ``hand_json``); ``ValueError`` if a key is
         missing or a value is not valid."""
         if not isinstance(d, dict):
@@ -374,14 +370,14 @@ class Hand:
         return same_inf and bool(np.allclose(la[np.isfinite(la)], lb[np.isfinite(lb)], rtol=0.0, atol=tol))
 
     @classmethod
-    def from_urdf(cls, path: Any, palm_link: str | None = None, fixed_joints: dict | None = None,
+    def from_urdf(cls, path: Any, palm_link: str | None = None, fixed_joints: dict[str, float] | None = None,
                   link_radius: float | None = None) -> Hand:
         """The hand of a URDF file: see :func:`hugger.hands.from_urdf` (needs ``hugger[hands]``)."""
         from .hands import from_urdf
         return from_urdf(path, palm_link=palm_link, fixed_joints=fixed_joints, link_radius=link_radius)
 
     @classmethod
-    def from_mjcf(cls, path: Any, palm_body: str | None = None, fixed_joints: dict | None = None,
+    def from_mjcf(cls, path: Any, palm_body: str | None = None, fixed_joints: dict[str, float] | None = None,
                   link_radius: float | None = None) -> Hand:
         """The hand of a MuJoCo MJCF file: see :func:`hugger.hands.from_mjcf` (needs MuJoCo)."""
         from .hands import from_mjcf

@@ -17,6 +17,7 @@ Needs the ``physics`` extra (``pip install 'hugger[physics]'``).
 """
 from __future__ import annotations
 
+import json
 import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
@@ -26,6 +27,9 @@ import numpy as np
 
 from . import _core
 from . import physics as _ph
+from .planner import Planner
+from .trajectory import Trajectory
+from .world import Object
 
 #: Simulated time per planner configuration (s): the control period of the loop.
 CONTROL_PERIOD = 0.02
@@ -43,10 +47,6 @@ OBJECT_DAMPING = (2.0, 2e-3)
 
 def _stub_trajectory(hand: Any, obj: Any, target: np.ndarray, pose: np.ndarray):
     """A one-configuration trajectory (C_init) from which physics builds the MJCF model."""
-    import json
-
-    from .trajectory import Trajectory
-
     m, n = hand.fingers, hand.links
     joints = hand.forward(pose, np.zeros((m, n)))[None]
     return Trajectory(hand_json=hand.to_json(), params_json=json.dumps({}), object_vertices=obj.vertices,
@@ -262,7 +262,6 @@ def simulate(hand: Any, obj: Any, target: Any, palm_pose: Any, offset: Any = (0.
     """Closed-loop hugging of ``obj`` (true pose) in MuJoCo, the planner told T = ``target`` +
     ``offset`` (m). ``push`` (N) pushes the object across the approach for ``push_duration`` s
     when the first finger touches (mid-grasp)."""
-    from .planner import Planner
 
     pose = np.asarray(palm_pose, dtype=np.float64)
     sim = Simulation(hand, obj, pose, latency=latency)
@@ -285,8 +284,6 @@ def replay(hand: Any, obj: Any, target: Any, palm_pose: Any, offset: Any = (0.0,
            push_duration: float = 0.1, max_iterations: int = 3000, **params: Any) -> LoopResult:
     """Open loop: plan on the static mesh where T is believed to be (``obj`` moved by ``offset``),
     then play the plan back in the simulation of the true scene (same push as :func:`simulate`)."""
-    from .planner import Planner
-    from .world import Object
 
     pose = np.asarray(palm_pose, dtype=np.float64)
     off = np.asarray(offset, dtype=np.float64)

@@ -70,7 +70,7 @@ from typing import Any
 import numpy as np
 
 from ._checks import positive as _positive
-from .trajectory import CONTACT_DISTANCE
+from .trajectory import CONTACT_DISTANCE, Trajectory
 
 #: Hinge servo stiffness (N·m/rad).
 KP = 5.0
@@ -238,8 +238,6 @@ def convex_pieces(vertices: Any, faces: Any, decompose: bool = True, cache_dir: 
 
 
 def _trajectory(traj: Any):
-    from .trajectory import Trajectory
-
     if isinstance(traj, (str, os.PathLike)):
         return Trajectory.load(traj)
     if not isinstance(traj, Trajectory):

@@ -3,30 +3,15 @@ from __future__ import annotations
 
 import json
 import numbers
-from dataclasses import dataclass
 from typing import Any, Iterator
 
 import numpy as np
 
 from . import _core
+from ._types import CONTACT, DONE, FROZEN, Configuration  # noqa: F401  (hugger.planner.FROZEN as before)
 from .hand import Hand, _real_array, rigid_pose
 from .trajectory import Trajectory
 from .world import Object
-
-FROZEN, CONTACT, DONE = 0, 1, 2
-
-
-@dataclass(frozen=True)
-class Configuration:
-    """One hand configuration (docs/model.md)."""
-
-    palm_pose: np.ndarray  #: (4, 4) T_WP
-    joints: np.ndarray  #: (M, N+1, 3) joint positions in the world, j_m0 (tail) .. j_mN (tip)
-    angles: np.ndarray  #: (M, N) joint angles (rad), positive = flexion
-    tip_state: np.ndarray  #: (M,) int8: 0 FROZEN, 1 CONTACT, 2 DONE
-    phase: int  #: 0 for C_init, then 1 (reorientation) or 2 (approach and hugging)
-    iteration: int  #: index of this configuration in the plan
-
 
 def look_at(position: Any, target: Any, up: Any = None) -> np.ndarray:
     """A palm pose (4, 4) at ``position`` whose normal (z axis) points at ``target``."""
@@ -158,12 +143,12 @@ class Planner:
         return self._core.status
 
     @property
-    def params(self) -> dict:
+    def params(self) -> dict[str, Any]:
         """The parameters in force, defaults resolved."""
         return dict(self._core.params)
 
     @property
-    def stats(self) -> dict:
+    def stats(self) -> dict[str, Any]:
         """Counters: Phase 1 configurations, Phase 2 iterations, first and palm contact, ..."""
         return dict(self._core.stats)
 

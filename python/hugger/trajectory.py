@@ -15,12 +15,10 @@ from typing import Any
 import numpy as np
 
 from ._files import atomic_path
-from .hand import MAX_FINGERS, MAX_LINKS
+from ._types import CONTACT_DISTANCE, MAX_FINGERS, MAX_LINKS, Configuration
+from .world import Object
 
 FORMAT_VERSION = 1
-#: Gap (m) at or below which a link or the palm counts as touching O, in summaries, analysis,
-#: figures and the physics squeeze.
-CONTACT_DISTANCE = 1e-3
 
 #: Largest hand a trajectory file may describe (the limits of :class:`hugger.Hand`).
 #: What reading a damaged zip/npy can raise; ``load`` turns each into a ``ValueError``. (numpy
@@ -73,19 +71,19 @@ class Trajectory:
         return int(self.palm_pose.shape[0])
 
     @property
-    def hand(self) -> dict:
+    def hand(self) -> dict[str, Any]:
         return json.loads(self.hand_json)
 
     @property
-    def params(self) -> dict:
+    def params(self) -> dict[str, Any]:
         return json.loads(self.params_json)
 
     @property
-    def stats(self) -> dict:
+    def stats(self) -> dict[str, Any]:
         return json.loads(self.stats_json)
 
     @property
-    def provenance(self) -> dict:
+    def provenance(self) -> dict[str, Any]:
         """What made the plan: ``hugger_version`` and ``object_sha256`` (filled in by :meth:`save`
         when missing), and, when the ``hugger`` command or the caller recorded them, ``object``
         (a built-in name or a mesh file's absolute path), ``object_source`` (``builtin`` or
@@ -109,7 +107,7 @@ class Trajectory:
         h.update(np.ascontiguousarray(self.object_faces, dtype="<i8").tobytes())
         return h.hexdigest()
 
-    def save(self, path: str | os.PathLike) -> None:
+    def save(self, path: str | os.PathLike[str]) -> None:
         """Write the .npz (loads with ``allow_pickle=False``) atomically: under a temporary name in
         the same directory (which must exist), then renamed, so that an interrupted save never
         leaves a partial file under ``path``. The provenance gets ``hugger_version`` and
@@ -135,7 +133,7 @@ class Trajectory:
             np.savez_compressed(fh, **arrays)
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> Trajectory:
+    def load(cls, path: str | os.PathLike[str]) -> Trajectory:
         """Read and check a trajectory file (format 1, docs/file-format.md).
 
         ``ValueError`` if it is not a valid format-1 file: not a zip, truncated or corrupt,
@@ -232,10 +230,8 @@ class Trajectory:
         names = {f.name for f in fields(cls) if f.init}
         return cls(**{k: v for k, v in {**strings, **arrays}.items() if k in names})
 
-    def configuration(self, k: int):
+    def configuration(self, k: int) -> Configuration:
         """Configuration k (negative counts from the end)."""
-        from .planner import Configuration
-
         k = range(len(self))[k]
         return Configuration(palm_pose=self.palm_pose[k], joints=self.joints[k], angles=self.angles[k],
                              tip_state=self.tip_state[k], phase=int(self.phase[k]), iteration=k)
@@ -246,14 +242,12 @@ class Trajectory:
         record): it holds the hand's motion only, and nothing can judge its contacts."""
         return len(self.object_vertices) > 0
 
-    def object(self):
+    def object(self) -> Object:
         """The grasped object as a :class:`hugger.Object` (``ValueError`` for an object-free plan): built (validation and BVH) on the first
         call from ``object_vertices``/``object_faces`` as they are then, and kept for later calls,
         so that reports, figures and checks of one trajectory share it. The arrays are the plan's
         record; edit a copy (``dataclasses.replace``), not the arrays in place."""
         if self._object is None:
-            from .world import Object
-
             if not self.has_object:
                 raise ValueError("this plan is object-free (made with a skin that has no mesh): give the planner "
                                  "record_object= to judge its contacts")
@@ -261,21 +255,21 @@ class Trajectory:
             object.__setattr__(self, "_object", obj)  # a cache on a frozen dataclass
         return self._object
 
-    def link_gaps(self, k: int = -1, obj=None) -> np.ndarray:
+    def link_gaps(self, k: int = -1, obj: Object | None = None) -> np.ndarray:
         """(M, N) gap (m) between each link capsule and the object at configuration k."""
         obj = obj if obj is not None else self.object()
         j = self.joints[k]
         a, b = j[:, :-1].reshape(-1, 3), j[:, 1:].reshape(-1, 3)
         return (obj.segment_distance(a, b) - float(self.hand["link_radius"])).reshape(j.shape[0], j.shape[1] - 1)
 
-    def palm_gap(self, k: int = -1, obj=None) -> float:
+    def palm_gap(self, k: int = -1, obj: Object | None = None) -> float:
         """Gap (m) between the palm and the object at configuration k."""
         obj = obj if obj is not None else self.object()
         h = self.hand
         return float(obj._core.palm_gap(np.asarray(self.palm_pose[k], dtype=np.float64), float(h["palm_radius"]),
                                         float(h["palm_thickness"])))
 
-    def summary(self, contact_distance: float = CONTACT_DISTANCE, obj=None) -> dict:
+    def summary(self, contact_distance: float = CONTACT_DISTANCE, obj: Object | None = None) -> dict[str, Any]:
         """Figures of the final grasp: status, sizes, palm contact, links within ``contact_distance``."""
         obj = obj if obj is not None else self.object()
         gaps = self.link_gaps(-1, obj)
@@ -318,7 +312,7 @@ def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, source: str) -> np.
         return fmt.read_array(member, allow_pickle=False)
 
 
-def _check_hand_sizes(hand: dict, m: int, n: int, source: str) -> None:
+def _check_hand_sizes(hand: dict[str, Any], m: int, n: int, source: str) -> None:
     """The sizes of ``hand_json`` that tools read: finite, non-negative numbers (m), link_lengths (M, N) > 0."""
     for key in ("link_radius", "palm_radius", "palm_thickness"):
         x = hand.get(key)

@@ -1,4 +1,4 @@
-"""Close-until-contact baseline (GraspIt!'s AutoGrasp) for the Hugger hand, in MuJoCo.
+"""Close-until-contact baseline (GraspIt!'s AutoGrasp) for the Hugger hand, in MuJoCo: ``hugger.baselines``.
 
 From the same start as Hugger: the palm turns to face the target T (Phase 1, exactly as
 Hugger's reorientation: no point moves more than one step per configuration), then approaches
@@ -20,7 +20,10 @@ finger closes, DONE once all its joints have stopped; ``status`` ``done`` (or ``
 ``stats`` holds ``plan_time_s``, the wall-clock time of the planning itself (the loop of collision
 queries; building and compiling the MuJoCo model is ``setup_time_s``).
 
-    python bench/baseline.py [--object sphere] [--out FILE.npz] [--validate]
+MuJoCo is imported when :func:`plan_baseline` is first called (extra: ``pip install 'hugger[physics]'``),
+so importing this module needs only numpy.
+
+    python -m hugger.baselines [--object sphere] [--out FILE.npz] [--validate]
 """
 from __future__ import annotations
 
@@ -32,8 +35,19 @@ from typing import Any
 
 import numpy as np
 
-import hugger
-from hugger import CONTACT, DONE, FROZEN, physics
+from . import physics, scenarios
+from .hand import Hand
+from .planner import CONTACT, DONE
+from .trajectory import Trajectory
+from .world import Object
+
+
+def _mujoco() -> Any:
+    try:
+        import mujoco
+    except ImportError as exc:
+        raise ImportError("the close-until-contact baseline needs MuJoCo: pip install 'hugger[physics]'") from exc
+    return mujoco
 
 
 def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -45,14 +59,14 @@ def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
 class _Scene:
     """The MuJoCo model of hand + object used as a collision checker."""
 
-    def __init__(self, hand: hugger.Hand, obj: hugger.Object, target: np.ndarray, pose: np.ndarray, margin: float,
+    def __init__(self, hand: Hand, obj: Object, target: np.ndarray, pose: np.ndarray, margin: float,
                  decompose: bool, cache_dir: Any) -> None:
-        import mujoco
+        mujoco = _mujoco()
 
         self.mj = mujoco
         m, n = hand.fingers, hand.links
         zero = np.zeros((1, m, n))
-        traj0 = hugger.Trajectory(hand_json=hand.to_json(), params_json="{}", object_vertices=obj.vertices,
+        traj0 = Trajectory(hand_json=hand.to_json(), params_json="{}", object_vertices=obj.vertices,
                                   object_faces=obj.faces, target=np.asarray(target, dtype=np.float64),
                                   palm_pose=pose[None], joints=hand.forward(pose, zero[0])[None], angles=zero,
                                   tip_state=np.zeros((1, m), dtype=np.int8), phase=np.zeros(1, dtype=np.int8),
@@ -105,9 +119,9 @@ class _Scene:
         return float(min(g[self.link_geoms].min(), g[self.palm_geom]))
 
 
-def plan_baseline(hand: hugger.Hand, obj: hugger.Object, target: Any, palm_pose: Any, step: float | None = None,
+def plan_baseline(hand: Hand, obj: Object, target: Any, palm_pose: Any, step: float | None = None,
                   contact_tolerance: float = 1e-4, max_iterations: int = 20000, decompose: bool = True,
-                  cache_dir: Any = None) -> hugger.Trajectory:
+                  cache_dir: Any = None) -> Trajectory:
     """Close-until-contact grasp of ``obj`` by ``hand`` from ``palm_pose`` (4, 4), aimed at ``target``.
 
     ``step`` (m, default shortest link / 20 as in Hugger) bounds how far any point of the hand
@@ -271,7 +285,7 @@ def plan_baseline(hand: hugger.Hand, obj: hugger.Object, target: Any, palm_pose:
     stats = {"plan_time_s": plan_time, "setup_time_s": setup_time, "approach_configurations": approach_configurations,
              "closing_configurations": iterations - approach_configurations, "collision_queries": scene.queries,
              "touched": bool(touched), "phase1_configurations": int(np.sum(np.array(phases) == 1))}
-    return hugger.Trajectory(hand_json=hand.to_json(), params_json=json.dumps(params), object_vertices=obj.vertices,
+    return Trajectory(hand_json=hand.to_json(), params_json=json.dumps(params), object_vertices=obj.vertices,
                              object_faces=obj.faces, target=target, palm_pose=palm, joints=joints, angles=ang,
                              tip_state=np.array(states, dtype=np.int8), phase=np.array(phases, dtype=np.int8),
                              status="done" if touched and not active.any() else "max_iterations",
@@ -284,9 +298,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default=None, help="write the baseline trajectory (.npz) here")
     ap.add_argument("--validate", action="store_true", help="run the six-direction physics check")
     args = ap.parse_args(argv)
-    from hugger import scenarios
-
-    hand = hugger.Hand()
+    hand = Hand()
     case = scenarios.default_case(args.object, hand)  # the start the hugger command plans from
     traj = plan_baseline(hand, case.obj, case.target, case.palm_pose)
     if args.out:

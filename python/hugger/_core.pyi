@@ -1,0 +1,229 @@
+"""Hugger engine: hand kinematics, the simulated world and the planner (C++17).
+
+Type stubs for the compiled module ``hugger._core`` (written from cpp/bindings/*.cpp, started with
+pybind11-stubgen). Arrays are float64 unless noted; shapes are in the docstrings.
+"""
+from __future__ import annotations
+import numpy
+import numpy.typing
+import typing
+__all__: list[str] = ['HandModel', 'Object', 'Planner', 'Sensing', 'SimulatedWorld', 'Touch']
+class HandModel:
+    """
+    Immutable hand: M fingers of N links on a round palm (metres).
+    """
+    @typing.overload
+    def __init__(self, fingers: typing.SupportsInt | typing.SupportsIndex, links: typing.SupportsInt | typing.SupportsIndex, link_lengths: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], link_radius: typing.SupportsFloat | typing.SupportsIndex, palm_radius: typing.SupportsFloat | typing.SupportsIndex, palm_thickness: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @typing.overload
+    def __init__(self, fingers: typing.SupportsInt | typing.SupportsIndex, links: typing.SupportsInt | typing.SupportsIndex, link_lengths: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], link_radius: typing.SupportsFloat | typing.SupportsIndex, palm_radius: typing.SupportsFloat | typing.SupportsIndex, palm_thickness: typing.SupportsFloat | typing.SupportsIndex, *, roots: typing.Annotated[numpy.typing.ArrayLike, numpy.float64] | None = None, directions: typing.Annotated[numpy.typing.ArrayLike, numpy.float64] | None = None, rest: typing.Annotated[numpy.typing.ArrayLike, numpy.float64] | None = None, lower: typing.Annotated[numpy.typing.ArrayLike, numpy.float64] | None = None, upper: typing.Annotated[numpy.typing.ArrayLike, numpy.float64] | None = None) -> None:
+        """
+        A general layout (palm frame): roots (M, 3) and directions (M, 3) with z = 0, rest angles (M, N), joint limits lower and upper (M, N) in rad (+-inf: unlimited). None: the rim layout's value.
+        """
+    def angles_from_joints(self, palm_pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], joints: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        Joint angles (M, N) from joint positions (M, N+1, 3).
+        """
+    def forward(self, palm_pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], angles: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        Joint positions (M, N+1, 3) in the world from palm pose (4, 4) and angles (M, N).
+        """
+    def planes(self, palm_pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        Finger planes (M, 3, 3): rows origin (the plane's point nearest P_o), outward u_m, palm normal p.
+        """
+    def roots(self, palm_pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        Finger roots R_m (M, 3) in the world.
+        """
+    @property
+    def extended_radius(self) -> float:
+        """
+        Largest distance (m) from P_o of the hand at rest
+        """
+    @property
+    def finger_angles(self) -> list[float]:
+        ...
+    @property
+    def finger_directions(self) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        In-plane outward directions u_m (M, 3) in the palm frame
+        """
+    @property
+    def finger_roots(self) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        Roots R_m (M, 3) in the palm frame (m)
+        """
+    @property
+    def fingers(self) -> int:
+        ...
+    @property
+    def general(self) -> bool:
+        """
+        True for a general layout
+        """
+    @property
+    def has_limits(self) -> bool:
+        """
+        True when any joint limit is finite
+        """
+    @property
+    def link_lengths(self) -> numpy.typing.NDArray[numpy.float64]:
+        ...
+    @property
+    def link_radius(self) -> float:
+        ...
+    @property
+    def links(self) -> int:
+        ...
+    @property
+    def lower(self) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        Lower joint limits (M, N), rad (-inf: unlimited)
+        """
+    @property
+    def palm_radius(self) -> float:
+        ...
+    @property
+    def palm_thickness(self) -> float:
+        ...
+    @property
+    def rest_angles(self) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        Rest (FROZEN) joint angles (M, N), rad
+        """
+    @property
+    def upper(self) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        Upper joint limits (M, N), rad (+inf: unlimited)
+        """
+class Object:
+    """
+    A closed, consistently oriented triangle mesh O.
+    """
+    def __init__(self, vertices: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], faces: typing.Annotated[numpy.typing.ArrayLike, numpy.int64]) -> None:
+        ...
+    def closest(self, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> dict[str, typing.Any]:
+        """
+        For points (n, 3): signed distance (n,), closest surface point (n, 3), the outward unit normal of its triangle (n, 3) and the triangle index (n,).
+        """
+    def inside(self, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.bool_]:
+        """
+        True for each point (n, 3) strictly inside O.
+        """
+    def palm_gap(self, palm_pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], radius: typing.SupportsFloat | typing.SupportsIndex, thickness: typing.SupportsFloat | typing.SupportsIndex) -> float:
+        """
+        Gap (m) between the palm disk of pose (4, 4) and O; negative when they overlap.
+        """
+    def section(self, origin: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> list[numpy.typing.NDArray[numpy.float64]]:
+        """
+        Section of O by the plane origin + a u + b v: a list of closed loops (k, 2) in (a, b); outer loops counter-clockwise.
+        """
+    def section_region(self, origin: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], radius: typing.SupportsFloat | typing.SupportsIndex, flatten: typing.SupportsFloat | typing.SupportsIndex = 1e-06) -> dict[str, typing.Any]:
+        """
+        The section skin's region of the plane origin + a u + b v for links of `radius`: the points within `radius` of O. Returns its boundary as flattened segments (k, 2, 2) in (a, b), at most `flatten` m outside the exact curve, and their outward unit normals (k, 2).
+        """
+    def segment_distance(self, a: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], b: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        Signed distance (n,) of each segment [a_i, b_i] to O; <= 0 when it crosses the surface.
+        """
+    def signed_distance(self, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        Signed distance (n,) of each point (n, 3) to O's surface; negative inside.
+        """
+    @property
+    def bounds(self) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        Axis-aligned bounds (2, 3): min and max corners.
+        """
+    @property
+    def volume(self) -> float:
+        """
+        Enclosed volume (m^3).
+        """
+class Touch:
+    """
+    What a piece of skin senses. ``gap`` (m) between the part's surface and O: signed, negative when the part penetrates O (FCL's convention); exact when <= the query's cap, otherwise any value >= cap (+inf: nothing sensed). ``on_hand`` (3,): nearest point of the capsule's axis; ``on_object`` (3,): nearest point of O; ``normal`` (3,): unit gradient of the signed distance at on_hand, pointing out of O toward the hand.
+    """
+    def __init__(self, gap: typing.SupportsFloat | typing.SupportsIndex, on_hand: typing.Annotated[numpy.typing.ArrayLike, numpy.float64] = ..., on_object: typing.Annotated[numpy.typing.ArrayLike, numpy.float64] = ..., normal: typing.Annotated[numpy.typing.ArrayLike, numpy.float64] = ...) -> None:
+        ...
+    def __repr__(self) -> str:
+        ...
+    @property
+    def gap(self) -> float:
+        ...
+    @gap.setter
+    def gap(self, value: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def normal(self) -> numpy.typing.NDArray[numpy.float64]:
+        ...
+    @normal.setter
+    def normal(self, value: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> None:
+        ...
+    @property
+    def on_hand(self) -> numpy.typing.NDArray[numpy.float64]:
+        ...
+    @on_hand.setter
+    def on_hand(self, value: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> None:
+        ...
+    @property
+    def on_object(self) -> numpy.typing.NDArray[numpy.float64]:
+        ...
+    @on_object.setter
+    def on_object(self, value: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> None:
+        ...
+class Sensing:
+    """
+    The whole-sensitive skin: the planner learns the object only through it. Subclass it (calling ``super().__init__()``) and define ``capsule(a, b, radius, cap) -> Touch`` and ``palm(pose, radius, thickness, cap) -> float``; ``capsule_clear(a, b, radius, a_outside) -> bool`` may be overridden.
+    """
+    def __init__(self) -> None:
+        ...
+    def capsule(self, a: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], b: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], radius: typing.SupportsFloat | typing.SupportsIndex, cap: typing.SupportsFloat | typing.SupportsIndex = ...) -> Touch:
+        """
+        Gap between the capsule of axis [a, b] (3,) and ``radius`` (m) and O, as a Touch (a == b: a sphere).
+        """
+    def capsule_clear(self, a: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], b: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], radius: typing.SupportsFloat | typing.SupportsIndex, a_outside: bool = False) -> bool:
+        """
+        True when the capsule does not penetrate O (gap >= 0). The default asks capsule(..., cap=0).
+        """
+    def palm(self, pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], radius: typing.SupportsFloat | typing.SupportsIndex, thickness: typing.SupportsFloat | typing.SupportsIndex, cap: typing.SupportsFloat | typing.SupportsIndex = ...) -> float:
+        """
+        Gap (m) between the palm disk (``radius``, ``thickness`` behind the front face of pose T_WP (4, 4)) and O; negative when they overlap (the depth need not be exact).
+        """
+class SimulatedWorld(Sensing):
+    """
+    The simulated mesh world: exact 3D queries on a BVH of the object (the reference skin).
+    """
+    def __init__(self, object: Object) -> None:
+        ...
+class Planner:
+    """
+    The Hugger planner (docs/algorithm.md) over a simulated world.
+    """
+    def __init__(self, hand: HandModel, sensing: Sensing | Object, target: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], palm_pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], step: typing.SupportsFloat | None = None, epsilon: typing.SupportsFloat | None = None, contact_tolerance: typing.SupportsFloat | None = None, max_iterations: typing.SupportsInt | None = None, rules: str = 'hug', skin: str = 'mesh') -> None:
+        ...
+    def history(self, start: typing.SupportsInt | typing.SupportsIndex = 0, stop: typing.SupportsInt | typing.SupportsIndex = ...) -> dict[str, numpy.typing.NDArray[typing.Any]]:
+        """
+        Configurations [start, stop) so far as arrays: palm_pose (K,4,4), joints (K,M,N+1,3), angles (K,M,N), tip_state (K,M) int8, phase (K,) int8.
+        """
+    def plan(self, timeout: typing.SupportsFloat | None = None) -> str:
+        """
+        Run to the end (GIL released); returns the status. With ``timeout`` (seconds, positive finite) the plan stops with status 'timeout' once that much wall-clock time has passed. An exception raised by the skin propagates unchanged and ends the plan (status 'error').
+        """
+    def step(self) -> dict[str, typing.Any] | None:
+        """
+        Advance by one configuration; a dict of arrays, or None when the plan has ended. An exception raised by the skin propagates unchanged and ends the plan (status 'error').
+        """
+    @property
+    def params(self) -> dict[str, typing.Any]:
+        ...
+    @property
+    def size(self) -> int:
+        ...
+    @property
+    def stats(self) -> dict[str, typing.Any]:
+        ...
+    @property
+    def status(self) -> str:
+        ...
