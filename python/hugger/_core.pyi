@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['HandModel', 'Object', 'Planner', 'Sensing', 'SimulatedWorld', 'Touch']
+__all__: list[str] = ['HandModel', 'Object', 'Planner', 'QualityResult', 'Sensing', 'SimulatedWorld', 'Touch',
+                      'grasp_quality', 'primitive_wrenches']
 class HandModel:
     """
     Immutable hand: M fingers of N links on a round palm (metres).
@@ -227,3 +228,39 @@ class Planner:
     @property
     def status(self) -> str:
         ...
+class QualityResult:
+    """
+    Grasp-wrench-space figures of a set of contacts.
+    """
+    def __init__(self, *args: typing.Any, **kwargs: typing.Any) -> None:
+        """Not constructible from Python: returned by grasp_quality."""
+    def __repr__(self) -> str:
+        ...
+    @property
+    def force_closure(self) -> bool:
+        """
+        The origin lies strictly inside the grasp wrench space.
+        """
+    @property
+    def epsilon(self) -> float:
+        """
+        Ferrari-Canny epsilon: radius of the largest origin-centred ball in the GWS (0 without closure).
+        """
+    @property
+    def volume(self) -> float:
+        """
+        6D volume of the GWS (0 when flat).
+        """
+    @property
+    def wrenches(self) -> int:
+        """
+        Distinct primitive wrenches of the GWS.
+        """
+def grasp_quality(points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], normals: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], center: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], mu: typing.SupportsFloat = 0.5, cone_edges: typing.SupportsInt = 8, torque_scale: typing.SupportsFloat = 1.0, volume: bool = True) -> QualityResult:
+    """
+    Force closure, epsilon and volume of the L1 grasp wrench space of contacts at points (C, 3) (m, world) with outward normals (C, 3), torques about center (3,) divided by torque_scale (m). Qhull, GIL released. volume=False skips the full hull (volume reported 0): epsilon by cutting planes.
+    """
+def primitive_wrenches(points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], normals: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], center: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], mu: typing.SupportsFloat = 0.5, cone_edges: typing.SupportsInt = 8, torque_scale: typing.SupportsFloat = 1.0) -> numpy.typing.NDArray[numpy.float64]:
+    """
+    Primitive contact wrenches (C * E, 6), contact-major (see grasp_quality).
+    """
