@@ -3,7 +3,7 @@
 For each object: T told to the planner off by 0, 5 and 10 mm (across the approach), and an object
 pushed mid-grasp (at the first touch); both modes end in the six-direction hold test.
 
-    .venv/bin/python bench/closed_loop.py [--objects sphere ellipsoid cylinder curvy] [--push 0.5] [--json out.json]
+    .venv/bin/python bench/closed_loop.py [--objects sphere ellipsoid cylinder curvy] [--offsets 0 0.005 0.01] [--push 0.5] [--json out.json]
 """
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--objects", nargs="+", default=["sphere", "ellipsoid", "cylinder", "curvy"])
     ap.add_argument("--offsets", nargs="*", type=float, default=[0.0, 0.005, 0.01], help="T offsets (m)")
-    ap.add_argument("--push", type=float, default=0.5, help="push (N) of the pushed case (default 0.5)")
+    ap.add_argument("--push", type=float, default=0.5, help="push (N) of the pushed case (default 0.5; 0: no pushed case)")
     ap.add_argument("--json", help="write the rows here")
     args = ap.parse_args()
     hand = hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
@@ -32,7 +32,9 @@ def main() -> int:
     for name in args.objects:
         case = default_case(name, hand)
         across = case.palm_pose[:3, 0]  # the palm's x axis: across the approach
-        cases = [(f"T off by {1000 * d:g} mm", d * across, 0.0) for d in args.offsets] + [(f"pushed {args.push:g} N", 0 * across, args.push)]
+        cases = [(f"T off by {1000 * d:g} mm", d * across, 0.0) for d in args.offsets]
+        if args.push > 0:
+            cases.append((f"pushed {args.push:g} N", 0 * across, args.push))
         for label, offset, push in cases:
             t0 = time.perf_counter()
             c = mujoco_skin.simulate(hand, case.obj, case.target, case.palm_pose, offset=offset, push=push).as_dict()

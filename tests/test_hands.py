@@ -18,12 +18,12 @@ REST_RULE = "is FROZEN but not extended"  # the checker's rule for rest = 0; see
 
 
 def full_check(checker, path: Path, rest_nonzero: bool) -> tuple[list[str], dict]:
-    """The independent checker's structure, kinematics (limits included), algorithm and
-    collision checks, as tests/helpers.check_file runs them (the motion rules for DONE fingers
-    and step sizes belong to the Phase 2 rules being reworked separately; helpers skips them too).
-    Returns the failures that count: the checker does not read rest_angles yet, so for a hand
-    with non-zero rest angles its "FROZEN but not extended" rule is set aside (our own
-    assert_plan_properties asserts that FROZEN fingers stay at rest)."""
+    """Every check of the independent checker: structure, kinematics (limits included),
+    algorithm, collision and motion (DONE angles, Phase 2 joint moves of at most 4 steps, swept
+    collision on every step), as its command line runs them by default. Returns the failures
+    that count: the checker does not read rest_angles yet, so for a hand with non-zero rest
+    angles its "FROZEN but not extended" rule is set aside (our own assert_plan_properties
+    asserts that FROZEN fingers stay at rest)."""
     d = checker.load(str(path))
     rep = checker.Report()
     assert checker.check_structure(d, rep), rep.failures
@@ -32,7 +32,8 @@ def full_check(checker, path: Path, rest_nonzero: bool) -> tuple[list[str], dict
     checker.check_kinematics(d, rep, checker.LIN_TOL)
     checker.check_algorithm(d, rep, checker.LIN_TOL)
     mq = checker.MeshQuery(d["object_vertices"].astype(float), d["object_faces"].astype(np.int32), lay, tol)
-    checker.check_collision(d, rep, tol, 1, mq)
+    cache = checker.check_collision(d, rep, tol, 1, mq)
+    checker.check_motion(d, rep, checker.LIN_TOL, tol, mq, cache, 4.0, 1)
     fails = [f for f in rep.failures if not (rest_nonzero and REST_RULE in f)]
     return fails, rep.figures
 

@@ -241,11 +241,15 @@ def _agreement(hand, checker, tmp_path, seed, kind):
     m = hugger.Planner(hand, mesh, target, pose, max_iterations=AGREEMENT_ITERATIONS).plan()
     path = tmp_path / f"{kind}-{seed}.npz"
     a.save(path)
-    ok_a, fail_a, _ = check_file(checker, path, every=2)
+    _, fail_a, _ = check_file(checker, path, every=2, motion=True, swept_every=2)
     m.save(path)
-    ok_m, fail_m, _ = check_file(checker, path, every=2)
-    r = dict(status=(a.status, m.status), links=_links(a, m, mesh), palm=_palm(a, m), ok=(ok_a, ok_m),
-             failures=(fail_a, fail_m))
+    _, fail_m, _ = check_file(checker, path, every=2, motion=True, swept_every=2)
+    static = [[f for f in fails if not f.startswith("motion:")] for fails in (fail_a, fail_m)]
+    # ok: the checker's structure, kinematics, algorithm and collision checks (every other
+    # configuration); motion_ok: its motion check too (DONE angles, joint moves <= 4 steps, the
+    # swept motion of every other step)
+    r = dict(status=(a.status, m.status), links=_links(a, m, mesh), palm=_palm(a, m),
+             ok=(not static[0], not static[1]), motion_ok=(not fail_a, not fail_m), failures=(fail_a, fail_m))
     r["agree"] = _agree(r)
     r["mesh_unstable"] = False
     if not r["agree"]:
@@ -279,6 +283,7 @@ def _assert_agrees(r):
     # The analytic plan passes the independent checker against the fine mesh wherever the mesh
     # world's own plan does (a failing mesh plan is the planner's, not the skin's).
     assert r["ok"][0] or not r["ok"][1], r
+    assert r["motion_ok"][0] or not r["motion_ok"][1], r
 
 
 @pytest.mark.skipif(not CHECKER.exists(), reason=SHARED_MISSING)
@@ -346,5 +351,5 @@ def test_sensor_model_plans_are_collision_free(hand, checker, tmp_path, kw):
     traj = hugger.Planner(hand, skins.SensorModel(obj, seed=3, **kw), [0, 0, 0], start(), record_object=obj).plan()
     assert traj.status in ("done", "max_iterations")
     traj.save(tmp_path / "s.npz")
-    ok, failures, _ = check_file(checker, tmp_path / "s.npz", every=2)
+    ok, failures, _ = check_file(checker, tmp_path / "s.npz", every=2, motion=True, swept_every=2)
     assert ok, failures
