@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 
 import hugger
+from hugger._files import write_atomic
 from hugger import mujoco_skin
 from hugger.scenarios import default_case
 
@@ -46,10 +46,7 @@ def main() -> int:
     held_o = sum(r["open"]["held"] for r in rows)
     print(f"\nheld: closed loop {held_c}/{len(rows)}, open loop {held_o}/{len(rows)}")
     if args.json:
-        tmp = args.json + ".tmp"
-        with open(tmp, "w") as fh:
-            json.dump(rows, fh, default=str)
-        os.replace(tmp, args.json)
+        write_atomic(args.json, json.dumps(rows, default=str))
     return 0
 
 

@@ -25,6 +25,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 import numpy as np  # noqa: E402
 
 import hugger  # noqa: E402
+from hugger._files import write_atomic  # noqa: E402
 from hugger import analysis, physics, skins  # noqa: E402
 from hugger.scenarios import default_case  # noqa: E402
 from helpers import CHECKER, check_file, load_checker  # noqa: E402
@@ -111,10 +112,7 @@ def main() -> int:
                   f"{sum(r['force_closure'] for r in rs)}/{n} | {held} | {sum(r['collision_free'] for r in rs)}/{n} | "
                   f"{sum(r['motion_ok'] for r in rs)}/{n} |")
     if args.json:
-        tmp = args.json + ".tmp"
-        with open(tmp, "w") as fh:
-            json.dump(rows, fh)
-        os.replace(tmp, args.json)
+        write_atomic(args.json, json.dumps(rows))
     if args.plot:
         matched = None
         if args.compare:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import tempfile
 from pathlib import Path
@@ -20,6 +19,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 import numpy as np  # noqa: E402
 
 import hugger  # noqa: E402
+from hugger._files import write_atomic  # noqa: E402
 from helpers import CHECKER, load_checker  # noqa: E402
 from test_skins import HAND, _agreement  # noqa: E402
 
@@ -57,10 +57,7 @@ def main() -> int:
               f"{sum(r['ok'][0] for r in k)} / {sum(r['motion_ok'][0] for r in k)} | "
               f"{sum(r['ok'][1] for r in k)} / {sum(r['motion_ok'][1] for r in k)} |")
     if args.json:
-        tmp = args.json + ".tmp"
-        with open(tmp, "w") as fh:
-            json.dump(rows, fh, default=str)
-        os.replace(tmp, args.json)
+        write_atomic(args.json, json.dumps(rows, default=str))
     return 0
 
 

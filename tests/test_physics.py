@@ -15,6 +15,7 @@ import hugger
 mujoco = pytest.importorskip("mujoco", reason="the physics extra is not installed (pip install 'hugger[physics]')")
 
 from hugger import baselines, physics  # noqa: E402
+from hugger._rotation import quaternion_wxyz  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "bench"
@@ -136,7 +137,7 @@ def test_export_round_trip_reproduces_configuration(sphere_plan, tmp_path, k):
     assert model.nu == m_count * n_count
     # qpos of the hinges set from the trajectory, everything else from the model's defaults
     data.mocap_pos[0] = traj.palm_pose[k, :3, 3]
-    data.mocap_quat[0] = physics._quat(traj.palm_pose[k, :3, :3])
+    data.mocap_quat[0] = quaternion_wxyz(traj.palm_pose[k, :3, :3])
     for m in range(m_count):
         for n in range(n_count):
             j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, f"f{m}_j{n}")

@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from . import physics, scenarios
+from ._rotation import quaternion_wxyz
 from .hand import Hand
 from .planner import CONTACT, DONE
 from .trajectory import Trajectory
@@ -100,7 +101,7 @@ class _Scene:
         """Gap (m) of every geom to anything it may touch (capped at the margin)."""
         mj, d = self.mj, self.data
         d.mocap_pos[0] = pose[:3, 3]
-        d.mocap_quat[0] = physics._quat(pose[:3, :3])
+        d.mocap_quat[0] = quaternion_wxyz(pose[:3, :3])
         d.qpos[self.hinge_qpos.ravel()] = angles.ravel()
         mj.mj_kinematics(self.model, d)
         mj.mj_collision(self.model, d)

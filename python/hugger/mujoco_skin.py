@@ -27,6 +27,7 @@ import numpy as np
 
 from . import _core
 from . import physics as _ph
+from ._rotation import quaternion_wxyz
 from .planner import Planner
 from .trajectory import Trajectory
 from .world import Object
@@ -116,7 +117,7 @@ class Simulation:
         self._ctrl_to = np.clip(np.asarray(angles, dtype=np.float64).ravel(), self.model.actuator_ctrlrange[:, 0],
                                 self.model.actuator_ctrlrange[:, 1])
         self._palm_from = (self.data.mocap_pos[0].copy(), self.data.mocap_quat[0].copy())
-        self._palm_to = (np.asarray(palm_pose[:3, 3], dtype=np.float64), _ph._quat(palm_pose[:3, :3]))
+        self._palm_to = (np.asarray(palm_pose[:3, 3], dtype=np.float64), quaternion_wxyz(palm_pose[:3, :3]))
 
     def advance(self, seconds: float, force: np.ndarray | None = None) -> None:
         """Step the simulation by ``seconds``, with ``force`` (3,) N on the object's centre of mass;

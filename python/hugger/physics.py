@@ -70,6 +70,7 @@ from typing import Any
 import numpy as np
 
 from ._checks import positive as _positive
+from ._rotation import quaternion_wxyz
 from .trajectory import CONTACT_DISTANCE, Trajectory
 
 #: Hinge servo stiffness (N·m/rad).
@@ -254,26 +255,6 @@ def _index(traj, k: Any) -> int:
     return int(k) % n
 
 
-def _quat(rot: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation matrix."""
-    r = np.asarray(rot, dtype=np.float64)
-    t = np.trace(r)
-    if t > 0:
-        s = math.sqrt(t + 1.0) * 2
-        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
-    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
-        s = math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2]) * 2
-        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
-    elif r[1, 1] > r[2, 2]:
-        s = math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2]) * 2
-        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
-    else:
-        s = math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1]) * 2
-        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
-    q = np.array(q)
-    return q / np.linalg.norm(q)
-
-
 def finger_frames(traj: Any, k: int = -1) -> tuple[np.ndarray, np.ndarray]:
     """Roots R_m (M, 3) and hinge axes a_m (M, 3), both in the *palm* frame, derived from the
     trajectory's palm pose and joints at configuration k: R_m = T_WP⁻¹ j_m0, u_m = R_m's direction
@@ -355,7 +336,7 @@ def _build_mjcf(traj, k: int, object_mass: float, friction: float, decompose: bo
     world = ET.SubElement(root, "worldbody")
     ET.SubElement(world, "light", pos=_floats(pose[:3, 3] + [0, 0, 0.5]), dir="0 0 -1", directional="true")
     palm = ET.SubElement(world, "body", name="palm", mocap="true", pos=_floats(pose[:3, 3]),
-                         quat=_floats(_quat(pose[:3, :3])))
+                         quat=_floats(quaternion_wxyz(pose[:3, :3])))
     ET.SubElement(palm, "geom", {"class": "hand", "name": "palm", "type": "cylinder",
                                  "pos": _floats([0, 0, -palm_t / 2]), "size": _floats([palm_r, palm_t / 2])})
     for m in range(m_count):
@@ -384,7 +365,7 @@ def _build_mjcf(traj, k: int, object_mass: float, friction: float, decompose: bo
     keyframe = ET.SubElement(root, "keyframe")
     qpos = np.concatenate([angles.ravel(), centre, [1.0, 0.0, 0.0, 0.0]])
     ET.SubElement(keyframe, "key", name="grasp", qpos=_floats(qpos), ctrl=_floats(angles.ravel()),
-                  mpos=_floats(pose[:3, 3]), mquat=_floats(_quat(pose[:3, :3])))
+                  mpos=_floats(pose[:3, 3]), mquat=_floats(quaternion_wxyz(pose[:3, :3])))
     ET.indent(root)
     header = (f"<!-- hugger grasp: configuration {k} of {len(traj)}, {m_count} fingers x {n_count} links, "
               f"object {object_mass:g} kg in {len(pieces)} convex piece(s). Units m, kg, s, rad. -->\n")

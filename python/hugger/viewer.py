@@ -30,6 +30,7 @@ import numpy as np
 
 from . import analysis
 from ._files import write_atomic
+from ._rotation import quaternion_wxyz
 from .trajectory import Trajectory
 
 __all__ = ["Viewer", "capsule_mesh", "export_scene", "palm_mesh", "scene_nodes", "view"]
@@ -118,22 +119,7 @@ def _rotation_z_to(d: np.ndarray) -> np.ndarray:
 
 def _wxyz(r: np.ndarray) -> np.ndarray:
     """The unit quaternion (w, x, y, z) of a rotation matrix."""
-    m = r
-    tr = m[0, 0] + m[1, 1] + m[2, 2]
-    if tr > 0:
-        s = math.sqrt(tr + 1.0) * 2
-        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2]) * 2
-        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
-    elif m[1, 1] > m[2, 2]:
-        s = math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2]) * 2
-        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
-    else:
-        s = math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1]) * 2
-        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
-    q = np.asarray(q)
-    return q / np.linalg.norm(q)
+    return quaternion_wxyz(r)
 
 
 @dataclass(frozen=True)
