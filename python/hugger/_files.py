@@ -32,4 +32,7 @@ def write_atomic(path: str | os.PathLike, data: Any) -> None:
     """Write ``data`` (bytes or str) to ``path`` atomically."""
     raw = data.encode() if isinstance(data, str) else bytes(data)
     with atomic_path(path) as tmp:
-        tmp.write_bytes(raw)
+        with open(tmp, "wb") as fh:
+            fh.write(raw)
+            fh.flush()
+            os.fsync(fh.fileno())  # on disk before the rename: a crash leaves the old file or the new one

@@ -31,7 +31,7 @@ import time
 from pathlib import Path
 from typing import Any, Sequence
 
-from ._files import atomic_path
+from ._files import atomic_path, write_atomic
 from ._progress import Progress
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
@@ -223,7 +223,7 @@ def _search(case, hand, args: argparse.Namespace):
     with Progress(f"searching {args.approaches} approaches of {case.name}", total=args.approaches) as p:
         result = hugger.search(hand, case.obj, case.target, approaches=args.approaches, threads=args.threads,
                                pole=pole, timeout=args.timeout, progress=lambda i, n: p.update(i),
-                               verify=args.verify, **{k: v for k, v in _params(args).items() if v is not None})
+                               verify=args.verify, **_params(args))
     chosen = result.chosen
     summary = {"approaches": len(result.candidates), "best": result.best,
                "direction": [float(x) for x in chosen.direction], "time_s": round(result.time_s, 6),
@@ -338,8 +338,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
                         progress=lambda i, n, p=p: (setattr(p, "total", n), p.update(i)))
         written.append(name)
     summary["files"] = written
-    with atomic_path(out / "summary.json") as tmp:
-        tmp.write_text(json.dumps(summary, indent=2) + "\n")
+    write_atomic(out / "summary.json", json.dumps(summary, indent=2) + "\n")
     written.append("summary.json")
     _print_table(summary)
     print(f"written to {out}/: {', '.join(written)}")
@@ -595,7 +594,7 @@ def cmd_hands(args: argparse.Namespace) -> int:
 def cmd_export_urdf(args: argparse.Namespace) -> int:
     import hugger
 
-    from .hands.robot import grasp_joint_values, to_mjcf, to_urdf, write_text
+    from .hands.robot import grasp_joint_values, to_mjcf, to_urdf
 
     traj = _load(args.file)
     n = len(traj.palm_pose)
@@ -605,7 +604,7 @@ def cmd_export_urdf(args: argparse.Namespace) -> int:
     angles = traj.angles[args.configuration]
     out = _out_path(args.out, (".urdf", ".xml", ".mjcf"))
     text = to_mjcf(hand, angles) if out.suffix.lower() in (".xml", ".mjcf") else to_urdf(hand, angles)
-    write_text(out, text)
+    write_atomic(out, text)
     if args.json:
         print(json.dumps({"out": str(out), "joint_values": grasp_joint_values(hand, angles)}))
     else:
@@ -628,7 +627,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     offset = np.asarray(args.offset, dtype=np.float64)
     if not np.all(np.isfinite(offset)):
         raise UsageError("--offset must be finite (m)")
-    params = {k: v for k, v in _params(args).items() if v is not None}
+    params = _params(args)
     runs = {}
     with Progress(f"closed-loop hugging of {case.name} in MuJoCo"):
         runs["closed"] = mujoco_skin.simulate(hand, case.obj, case.target, case.palm_pose, offset=offset,

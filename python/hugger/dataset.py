@@ -28,6 +28,8 @@ from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
+from ._files import write_atomic
+
 __all__ = ["Dataset", "Grasp", "generate", "parse_hand", "DATASET_FORMAT", "SHARD_FORMAT"]
 
 DATASET_FORMAT = "hugger-dataset"
@@ -122,11 +124,9 @@ def _npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:
 def make_shard(task: dict) -> bytes:
     """The shard of one (object, hand) task, as the bytes of its .npz file. Pure: the same task
     gives the same bytes in any process."""
-    from . import analysis
     from .hand import Hand
     from .scenarios import default_case
-    from .search import RANK_MU, search
-    from .trajectory import CONTACT_DISTANCE
+    from .search import final_grasp_quality, search, torque_scale
 
     ob = task["object"]
     hand = Hand(**task["hand"]["kwargs"])
@@ -139,7 +139,7 @@ def make_shard(task: dict) -> bytes:
                     pole=pole, keep_all=True, **params)
     k = len(result.candidates)
     m, n = hand.fingers, hand.links
-    torque_scale = float(np.linalg.norm(case.obj.vertices - case.target, axis=1).max())
+    scale = torque_scale(case.obj, case.target)
     nan = np.nan
     a: dict[str, Any] = {
         "format_version": np.int64(SHARD_FORMAT), "task_sha256": np.str_(_task_key(task)),
@@ -165,8 +165,7 @@ def make_shard(task: dict) -> bytes:
         a["start_pose"][i], a["palm_pose"][i] = cand.start_pose, traj.palm_pose[-1]  # the pose given, exactly
         a["joints"][i], a["angles"][i], a["tip_state"][i] = traj.joints[-1], traj.angles[-1], traj.tip_state[-1]
         a["links_in_contact"][i], a["palm_contact"][i] = cand.links_in_contact, cand.palm_contact
-        found = analysis.contacts_of(hand, case.obj, traj.palm_pose[-1], traj.joints[-1], CONTACT_DISTANCE)
-        q = analysis.grasp_quality(found, case.target, mu=RANK_MU, torque_scale=torque_scale, volume=False)
+        found, q = final_grasp_quality(traj, hand, case.obj, case.target, scale)
         a["force_closure"][i], a["epsilon"][i] = q.force_closure, q.epsilon
         points.append(found.points)
         normals.append(found.normals)
@@ -194,15 +193,6 @@ def make_shard(task: dict) -> bytes:
                                         for v in verdicts], dtype=np.float64).reshape(k, len(names))
         a["validate_directions"] = np.array(names, dtype=np.str_)
     return _npz_bytes(a)
-
-
-def _atomic_write(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
 
 
 def _shard_done(path: Path, key: str) -> bool:
@@ -301,7 +291,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike, approaches: int = 2
 
     def finished(task: dict, data: bytes) -> None:
         nonlocal done
-        _atomic_write(shard_dir / task["file"], data)
+        write_atomic(shard_dir / task["file"], data)
         done += 1
         say(f"shard {done}/{len(tasks)} written: {task['file']}")
         if progress is not None:
@@ -358,7 +348,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike, approaches: int = 2
         "shards": [{"file": f"shards/{t['file']}", "object": t["object"]["name"], "hand": t["hand"]["label"],
                     "task_sha256": t["key"], "sha256": _sha256_file(str(shard_dir / t["file"]))} for t in tasks],
     }
-    _atomic_write(root / "index.json", (json.dumps(index, indent=1, sort_keys=True) + "\n").encode())
+    write_atomic(root / "index.json", json.dumps(index, indent=1, sort_keys=True) + "\n")
     return index
 
 

@@ -385,10 +385,11 @@ class Hand:
 
     def to_urdf(self, path: Any = None, angles: Any = None) -> str:
         """The hand as URDF text (see :func:`hugger.hands.to_urdf`), also written to ``path``."""
-        from .hands.robot import to_urdf, write_text
+        from ._files import write_atomic
+        from .hands.robot import to_urdf
         text = to_urdf(self, angles)
         if path is not None:
-            write_text(path, text)
+            write_atomic(path, text)
         return text
 
     def __repr__(self) -> str:

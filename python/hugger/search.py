@@ -146,13 +146,25 @@ def _threads(threads: Any) -> int:
     return int(threads)
 
 
-def _judge(cand: Candidate, traj: Trajectory, hand: Hand, obj: Object, target: np.ndarray,
-           torque_scale: float) -> Candidate:
-    """The candidate with its contacts, force closure and epsilon filled in."""
+def torque_scale(obj: Object, target: np.ndarray) -> float:
+    """The torque scale of the ranking's grasp quality: the object's largest distance from T (m)."""
+    return float(np.linalg.norm(obj.vertices - target, axis=1).max())
+
+
+def final_grasp_quality(traj: Trajectory, hand: Hand, obj: Object, target: np.ndarray,
+                        scale: float) -> tuple[Any, Any]:
+    """The contacts of a plan's final configuration and their force closure and epsilon (the
+    ranking's definition: mu = RANK_MU, torques divided by ``scale``, no volume)."""
     from . import analysis
 
     found = analysis.contacts_of(hand, obj, traj.palm_pose[-1], traj.joints[-1], CONTACT_DISTANCE)
-    q = analysis.grasp_quality(found, target, mu=RANK_MU, torque_scale=torque_scale, volume=False)
+    return found, analysis.grasp_quality(found, target, mu=RANK_MU, torque_scale=scale, volume=False)
+
+
+def _judge(cand: Candidate, traj: Trajectory, hand: Hand, obj: Object, target: np.ndarray,
+           scale: float) -> Candidate:
+    """The candidate with its contacts, force closure and epsilon filled in."""
+    found, q = final_grasp_quality(traj, hand, obj, target, scale)
     return replace(cand, contacts=len(found), force_closure=bool(q.force_closure), epsilon=float(q.epsilon))
 
 
@@ -238,7 +250,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
         raise ValueError(f"target T {t.tolist()} is not inside the object")
     dirs = approach_directions(approaches, pole)
     distance = safe_distance(obj, hand, t)
-    torque_scale = float(np.linalg.norm(obj.vertices - t, axis=1).max())
+    scale = torque_scale(obj, t)
 
     def run(i: int) -> tuple[Candidate, Trajectory | None]:
         d = dirs[i]
@@ -272,7 +284,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
                 if progress is not None:
                     progress(done, k)
     trajs = [r[1] for r in results]
-    judge = lambda c: _judge(c, trajs[c.index], hand, obj, t, torque_scale)  # noqa: E731
+    judge = lambda c: _judge(c, trajs[c.index], hand, obj, t, scale)  # noqa: E731
     best, ranked = rank([r[0] for r in results], judge, score)
     if verify:
         from . import physics

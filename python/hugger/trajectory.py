@@ -112,7 +112,10 @@ class Trajectory:
         the same directory (which must exist), then renamed, so that an interrupted save never
         leaves a partial file under ``path``. The provenance gets ``hugger_version`` and
         ``object_sha256`` when it lacks them."""
-        prov = {"hugger_version": _version(), "object_sha256": self.object_sha256(), **self.provenance}
+        prov = dict(self.provenance)
+        prov.setdefault("hugger_version", _version())
+        if "object_sha256" not in prov:  # hashing the mesh only when the provenance lacks it
+            prov["object_sha256"] = self.object_sha256()
         arrays = {
             "format_version": np.int64(FORMAT_VERSION),
             "hand_json": np.array(self.hand_json),

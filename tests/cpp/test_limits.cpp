@@ -30,6 +30,28 @@ HandModel limited_hand(int M, int N, double lo, double hi, double radius = 0.003
   return HandModel(M, N, MatrixX::Constant(M, N, 0.02), radius, 0.03, 0.01, layout);
 }
 
+/// A 4-link chain with limits on every joint, for the propagation tests.
+struct LimitedChain {
+  static constexpr int N = 4;
+  double lengths[N] = {0.02, 0.015, 0.02, 0.01};
+  double lower[N] = {-0.3, 0.0, -0.2, 0.1}, upper[N] = {0.6, 1.2, 0.9, 1.5};
+  SnakeRequest request() const {
+    SnakeRequest req;
+    req.lengths = lengths;
+    req.lower = lower;
+    req.upper = upper;
+    return req;
+  }
+  /// A random chain rooted at (0.03, 0), each link turned by up to 2 rad from the last.
+  Chain random_chain(std::mt19937_64& rng, std::uniform_real_distribution<double>& u) const {
+    Chain c(N + 1);
+    c[0] = Vec2(0.03, 0.0);
+    double theta = 0.0;
+    for (int n = 0; n < N; ++n) c[n + 1] = c[n] + lengths[n] * unit(theta += 2.0 * u(rng));
+    return c;
+  }
+};
+
 }  // namespace
 
 TEST(Limits, RelativeAngleSignIsFlexion) {
@@ -75,18 +97,12 @@ TEST(Limits, TailToHeadHoldsEveryJointWithinItsLimits) {
   const EmptySkin skin;
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const int N = 4;
-  const double lengths[N] = {0.02, 0.015, 0.02, 0.01};
-  const double lower[N] = {-0.3, 0.0, -0.2, 0.1}, upper[N] = {0.6, 1.2, 0.9, 1.5};
-  SnakeRequest req;
-  req.lengths = lengths;
-  req.lower = lower;
-  req.upper = upper;
+  const LimitedChain lc;
+  const int N = LimitedChain::N;
+  const double *lengths = lc.lengths, *lower = lc.lower, *upper = lc.upper;
+  const SnakeRequest req = lc.request();
   for (int i = 0; i < 500; ++i) {
-    Chain c(N + 1);
-    c[0] = Vec2(0.03, 0.0);
-    double theta = 0.0;
-    for (int n = 0; n < N; ++n) c[n + 1] = c[n] + lengths[n] * unit(theta += 2.0 * u(rng));
+    Chain c = lc.random_chain(rng, u);
     const Vec2 root(0.03, 0.004 * (u(rng) + 1.0));
     ASSERT_TRUE(tail_to_head(skin, req, root, c));
     EXPECT_TRUE(c[0] == root);
@@ -106,18 +122,12 @@ TEST(Limits, HeadToTailHoldsTheJointsItPassesWithinTheirLimits) {
   const EmptySkin skin;
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const int N = 4;
-  const double lengths[N] = {0.02, 0.015, 0.02, 0.01};
-  const double lower[N] = {-0.3, 0.0, -0.2, 0.1}, upper[N] = {0.6, 1.2, 0.9, 1.5};
-  SnakeRequest req;
-  req.lengths = lengths;
-  req.lower = lower;
-  req.upper = upper;
+  const LimitedChain lc;
+  const int N = LimitedChain::N;
+  const double *lengths = lc.lengths, *lower = lc.lower, *upper = lc.upper;
+  const SnakeRequest req = lc.request();
   for (int i = 0; i < 500; ++i) {
-    Chain c(N + 1);
-    c[0] = Vec2(0.03, 0.0);
-    double theta = 0.0;
-    for (int n = 0; n < N; ++n) c[n + 1] = c[n] + lengths[n] * unit(theta += 2.0 * u(rng));
+    Chain c = lc.random_chain(rng, u);
     const Vec2 head = c[N] + 0.003 * Vec2(u(rng), u(rng));
     ASSERT_TRUE(head_to_tail(skin, req, head, c));
     EXPECT_TRUE(c[N] == head);

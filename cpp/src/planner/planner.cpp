@@ -148,14 +148,7 @@ void Planner::plan_phase1(const Pose& start) {
   palm2_ = history_.back().palm;
   for (int m = 0; m < hand_.fingers(); ++m) {
     planes_.push_back(hand_.plane(palm2_, m));
-    if (hand_.general()) {
-      chains_.push_back(hand_.rest_chain(m));
-    } else {
-      Chain c(hand_.links() + 1);
-      c[0] = Vec2(hand_.palm_radius(), 0.0);
-      for (int n = 0; n < hand_.links(); ++n) c[n + 1] = c[n] + Vec2(0.0, hand_.link_length(m, n));
-      chains_.push_back(std::move(c));
-    }
+    chains_.push_back(hand_.rest_chain(m));  // the rim hand's rest is straight: (R, 0), (R, L0), ...
   }
   states_.assign(hand_.fingers(), TipState::kFrozen);
   anchors_.assign(hand_.fingers(), Vec2(kInf, kInf));
@@ -407,6 +400,14 @@ void Planner::phase2_iteration() {
   const double r = hand_.link_radius();
   const bool hug = params_.rules == Rules::kHug;
   const long it = stats_.phase2_iterations;
+  // A FROZEN finger becomes CONTACT (palm contact, or the hand blocked); under the hug rules it
+  // never touched O, so it closes all its joints until it touches.
+  auto release = [&](std::vector<TipState>& st, int m) {
+    if (st[m] != TipState::kFrozen) return;
+    st[m] = TipState::kContact;
+    closing_[m] = hug;
+    closed_[m] = hug;
+  };
 
   // Decision 1: before any contact the hand advances by its free distance in one iteration.
   if (!any_contact_ && !palm_touched_ && approach()) {
@@ -435,12 +436,7 @@ void Planner::phase2_iteration() {
     }
   }
   if (palm_touched_)  // decision 3: the palm stops for good; every finger closes
-    for (int m = 0; m < M; ++m)
-      if (states_[m] == TipState::kFrozen) {
-        states_[m] = TipState::kContact;
-        closing_[m] = hug;  // hug rule: it never touched O, so it closes all its joints
-        closed_[m] = hug;
-      }
+    for (int m = 0; m < M; ++m) release(states_, m);
   for (auto st : states_)
     if (st != TipState::kFrozen && !any_contact_) {
       any_contact_ = true;
@@ -646,12 +642,7 @@ void Planner::phase2_iteration() {
   const bool blocked = sigma == 0.0 && std::none_of(next_states.begin(), next_states.end(),
                                                     [](TipState t) { return t == TipState::kContact; });
   if (blocked)
-    for (int m = 0; m < M; ++m)
-      if (next_states[m] == TipState::kFrozen) {
-        next_states[m] = TipState::kContact;
-        closing_[m] = hug;
-        closed_[m] = hug;
-      }
+    for (int m = 0; m < M; ++m) release(next_states, m);
   ++stats_.phase2_iterations;
   // Never emit an unchanged configuration: when nothing moved and no state changed, nothing
   // can move any more.

@@ -5,8 +5,17 @@
 
 namespace hugger {
 
+namespace {
+
+/// The direction joint `joint`'s angle is measured from: link joint - 1, or the palm normal.
+Vec2 base_of(const Chain& chain, int joint) {
+  return joint == 0 ? Vec2(0.0, 1.0) : Vec2(chain[joint] - chain[joint - 1]);
+}
+
+}  // namespace
+
 double relative_angle(const Chain& chain, int joint, const Vec2& dir) {
-  const Vec2 prev = joint == 0 ? Vec2(0.0, 1.0) : Vec2(chain[joint] - chain[joint - 1]);
+  const Vec2 prev = base_of(chain, joint);
   return std::atan2(prev.x() * dir.y() - prev.y() * dir.x(), prev.dot(dir));
 }
 
@@ -24,28 +33,27 @@ bool angle_within_limits(double lo, double hi, const Vec2& base, Vec2& dir, bool
 
 bool joint_within_limits(const SnakeRequest& req, const Chain& chain, int joint, Vec2& dir, bool clamp) {
   if (req.lower == nullptr || req.upper == nullptr) return true;
-  const Vec2 prev = joint == 0 ? Vec2(0.0, 1.0) : Vec2(chain[joint] - chain[joint - 1]);
-  return angle_within_limits(req.lower[joint], req.upper[joint], prev, dir, clamp);
+  return angle_within_limits(req.lower[joint], req.upper[joint], base_of(chain, joint), dir, clamp);
 }
 
 namespace {
 
 /// Place chain[to] at distance L from chain[from], toward the old position of `to`; cling if needed.
 /// `pivot_outside`: chain[from] is known to lie outside O.
-/// `limited`: Tail2Head (to == from + 1) holds the joint at `from` within its limits, turning
+/// Limits: Tail2Head (to == from + 1) holds the joint at `from` within its limits, turning
 /// the ray onto a limit it breaks and refusing a freeing rotation that ends beyond one;
 /// Head2Tail (to == from - 1) turns the ray of link `to` so that joint `from` (between it and
 /// the link placed before it) is within its limits, and leaves the freeing rotation free:
 /// Tail2Head, whose chain is the one emitted, enforces them.
 bool place(const Sensing& sensing, const SnakeRequest& req, const Chain& old, int from, int to, double L,
-           bool pivot_outside, bool limited, Chain& chain) {
+           bool pivot_outside, Chain& chain) {
   Vec2 dir = old[to] - chain[from];
   if (dir.norm() < 1e-15) dir = old[to] - old[from];
   dir.normalize();
   const int N = static_cast<int>(chain.size()) - 1;
-  if (limited && to > from) {
+  if (to > from) {
     joint_within_limits(req, chain, from, dir, true);
-  } else if (limited && req.lower != nullptr && req.upper != nullptr && from < N) {
+  } else if (req.lower != nullptr && req.upper != nullptr && from < N) {
     // theta_from is the angle from link `to` (= -dir) to link `from`: within [lo, hi] exactly
     // when the angle from link `from` to -dir is within [-hi, -lo].
     Vec2 e = -dir;
@@ -66,7 +74,7 @@ bool place(const Sensing& sensing, const SnakeRequest& req, const Chain& old, in
   const RotateResult r = sensing.rotate_until_free(rr);
   if (!r.ok) return false;
   Vec2 freed = r.end - chain[from];
-  if (limited && to > from && !joint_within_limits(req, chain, from, freed, false)) return false;
+  if (to > from && !joint_within_limits(req, chain, from, freed, false)) return false;
   chain[to] = r.end;
   return true;
 }
@@ -79,7 +87,7 @@ bool head_to_tail(const Sensing& sensing, const SnakeRequest& req, const Vec2& h
   chain[N] = head;
   for (int n = N - 1; n >= 0; --n)
     // Every pivot after the first is the end of a link just placed free: outside O.
-    if (!place(sensing, req, old, n + 1, n, req.lengths[n], req.start_outside || n + 1 < N, true, chain)) return false;
+    if (!place(sensing, req, old, n + 1, n, req.lengths[n], req.start_outside || n + 1 < N, chain)) return false;
   return true;
 }
 
@@ -88,7 +96,7 @@ bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& r
   const int N = static_cast<int>(chain.size()) - 1;
   chain[0] = root;
   for (int n = 0; n < N; ++n)
-    if (!place(sensing, req, old, n, n + 1, req.lengths[n], req.start_outside || n > 0, true, chain)) return false;
+    if (!place(sensing, req, old, n, n + 1, req.lengths[n], req.start_outside || n > 0, chain)) return false;
   return true;
 }
 

@@ -140,13 +140,6 @@ def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | No
                             name=os.path.splitext(os.path.basename(source))[0], **kwargs)
 
 
-def write_text(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` atomically (a temporary file beside it, then a rename)."""
-    from .._files import write_atomic
-
-    write_atomic(path, text)
-
-
 # ------------------------------------------------------------------------------------- URDF
 def from_urdf(path: str | os.PathLike, palm_link: str | None = None, fixed_joints: dict[str, float] | None = None,
               link_radius: float | None = None) -> Hand:
