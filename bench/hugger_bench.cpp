@@ -422,7 +422,7 @@ int main(int argc, char** argv) {
     else if (a == "--allow-debug") allow_debug = true;
     else if (a == "--dump-obj" && i + 2 < argc) {
       // The scenario's object as Wavefront OBJ, every coordinate to 17 significant digits
-      // (round-trips exactly): lets bench/check_curvy.py compare it with the Python built-in.
+      // (round-trips exactly), to compare with the Python built-in (hugger.objects.curvy()).
       const std::string name = argv[++i], path = argv[++i];
       auto it = std::find_if(all.begin(), all.end(), [&](const Scenario& s) { return s.name == name; });
       if (it == all.end()) {

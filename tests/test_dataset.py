@@ -51,6 +51,11 @@ def test_shards_are_byte_identical_whatever_the_workers(reference, tmp_path):
     assert index["hugger_version"] == hugger.__version__
 
 
+def _finished(out: Path) -> list[Path]:
+    """Shards under their final names (a temporary also ends .npz, but starts with a dot)."""
+    return [p for p in (out / "shards").iterdir() if p.suffix == ".npz" and not p.name.startswith(".")]
+
+
 def _run_until_first_shard(out: Path, sig: int) -> int:
     cmd = [sys.executable, "-m", "hugger", "generate", *OBJECTS, "--approaches", "3", "--out", str(out),
            "--workers", "1"]
@@ -58,7 +63,7 @@ def _run_until_first_shard(out: Path, sig: int) -> int:
     deadline = time.monotonic() + 120
     try:
         while time.monotonic() < deadline and proc.poll() is None:
-            if (out / "shards").is_dir() and any(p.suffix == ".npz" for p in (out / "shards").iterdir()):
+            if (out / "shards").is_dir() and _finished(out):
                 break
             time.sleep(0.01)
         os.killpg(proc.pid, sig)
@@ -74,7 +79,7 @@ def test_a_killed_run_resumes_to_the_same_dataset(reference, tmp_path, sig):
     code = _run_until_first_shard(out, sig)
     assert code != 0
     assert not (out / "index.json").exists()
-    finished = [p for p in (out / "shards").iterdir() if p.suffix == ".npz"]
+    finished = _finished(out)
     assert 1 <= len(finished) < len(OBJECTS)  # killed part-way
     for p in finished:  # whatever has its final name is whole
         assert p.read_bytes() == (reference / "shards" / p.name).read_bytes()
@@ -158,3 +163,16 @@ def test_bad_input(tmp_path, capsys):
     assert dataset.parse_hand("4x3:link_length=0.025,palm_radius=0.035") == (
         "4x3_link_length0.025_palm_radius0.035",
         {"fingers": 4, "links": 3, "link_length": 0.025, "palm_radius": 0.035})
+
+
+def test_a_temporary_left_by_a_killed_writer_is_removed_on_resume(reference, tmp_path):
+    import shutil
+
+    out = tmp_path / "ds"
+    shutil.copytree(reference, out)
+    (out / "index.json").unlink()
+    left = out / "shards" / f".{OBJECTS[0]}__5x5.npz.4242-0123456789ab.part.npz"
+    left.write_bytes(b"PK\x03\x04 half a shard")
+    assert main(["generate", *OBJECTS, "--approaches", "3", "--out", str(out), "--workers", "1"]) == 0
+    assert not left.exists()
+    assert shard_bytes(out) == shard_bytes(reference)

@@ -7,6 +7,8 @@ import secrets
 from pathlib import Path
 from typing import Any, Iterator
 
+_PART = ".part"  # marks a temporary name: ".<final name>.<pid>-<random>.part<suffix>"
+
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
@@ -18,7 +20,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     if not parent.is_dir():
         raise FileNotFoundError(f"no such directory: {str(parent)!r} (for {str(final)!r})")
     # not created here (mkstemp would make it private, mode 0600): the writer creates it as any file
-    tmp_path = parent / f".{final.name}.{os.getpid()}-{secrets.token_hex(6)}.part{final.suffix}"
+    tmp_path = parent / f".{final.name}.{os.getpid()}-{secrets.token_hex(6)}{_PART}{final.suffix}"
     try:
         yield tmp_path
         os.replace(tmp_path, final)
@@ -36,3 +38,21 @@ def write_atomic(path: str | os.PathLike, data: Any) -> None:
             fh.write(raw)
             fh.flush()
             os.fsync(fh.fileno())  # on disk before the rename: a crash leaves the old file or the new one
+
+
+def is_temporary(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is named as :func:`atomic_path`'s temporary files are."""
+    name = Path(os.fspath(path)).name
+    return name.startswith(".") and _PART + Path(name).suffix in name
+
+
+def remove_temporaries(directory: str | os.PathLike) -> int:
+    """Remove the temporary files a killed writer left in ``directory``; returns how many.
+    Only for directories that one writer owns (a live writer's temporary would go too)."""
+    count = 0
+    for p in Path(os.fspath(directory)).iterdir():
+        if p.is_file() and is_temporary(p):
+            with contextlib.suppress(FileNotFoundError):
+                p.unlink()
+                count += 1
+    return count

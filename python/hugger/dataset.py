@@ -28,7 +28,7 @@ from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
-from ._files import write_atomic
+from ._files import remove_temporaries, write_atomic
 
 __all__ = ["Dataset", "Grasp", "generate", "parse_hand", "DATASET_FORMAT", "SHARD_FORMAT"]
 
@@ -264,8 +264,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike, approaches: int = 2
     root = Path(out)
     shard_dir = root / "shards"
     shard_dir.mkdir(parents=True, exist_ok=True)
-    for stale in shard_dir.glob(".*.tmp-*"):  # left by a killed run
-        stale.unlink(missing_ok=True)
+    remove_temporaries(shard_dir)  # left by a killed run
     tasks = []
     from .hand import Hand
 
