@@ -72,7 +72,7 @@ bench: install
 	$(BIN)/python bench/bench_python.py --repeat 3
 
 fuzz: install
-	HUGGER_FUZZ_PROFILE=long $(BIN)/python -m pytest -q tests/test_fuzz.py tests/test_hands.py::test_random_layouts_many
+	HUGGER_FUZZ_PROFILE=long $(BIN)/python -m pytest -q tests/properties/test_fuzz.py tests/test_hands.py::test_random_layouts_many
 
 clean:
 	rm -rf build $(VENV) demo-out

@@ -33,3 +33,11 @@ def sphere():
     import hugger
 
     return hugger.objects.sphere(radius=0.04, subdivisions=3)
+
+
+@pytest.fixture(scope="session")
+def fine_sphere():
+    """A 4 cm sphere of 5120 triangles: the finer mesh of the API tests of the world, planner and files."""
+    import hugger
+
+    return hugger.objects.sphere(radius=0.04, subdivisions=4)

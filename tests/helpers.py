@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import importlib.util
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,58 @@ SHARED = ROOT.parent / "shared"
 CHECKER = SHARED / "tools" / "check_trajectory.py"
 OBJECTS_DIR = SHARED / "data" / "objects"
 SHARED_MISSING = "../shared (checker and meshes beside the project root) is not present in this checkout"
+
+
+def start(height=0.2):
+    """The palm ``height`` above the origin, facing it."""
+    return hugger.look_at([0.0, 0.0, height], [0, 0, 0])
+
+
+def ico(subdivisions=2, radius=0.04):
+    """An icosphere of ``radius`` (m) as (vertices, faces) arrays."""
+    v, f = hugger.objects.icosphere(subdivisions)
+    return v * radius, f.copy()
+
+
+def no_warnings(fn, *args, **kwargs):
+    """Call fn and assert it warned nothing."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        out = fn(*args, **kwargs)
+    assert not caught, [str(w.message) for w in caught]
+    return out
+
+
+# palm poses that are not rigid (shared by the hand's kinematics tests and the planner's)
+
+def _linear(m):
+    pose = start()
+    pose[:3, :3] = pose[:3, :3] @ np.asarray(m, dtype=float)
+    return pose
+
+
+def _entry(i, j, x):
+    pose = start()
+    pose[i, j] = x
+    return pose
+
+
+BAD_POSES = [
+    (_linear(np.eye(3) * 1.001), "rigid"),
+    (_linear(np.diag([1, 1, 0.5])), "rigid"),
+    (_linear([[1, 0.05, 0], [0, 1, 0], [0, 0, 1]]), "rigid"),
+    (_linear(np.diag([1, 1, -1])), "rigid|reflect"),
+    (_linear(-np.eye(3)), "rigid|reflect"),
+    (_linear(np.zeros((3, 3))), "rigid"),
+    (_entry(0, 0, np.nan), "finite"),
+    (_entry(1, 3, np.inf), "finite"),
+    (_entry(3, 3, 2.0), "last row"),
+    (_entry(3, 0, 0.1), "last row"),
+    (start()[:3], r"\(4, 4\)"),
+    (start().ravel(), r"\(4, 4\)"),
+    (start()[None], r"\(4, 4\)"),
+    (None, r"\(4, 4\)|palm_pose"),
+]
 
 
 def load_checker():

@@ -305,7 +305,7 @@ def test_analytic_skin_plans_agree_many(hand, checker, tmp_path, kind):
             unexplained.add((kind, seed))
             r = {**r, "agree": True}  # judged below, against the known list; the checker rules still hold
         _assert_agrees(r)
-    # Disagreements that no tessellation explains, known and stated in the README: strict both ways,
+    # Disagreements that no tessellation explains, known and stated in docs/skins.md: strict both ways,
     # so a new one fails here and a fixed one asks for this list to be updated.
     assert unexplained == {k for k in KNOWN_DISAGREEMENTS if k[0] == kind}, unexplained
     assert sum(r["agree"] for r in results.values()) >= 0.8 * len(results)

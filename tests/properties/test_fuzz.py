@@ -243,7 +243,7 @@ def test_object_builds_or_says_why(mesh, probe):
     assert obj.faces.dtype == np.int64 and obj.faces.min() >= 0 and obj.faces.max() < len(obj.vertices)
     # its queries answer; on a surely embedded surface "inside" agrees with an independent
     # winding number away from the surface (self-intersecting meshes are not detected, and on
-    # them "inside" is not defined: see test_robustness)
+    # them "inside" is not defined: see test_world)
     rng = np.random.default_rng(probe)
     lo, hi = obj.bounds
     pts = lo + (hi - lo) * rng.uniform(-0.2, 1.2, size=(40, 3))

@@ -1,0 +1,514 @@
+"""The planner: step/plan, parameters, refusals of bad targets and starts, timeouts, determinism, threads."""
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import helpers
+import hugger
+from helpers import BAD_POSES, no_warnings, start
+
+HERE = Path(__file__).resolve()
+
+
+# --- planner ------------------------------------------------------------------------------
+
+def test_stream_equals_plan(hand, fine_sphere):
+    streamed = list(hugger.Planner(hand, fine_sphere, [0, 0, 0], start()))
+    traj = hugger.Planner(hand, fine_sphere, [0, 0, 0], start()).plan()
+    assert len(streamed) == len(traj)
+    for k in (0, len(traj) // 2, len(traj) - 1):
+        np.testing.assert_array_equal(streamed[k].joints, traj.joints[k])
+        np.testing.assert_array_equal(streamed[k].palm_pose, traj.palm_pose[k])
+        assert streamed[k].iteration == k
+    assert streamed[0].phase == 0 and streamed[-1].phase == 2
+
+
+def test_step_then_plan_continues(hand, fine_sphere):
+    turned = hugger.scenarios.start_pose(fine_sphere, hand, [0, 0, 0], turn_deg=60)  # Phase 1 has work to do
+    planner = hugger.Planner(hand, fine_sphere, [0, 0, 0], turned)
+    first = [planner.step() for _ in range(10)]
+    assert planner.status == "running"
+    partial = planner.trajectory()  # exactly what step() handed out, although Phase 1 is precomputed
+    assert len(partial) == 10
+    np.testing.assert_array_equal(partial.joints[-1], first[-1].joints)
+    traj = planner.plan()
+    assert traj.status == "done" and planner.step() is None
+    np.testing.assert_array_equal(traj.joints[9], first[9].joints)
+
+
+def test_defaults_are_resolved(hand, fine_sphere):
+    p = hugger.Planner(hand, fine_sphere, [0, 0, 0], start()).params
+    assert p["step"] == pytest.approx(0.001) and p["epsilon"] == pytest.approx(0.0001)
+    assert p["contact_tolerance"] == 1e-4 and p["max_iterations"] == 20000
+
+
+def test_max_iterations_gives_a_valid_partial_plan(hand, fine_sphere):
+    traj = hugger.Planner(hand, fine_sphere, [0, 0, 0], start(), max_iterations=5).plan()
+    # the approach before the first contact is one iteration of several configurations
+    assert traj.status == "max_iterations" and traj.stats["phase2_iterations"] == 5
+    assert np.sum(traj.phase == 2) >= traj.stats["approach_configurations"] >= 5
+
+
+@pytest.mark.parametrize("target, pose, match", [
+    ([0.1, 0, 0], None, "not inside"),
+    ("vertex", None, "not inside"),  # exactly at a vertex: on the surface, not inside
+    ([0, 0, float("nan")], None, "target"),
+    ([0, 0], None, "target"),
+    ([0, 0, 0], start(0.03), "inside|penetrates|touches"),
+    ([0, 0, 0], start(0.1), "touches|penetrates"),
+    ([0, 0, 0], np.diag([1.0, 1.0, 2.0, 1.0]), "rigid"),
+    ([0, 0, 0], np.eye(3), r"\(4, 4\)"),
+])
+def test_planner_rejects_bad_starts(hand, fine_sphere, target, pose, match):
+    if isinstance(target, str):
+        target = fine_sphere.vertices[7]
+    with pytest.raises(ValueError, match=match):
+        hugger.Planner(hand, fine_sphere, target, start() if pose is None else pose)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"step": 0}, "step"), ({"step": -0.001}, "step"), ({"step": 0.05}, "step"), ({"step": float("inf")}, "step"),
+    ({"epsilon": 0}, "epsilon"), ({"epsilon": 0.01}, "epsilon"),
+    ({"contact_tolerance": -1}, "contact_tolerance"), ({"contact_tolerance": 0.01}, "contact_tolerance"),
+    ({"max_iterations": 0}, "max_iterations"), ({"max_iterations": 2.5}, "max_iterations"),
+])
+def test_planner_rejects_bad_parameters(hand, fine_sphere, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        hugger.Planner(hand, fine_sphere, [0, 0, 0], start(), **kwargs)
+
+
+def test_sideways_start_that_would_sweep_through_the_object_is_refused(hand, fine_sphere):
+    pose = np.eye(4)
+    pose[:3, 3] = [0.075, 0, 0]
+    with pytest.raises(ValueError, match="Phase 1"):
+        hugger.Planner(hand, fine_sphere, [0, 0, 0], pose)
+
+
+# --- the reference grasp: the 5x5 hand on a 4 cm sphere with T at its centre -------------------
+
+def test_sphere_hug_has_palm_and_most_links_in_contact(tmp_path):
+    hand = hugger.Hand(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03,
+                       palm_thickness=0.01)
+    obj = hugger.objects.sphere(radius=0.04, subdivisions=5)
+    rot = np.array([[np.cos(0.8), 0, np.sin(0.8)], [0, 1, 0], [-np.sin(0.8), 0, np.cos(0.8)]])
+    start = hugger.look_at([0.0, 0.0, 0.2], [0, 0, 0])
+    start[:3, :3] = rot @ start[:3, :3]  # turned away from T, so Phase 1 has work to do
+    planner = hugger.Planner(hand, obj, [0, 0, 0], start)
+    traj = planner.plan()
+    s = traj.summary(contact_distance=1e-3)
+    assert traj.status == "done"
+    assert s["phase1_configurations"] > 0
+    assert s["palm_contact"], s
+    assert s["links_in_contact"] >= 15, s
+    # no link penetrates: every final gap is non-negative
+    assert traj.link_gaps().min() >= 0.0
+
+
+# --- palm poses that are not rigid -------------------------------------------------------------
+
+@pytest.mark.parametrize("pose, match", BAD_POSES)
+def test_planner_refuses_non_rigid_palm_poses(hand, sphere, pose, match):
+    with pytest.raises(ValueError, match=match):
+        hugger.Planner(hand, sphere, [0, 0, 0], pose)
+
+
+def test_nearly_rigid_pose_is_accepted_and_made_exactly_rigid(hand, sphere):
+    pose = start()
+    pose[:3, :3] += 1e-9 * np.arange(9).reshape(3, 3)  # within the 1e-6 tolerance
+    traj = hugger.Planner(hand, sphere, [0, 0, 0], pose, max_iterations=3).plan()
+    r = traj.palm_pose[:, :3, :3]
+    assert np.abs(np.einsum("kji,kjl->kil", r, r) - np.eye(3)).max() < 1e-14
+    np.testing.assert_allclose(hand.forward(pose, np.zeros((5, 5))), traj.joints[0], atol=1e-8)
+
+
+# --- the target T -----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("where", ["face centroid", "edge midpoint", "far away", "below the object"])
+def test_target_not_strictly_inside_is_refused(hand, sphere, where):
+    v, f = sphere.vertices, sphere.faces
+    target = {"face centroid": v[f[10]].mean(axis=0), "edge midpoint": v[f[10, :2]].mean(axis=0),
+              "far away": [1e5, 0, 0], "below the object": [0, 0, -0.05]}[where]
+    with pytest.raises(ValueError, match="not inside"):
+        hugger.Planner(hand, sphere, target, start())
+
+
+def test_target_just_inside_a_vertex_is_accepted(hand, sphere):
+    target = sphere.vertices[7] * (1 - 1e-6)
+    assert hugger.Planner(hand, sphere, target, start(), max_iterations=2).plan().status == "max_iterations"
+
+
+def test_target_at_the_palm_origin_is_refused(hand):
+    big = hugger.objects.sphere(radius=0.5, subdivisions=2)
+    with pytest.raises(ValueError, match="target|touches|penetrates"):
+        hugger.Planner(hand, big, [0, 0, 0.1], hugger.look_at([0, 0, 0.1], [0, 0, 1]))
+
+
+# --- the start: inside, touching, too close for Phase 1 ---------------------------------------
+
+def _gap(hand, obj, height):
+    """Gap (m) between the extended fingers' capsules and obj, palm facing down from ``height``."""
+    j = hand.forward(start(height), np.zeros((hand.fingers, hand.links)))
+    return float(obj.segment_distance(j[:, :-1].reshape(-1, 3), j[:, 1:].reshape(-1, 3)).min() - hand.link_radius)
+
+
+def _touching_height(hand, obj):
+    """Palm height at which the extended fingers just touch obj (gap 0, by bisection on the mesh)."""
+    lo, hi = 0.05, 0.3
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if _gap(hand, obj, mid) > 0 else (mid, hi)
+    return hi
+
+
+def _facing_away(height):
+    pose = np.eye(4)
+    pose[:3, 3] = [0, 0, height]  # palm normal +z, away from the sphere below
+    return pose
+
+
+@pytest.mark.parametrize("pose, match", [
+    (np.eye(4), "coincides|inside|penetrates"),      # P_o at T, inside O
+    (start(0.04), "touches|penetrates"),             # the palm's face on the sphere
+    (start(0.0605), "touches|penetrates"),           # fingers deep in it, palm clear
+    ("touching", "touches"),                         # fingertips exactly on it (gap 0)
+    ("within tolerance", "touches"),                 # a gap below contact_tolerance counts as touching
+    (_facing_away(0.1), "Phase 1"),                  # turning 180 degrees sweeps the fingers through it
+    (hugger.look_at([0.0, 0.09, 0.09], [0, 0, 0.5]), "Phase 1"),
+])
+def test_start_inside_touching_or_too_close_is_refused(hand, sphere, pose, match):
+    if isinstance(pose, str):
+        h = _touching_height(hand, sphere) + (0.0 if pose == "touching" else 5e-5)
+        assert _gap(hand, sphere, h) < 1e-4  # contact_tolerance
+        pose = start(h)
+    with pytest.raises(ValueError, match=match):
+        hugger.Planner(hand, sphere, [0, 0, 0], pose)
+
+
+def test_start_clear_by_a_millimetre_is_accepted(hand, sphere):
+    h = _touching_height(hand, sphere) + 0.001
+    assert 0.0005 < _gap(hand, sphere, h) < 0.001
+    traj = hugger.Planner(hand, sphere, [0, 0, 0], start(h)).plan()
+    assert traj.status == "done" and traj.stats["first_contact_iteration"] >= 1
+
+
+# --- planner parameters -------------------------------------------------------------------------
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"step": -1e-3}, "step"), ({"step": float("nan")}, "step"), ({"step": 0.0201}, "shortest link"),
+    ({"step": 1e-300}, "contact_tolerance .* smaller than step"),
+    ({"epsilon": -0.001}, "epsilon"), ({"epsilon": float("nan")}, "epsilon"), ({"epsilon": float("inf")}, "epsilon"),
+    ({"epsilon": 0.0011}, "epsilon .* must not exceed step"),
+    ({"contact_tolerance": 0}, "contact_tolerance"), ({"contact_tolerance": float("nan")}, "contact_tolerance"),
+    ({"max_iterations": -5}, "max_iterations"), ({"max_iterations": True}, "max_iterations"),
+    ({"max_iterations": "10"}, "max_iterations"),
+])
+def test_planner_refuses_more_bad_parameters(hand, sphere, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        hugger.Planner(hand, sphere, [0, 0, 0], start(), **kwargs)
+
+
+def test_step_equal_to_a_link_is_allowed_and_ends(hand, sphere):
+    traj = hugger.Planner(hand, sphere, [0, 0, 0], start(), step=0.02, epsilon=0.002).plan()
+    assert traj.status == "done"
+
+
+def test_absurd_max_iterations_gets_a_value_error(hand, sphere):
+    with pytest.raises(ValueError, match="max_iterations"):
+        hugger.Planner(hand, sphere, [0, 0, 0], start(), max_iterations=10 ** 30)
+
+
+def test_contact_tolerance_below_double_resolution_is_refused(hand, sphere):
+    try:
+        traj = hugger.Planner(hand, sphere, [0, 0, 0], start(), contact_tolerance=1e-18, max_iterations=400).plan()
+    except ValueError as exc:
+        assert "contact_tolerance" in str(exc)
+        return
+    assert traj.status == "done", f"ran to {traj.status} with first contact {traj.stats['first_contact_iteration']}"
+
+
+@pytest.mark.parametrize("which", ["target", "palm_pose"])
+def test_complex_target_or_pose_gets_a_value_error(hand, sphere, which):
+    args = {"target": np.zeros(3), "palm_pose": start()}
+    args[which] = args[which] + 1e-3j
+    with pytest.raises(ValueError, match=which):
+        hugger.Planner(hand, sphere, **args)
+
+
+# --- objects far smaller than a link or far larger than the reach ------------------------------
+
+@pytest.mark.parametrize("make, warns, palm", [
+    (lambda: hugger.objects.sphere(radius=0.0004, subdivisions=2), True, True),    # 0.8 mm: a crumb
+    (lambda: hugger.objects.sphere(radius=0.002, subdivisions=2), False, True),    # 4 mm, a fifth of a link
+    (lambda: hugger.objects.sphere(radius=1.0, subdivisions=3), False, False),     # 2 m: a wall to this hand
+    (lambda: hugger.objects.box((10.0, 10.0, 10.0), divisions=2), True, False),    # 10 m
+])
+def test_objects_far_from_the_hands_size_end_done(hand, request, tmp_path, make, warns, palm):
+    if warns:
+        with pytest.warns(UserWarning, match="implausibly"):
+            obj = make()
+    else:
+        obj = no_warnings(make)
+    top = float(obj.bounds[1, 2])
+    traj = hugger.Planner(hand, obj, [0, 0, 0], start(top + 0.15)).plan()
+    s = traj.summary()
+    assert s["status"] == "done" and s["phase2_iterations"] < traj.params["max_iterations"] // 10
+    assert s["fingers_done"] == 5 and s["palm_contact"] == palm
+    traj.save(tmp_path / "plan.npz")
+    checker = request.getfixturevalue("checker")  # skips here when ../shared is absent
+    ok, failures, _ = helpers.check_file(checker, tmp_path / "plan.npz", every=10)
+    assert ok, failures
+
+
+# --- timeouts: Planner.plan(timeout=...) and hugger.plan(..., timeout=...) --------------------
+
+# Start clear of the sphere, turned away from T so that Phase 1 has work to do.
+START = hugger.look_at([0.0, 0.0, 0.2], [0, 0, 0])
+
+
+def slow_planner(hand, sphere):
+    """A plan of thousands of iterations (a step 1/400 of a link): far longer than a millisecond."""
+    return hugger.Planner(hand, sphere, [0, 0, 0], START, step=5e-5, contact_tolerance=1e-5, max_iterations=100000)
+
+
+@pytest.mark.parametrize("bad", [0, 0.0, -1.0, float("nan"), float("inf"), -float("inf"), True, "1", [1.0]])
+def test_bad_timeouts_are_refused(hand, sphere, bad):
+    p = hugger.Planner(hand, sphere, [0, 0, 0], START)
+    with pytest.raises(ValueError, match="timeout"):
+        p.plan(timeout=bad)
+    assert p.status == "running"  # nothing was planned
+    with pytest.raises(ValueError, match="timeout"):
+        hugger.plan(hand, sphere, [0, 0, 0], START, timeout=bad)
+
+
+def test_core_refuses_bad_timeouts_too(hand, sphere):
+    p = hugger.Planner(hand, sphere, [0, 0, 0], START)
+    for bad in (0.0, -2.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="timeout"):
+            p._core.plan(bad)
+
+
+def test_generous_timeout_changes_nothing(hand, sphere):
+    a = hugger.Planner(hand, sphere, [0, 0, 0], START).plan()
+    b = hugger.Planner(hand, sphere, [0, 0, 0], START).plan(timeout=600)
+    c = hugger.plan(hand, sphere, [0, 0, 0], START, timeout=600.0)
+    assert a.status == b.status == c.status == "done"
+    for t in (b, c):
+        assert np.array_equal(a.joints, t.joints) and np.array_equal(a.palm_pose, t.palm_pose)
+        assert np.array_equal(a.tip_state, t.tip_state)
+
+
+def test_timeout_stops_with_a_valid_partial_trajectory(hand, sphere, checker, tmp_path):
+    full = slow_planner(hand, sphere).plan()
+    assert full.status == "done"
+    planner = slow_planner(hand, sphere)
+    part = planner.plan(timeout=1e-3)
+    assert part.status == "timeout" == planner.status
+    assert 1 <= len(part) < len(full)
+    # the partial plan is the full plan's beginning, bit for bit (plans are deterministic)
+    k = len(part)
+    assert np.array_equal(part.joints, full.joints[:k]) and np.array_equal(part.palm_pose, full.palm_pose[:k])
+    assert np.array_equal(part.tip_state, full.tip_state[:k])
+    # a timed-out plan has ended: planning again or stepping adds nothing
+    assert planner.plan().status == "timeout" and len(planner.trajectory()) == k
+    assert planner.step() is None
+    path = tmp_path / "partial.npz"
+    part.save(path)
+    assert hugger.Trajectory.load(path).status == "timeout"
+    ok, failures, _ = helpers.check_file(checker, path, every=max(1, k // 40))
+    assert ok, failures
+
+
+def test_timeout_through_hugger_plan(hand, sphere):
+    t = hugger.plan(hand, sphere, [0, 0, 0], START, timeout=1e-3, step=5e-5, contact_tolerance=1e-5,
+                    max_iterations=100000)
+    assert t.status == "timeout"
+    assert math.isclose(t.params["step"], 5e-5)
+
+
+# --- determinism and threads ---------------------------------------------------------------
+
+def _blob_plan(seed):
+    obj = hugger.objects.blob(radius=0.035, seed=seed)
+    hand = hugger.Hand(fingers=4, links=6, link_length=0.015, link_radius=0.002, palm_radius=0.025)
+    return hugger.Planner(hand, obj, [0, 0, 0], hugger.look_at([0.02, 0.1, 0.15], [0, 0, 0])).plan()
+
+
+def test_bit_identical_across_runs_and_threads():
+    alone = [_blob_plan(s) for s in range(4)]
+    again = [_blob_plan(s) for s in range(4)]
+    results = [None] * 4
+
+    def run(i):
+        results[i] = _blob_plan(i)
+
+    threads = [threading.Thread(target=run, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for a, b, c in zip(alone, again, results):
+        assert a.joints.tobytes() == b.joints.tobytes() == c.joints.tobytes()
+        assert a.palm_pose.tobytes() == c.palm_pose.tobytes()
+
+
+def test_gil_is_released_while_planning():
+    obj = hugger.objects.sphere(radius=0.04, subdivisions=6)  # a large mesh: a plan of ~1 s
+    hand = hugger.Hand(fingers=8, links=8, link_length=0.0125, link_radius=0.002)
+    planner = hugger.Planner(hand, obj, [0, 0, 0], hugger.look_at([0, 0, 0.2], [0, 0, 0]), step=0.0003)
+    ticks = []
+    done = threading.Event()
+
+    def counter():
+        while not done.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.001)
+
+    t = threading.Thread(target=counter)
+    t0 = time.perf_counter()
+    t.start()
+    planner.plan()
+    elapsed = time.perf_counter() - t0
+    done.set()
+    t.join()
+    # the other thread kept ticking during the plan (it could not if the GIL were held)
+    during = [x for x in ticks if x < t0 + elapsed]
+    assert elapsed > 0.05
+    assert len(during) > 0.2 * elapsed / 0.001
+
+
+def test_one_planner_cannot_run_on_two_threads_at_once(hand, fine_sphere):
+    planner = hugger.Planner(hand, hugger.objects.sphere(radius=0.04, subdivisions=6), [0, 0, 0], start(),
+                             step=0.0002)
+    errors = []
+    t = threading.Thread(target=planner.plan)
+    t.start()
+    time.sleep(0.01)
+    try:
+        planner.step()
+    except RuntimeError as exc:
+        errors.append(str(exc))
+    t.join()
+    assert planner.status == "done"
+    if errors:  # the first plan may already have finished on a fast machine
+        assert "another thread" in errors[0]
+
+
+# --- determinism and threads ----------------------------------------------------------------------
+
+def _case():
+    obj = hugger.objects.blob(radius=0.035, amplitude=0.3, seed=11, subdivisions=3)
+    hand = hugger.Hand(fingers=4, links=6, link_length=0.015, link_radius=0.002, palm_radius=0.025)
+    return hand, obj, hugger.look_at([0.05, -0.08, 0.14], [0, 0, 0])
+
+
+def _fingerprint(traj: hugger.Trajectory) -> str:
+    h = hashlib.sha256()
+    for name in ("palm_pose", "joints", "angles", "tip_state", "phase"):
+        h.update(np.ascontiguousarray(getattr(traj, name)).tobytes())
+    h.update((traj.status + traj.params_json + traj.stats_json).encode())
+    return h.hexdigest()
+
+
+def test_shared_hand_and_object_on_two_threads_equal_the_plan_alone():
+    hand, obj, pose = _case()
+    alone = _fingerprint(hugger.Planner(hand, obj, [0, 0, 0], pose).plan())
+    results: list = [None] * 4
+    barrier = threading.Barrier(2)
+
+    def run(i):
+        barrier.wait()
+        for j in (i, i + 2):
+            if j < 2:
+                results[j] = _fingerprint(hugger.Planner(hand, obj, [0, 0, 0], pose).plan())
+            else:  # streamed one configuration at a time, interleaved with the other thread
+                p = hugger.Planner(hand, obj, [0, 0, 0], pose)
+                while p.step() is not None:
+                    pass
+                results[j] = _fingerprint(p.trajectory())
+
+    threads = [threading.Thread(target=run, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert results == [alone] * 4
+
+
+def test_bit_identical_in_another_process():
+    hand, obj, pose = _case()
+    here = _fingerprint(hugger.Planner(hand, obj, [0, 0, 0], pose).plan())
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); import test_planner as t; "
+            "h, o, p = t._case(); import hugger; print(t._fingerprint(hugger.Planner(h, o, [0, 0, 0], p).plan()))")
+    env = {**os.environ, "PYTHONHASHSEED": "12345"}
+    out = subprocess.run([sys.executable, "-c", code, str(HERE.parent)], capture_output=True, text=True, env=env,
+                         timeout=120, check=True)
+    assert out.stdout.strip() == here
+
+
+def _ticks_while(fn):
+    """Run fn on this thread while another thread ticks every millisecond; (elapsed s, ticks during)."""
+    ticks, done = [], threading.Event()
+
+    def counter():
+        while not done.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.001)
+
+    t = threading.Thread(target=counter)
+    t.start()
+    time.sleep(0.01)
+    t0 = time.perf_counter()
+    fn()
+    t1 = time.perf_counter()
+    done.set()
+    t.join()
+    return t1 - t0, sum(t0 <= x <= t1 for x in ticks)
+
+
+def test_gil_is_released_during_phase_1_in_the_constructor(hand, sphere):
+    pose = np.eye(4)
+    pose[:3, 3] = [0, 0, 0.3]  # facing away: Phase 1 turns the hand through 180 degrees, ~30000 increments
+    made = []
+    elapsed, during = _ticks_while(lambda: made.append(hugger.Planner(hand, sphere, [0, 0, 0], pose, step=1e-5,
+                                                                      contact_tolerance=5e-6)))
+    assert made[0].stats["phase1_configurations"] > 1000
+    assert elapsed > 0.05
+    # the counter sleeps 1 ms a tick; with the GIL held it could not tick at all
+    assert during > 0.2 * elapsed / 0.001
+
+
+# --- bounded resources ------------------------------------------------------------------------
+
+def _rss_bytes() -> int:
+    with open("/proc/self/statm") as fh:
+        return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/statm"), reason="needs Linux /proc to read the resident memory")
+def test_repeated_plans_do_not_leak_memory():
+    import gc
+
+    hand = hugger.Hand()
+    obj = hugger.objects.sphere(0.04, subdivisions=5)  # 20480 triangles: a leaked tree would show
+    pose = hugger.look_at([0, 0, 0.2], [0, 0, 0])
+    for _ in range(3):  # warm up allocator pools
+        hugger.plan(hand, hugger.Object(obj.vertices, obj.faces), [0, 0, 0], pose)
+    gc.collect()
+    before = _rss_bytes()
+    for _ in range(25):
+        traj = hugger.plan(hand, hugger.Object(obj.vertices, obj.faces), [0, 0, 0], pose)
+        assert traj.status == "done"
+    del traj
+    gc.collect()
+    grown = _rss_bytes() - before
+    assert grown < 24 * 2**20, f"resident memory grew by {grown / 2**20:.1f} MiB over 25 plans"

@@ -1,0 +1,240 @@
+"""Trajectory files: save and load, and the refusal of truncated, corrupt, pickled or malformed files."""
+from __future__ import annotations
+
+import io
+import json
+import tracemalloc
+import zipfile
+
+import numpy as np
+import pytest
+
+import hugger
+from helpers import start
+
+
+# --- trajectory file -----------------------------------------------------------------------
+
+def test_save_load_round_trip(hand, fine_sphere, tmp_path):
+    traj = hugger.Planner(hand, fine_sphere, [0, 0, 0], start()).plan()
+    traj.save(tmp_path / "plan.npz")
+    back = hugger.Trajectory.load(tmp_path / "plan.npz")
+    for name in ("palm_pose", "joints", "angles", "tip_state", "phase", "object_vertices", "object_faces", "target"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(traj, name))
+    assert back.status == "done" and back.hand == hand.to_dict() and back.params == traj.params
+    with np.load(tmp_path / "plan.npz", allow_pickle=False) as z:
+        assert int(z["format_version"]) == 1 and z["tip_state"].dtype == np.int8
+
+
+def test_load_refuses_corrupt_and_pickled_files(tmp_path):
+    (tmp_path / "junk.npz").write_bytes(b"not a zip file at all")
+    with pytest.raises(ValueError, match="cannot read"):
+        hugger.Trajectory.load(tmp_path / "junk.npz")
+    np.savez(tmp_path / "pickled.npz", format_version=np.array([{"evil": 1}], dtype=object))
+    with pytest.raises(ValueError):
+        hugger.Trajectory.load(tmp_path / "pickled.npz")
+    np.savez(tmp_path / "partial.npz", format_version=np.int64(1))
+    with pytest.raises(ValueError, match="missing keys"):
+        hugger.Trajectory.load(tmp_path / "partial.npz")
+
+
+def test_truncated_file_is_refused(hand, fine_sphere, tmp_path):
+    traj = hugger.Planner(hand, fine_sphere, [0, 0, 0], start(), max_iterations=20).plan()
+    traj.save(tmp_path / "plan.npz")
+    data = (tmp_path / "plan.npz").read_bytes()
+    (tmp_path / "cut.npz").write_bytes(data[: len(data) // 2])
+    with pytest.raises(ValueError, match="cannot read"):
+        hugger.Trajectory.load(tmp_path / "cut.npz")
+
+
+# --- trajectory files ---------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def saved(tmp_path_factory, hand, sphere):
+    traj = hugger.Planner(hand, sphere, [0, 0, 0], start(), max_iterations=25).plan()
+    path = tmp_path_factory.mktemp("traj") / "plan.npz"
+    traj.save(path)
+    with np.load(path, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    return traj, path, arrays
+
+
+def _same(a: hugger.Trajectory, b: hugger.Trajectory) -> bool:
+    names = ("palm_pose", "joints", "angles", "tip_state", "phase", "object_vertices", "object_faces", "target")
+    return (all(np.array_equal(getattr(a, n), getattr(b, n)) for n in names)
+            and (a.hand_json, a.params_json, a.status) == (b.hand_json, b.params_json, b.status))
+
+
+def _write(tmp_path, arrays, compressed=True):
+    path = tmp_path / "t.npz"
+    (np.savez_compressed if compressed else np.savez)(path, **arrays)
+    return path
+
+
+def test_truncated_files_are_refused_at_every_offset(saved, tmp_path):
+    traj, path, _ = saved
+    data = path.read_bytes()
+    offsets = sorted(set(np.linspace(0, len(data) - 1, 41).astype(int)) | {1, 4, 30, len(data) - 22, len(data) - 1})
+    for cut in offsets:
+        (tmp_path / "cut.npz").write_bytes(data[:cut])
+        with pytest.raises(ValueError, match="cannot read"):
+            hugger.Trajectory.load(tmp_path / "cut.npz")
+
+
+@pytest.mark.parametrize("compressed", [True, False])
+def test_flipped_bytes_are_refused_or_harmless(saved, tmp_path, compressed):
+    traj, _, arrays = saved
+    data = _write(tmp_path, arrays, compressed).read_bytes()
+    rng = np.random.default_rng(1994)
+    refused = harmless = 0
+    for _ in range(150):
+        b = bytearray(data)
+        for k in rng.integers(0, len(b), size=int(rng.integers(1, 4))):
+            b[k] ^= int(rng.integers(1, 256))
+        (tmp_path / "flip.npz").write_bytes(bytes(b))
+        try:
+            back = hugger.Trajectory.load(tmp_path / "flip.npz")
+        except ValueError:
+            refused += 1
+            continue
+        # a flip in zip metadata the reader ignores (timestamps, comments) changes nothing
+        assert _same(back, traj)
+        harmless += 1
+    assert refused > 100 and refused + harmless == 150
+
+
+def test_every_required_key_is_required(saved, tmp_path):
+    _, _, arrays = saved
+    for key in ("format_version", "hand_json", "params_json", "status", "object_vertices", "object_faces", "target",
+                "palm_pose", "joints", "angles", "tip_state", "phase"):
+        with pytest.raises(ValueError, match=f"missing keys.*{key}"):
+            hugger.Trajectory.load(_write(tmp_path, {k: v for k, v in arrays.items() if k != key}))
+
+
+def test_extra_keys_are_fine(saved, tmp_path):
+    traj, _, arrays = saved
+    back = hugger.Trajectory.load(_write(tmp_path, {**arrays, "my_notes": np.arange(3), "comment": np.array("hi")}))
+    assert _same(back, traj)
+
+
+def _edit(key, fn):
+    return lambda a: {**a, key: fn(a[key])}
+
+
+@pytest.mark.parametrize("edit, match", [
+    (_edit("joints", lambda x: x.astype(np.int64)), "joints .* dtype"),
+    (_edit("joints", lambda x: x.astype(complex)), "joints .* dtype"),
+    (_edit("joints", lambda x: x[..., :2]), "joints has shape"),
+    (_edit("joints", lambda x: x[:-1]), "joints has shape"),
+    (_edit("joints", lambda x: np.where(x == x.max(), np.nan, x)), "joints holds non-finite"),
+    (_edit("palm_pose", lambda x: x[:0]), "no configuration"),
+    (_edit("angles", lambda x: x[:, :, :-1]), "angles has shape"),
+    (_edit("tip_state", lambda x: x.astype(float)), "tip_state .* dtype"),
+    (_edit("tip_state", lambda x: x + 7), r"tip_state holds [7-9]"),
+    (_edit("tip_state", lambda x: x.astype(np.int64) + 256), "tip_state holds"),  # would wrap to int8 0
+    (_edit("phase", lambda x: x - 1), "phase holds -1"),
+    (_edit("target", lambda x: x[:2]), "target has shape"),
+    (_edit("object_faces", lambda x: x + 10 ** 6), "object_faces index vertices outside"),
+    (_edit("object_faces", lambda x: x[:0]), "non-empty"),
+    (_edit("object_vertices", lambda x: x[:, :2]), "object_vertices"),
+    (_edit("format_version", lambda x: np.int64(2)), "format_version must be 1"),
+    (_edit("format_version", lambda x: np.float64(1)), "format_version must be 1"),
+    (_edit("status", lambda x: np.array(b"done")), "status must be a string"),
+    (_edit("status", lambda x: np.array(["done", "x"])), "status must be a string"),
+    (_edit("hand_json", lambda x: np.array("{not json")), "not valid"),
+    (_edit("hand_json", lambda x: np.array("[" * 100000 + "]" * 100000)), "not valid"),
+    (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "fingers": "five"}))), "fingers"),
+    (_edit("hand_json", lambda x: np.array(str(x).replace('"fingers": 5', '"fingers": Infinity'))), "fingers"),
+    (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "fingers": 10 ** 9}))), "fingers"),
+    (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "link_radius": -1}))), "link_radius"),
+    (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "link_lengths": [[1]]}))),
+     "link_lengths"),
+    (_edit("params_json", lambda x: np.array("[1, 2]")), "params_json"),
+])
+def test_wrong_dtypes_shapes_and_values_are_refused(saved, tmp_path, edit, match):
+    _, _, arrays = saved
+    with pytest.raises(ValueError, match=match):
+        hugger.Trajectory.load(_write(tmp_path, edit(dict(arrays))))
+
+
+def test_pickled_objects_are_refused_not_unpickled(saved, tmp_path):
+    _, _, arrays = saved
+    ran = []
+
+    class Bomb:
+        def __reduce__(self):
+            return (ran.append, ("unpickled!",))
+
+    for key in ("joints", "hand_json", "my_extra_key"):
+        path = tmp_path / f"pickled_{key}.npz"
+        np.savez(path, **{**arrays, key: np.array([Bomb()], dtype=object)})
+        with pytest.raises(ValueError, match="pickled"):
+            hugger.Trajectory.load(path)
+    assert ran == []
+
+
+def test_a_header_declaring_a_huge_array_is_refused_without_allocating(saved, tmp_path):
+    _, _, arrays = saved
+    joints = arrays["joints"]
+    # the joints member of a real file, its header edited to declare 10**11 configurations (12 TB)
+    bomb = io.BytesIO()
+    np.lib.format.write_array_header_1_0(bomb, {"descr": "<f8", "fortran_order": False,
+                                                "shape": (10 ** 11, *joints.shape[1:])})
+    bomb.write(joints.tobytes())
+    path = tmp_path / "bomb.npz"
+    with zipfile.ZipFile(path, "w") as zf:
+        for key, value in arrays.items():
+            member = io.BytesIO()
+            np.lib.format.write_array(member, value)
+            zf.writestr(f"{key}.npy", bomb.getvalue() if key == "joints" else member.getvalue())
+    tracemalloc.start()
+    try:
+        with pytest.raises(ValueError, match="declares"):
+            hugger.Trajectory.load(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 50 << 20
+
+
+def test_a_damaged_npy_header_is_a_value_error(saved, tmp_path):
+    # found by test_fuzz: numpy parses the header with tokenize, which raises TokenError, not ValueError
+    _, _, arrays = saved
+    text = "{'descr': '<i8', 'fortran_order': False, 'shape': (320der': Fas, }"
+    text += " " * (117 - len(text)) + "\n"
+    header = b"\x93NUMPY\x01\x00" + len(text).to_bytes(2, "little") + text.encode("latin1")
+    path = tmp_path / "header.npz"
+    with zipfile.ZipFile(path, "w") as zf:
+        for key, value in arrays.items():
+            member = io.BytesIO()
+            np.lib.format.write_array(member, value)
+            zf.writestr(f"{key}.npy", header + bytes(8 * 960) if key == "object_faces" else member.getvalue())
+    with pytest.raises(ValueError, match="cannot read"):
+        hugger.Trajectory.load(path)
+
+
+@pytest.mark.parametrize("content, match", [
+    (b"", "cannot read"),
+    (b"PK\x05\x06" + b"\0" * 18, "missing keys"),  # an empty zip
+    (b"\x93NUMPY\x01\x00", "single array"),
+    (b"\x80\x04\x95\x05\x00\x00\x00\x00\x00\x00\x00]\x94.", "cannot read"),  # a pickle
+])
+def test_files_that_are_not_trajectories(tmp_path, content, match):
+    (tmp_path / "x.npz").write_bytes(content)
+    with pytest.raises(ValueError, match=match):
+        hugger.Trajectory.load(tmp_path / "x.npz")
+
+
+def test_missing_file_and_directory(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        hugger.Trajectory.load(tmp_path / "nothing.npz")
+    with pytest.raises(ValueError, match="cannot read"):
+        hugger.Trajectory.load(tmp_path)
+
+
+def test_a_valid_file_from_another_writer_loads(saved, tmp_path):
+    traj, _, arrays = saved
+    # int64 states, uint8 phases, uncompressed: still format 1; loaded as int8
+    edited = {**arrays, "tip_state": arrays["tip_state"].astype(np.int64), "phase": arrays["phase"].astype(np.uint8)}
+    back = hugger.Trajectory.load(_write(tmp_path, edited, compressed=False))
+    assert _same(back, traj) and back.tip_state.dtype == np.int8
