@@ -147,3 +147,14 @@ def test_core_stub_matches_the_compiled_module():
         cls = getattr(_core, name)
         own = {m for m in vars(cls) if not m.startswith("_") or m in ("__init__", "__repr__")}
         assert members == own, (name, sorted(members ^ own))
+
+
+def test_mypy_strict_is_clean():
+    """The package type-checks under mypy --strict with its stubs (_core.pyi, py.typed)."""
+    import pytest
+
+    api = pytest.importorskip("mypy.api", reason="mypy is in the test extra")
+    root = Path(__file__).resolve().parents[1]
+    out, err, status = api.run(["--strict", "--no-incremental", "--config-file", str(root / "pyproject.toml"),
+                                str(root / "python" / "hugger")])
+    assert status == 0, out + err

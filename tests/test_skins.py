@@ -188,6 +188,21 @@ def test_analytic_gaps_match_the_mesh_of_the_same_shape(make):
     assert np.all(np.sign(g[:, 0]) == np.sign(g[:, 1])) or np.mean(np.sign(g[:, 0]) == np.sign(g[:, 1])) > 0.98
 
 
+@pytest.mark.parametrize("make", [
+    lambda: skins.SphereSkin(0.035),
+    lambda: skins.BoxSkin((0.05, 0.04, 0.03)),
+    lambda: skins.SpheresSkin([[0, 0, 0], [0.02, 0.01, 0]], [0.035, 0.03]),
+    lambda: skins.SensorModel(skins.SphereSkin(0.035), gap_noise=1e-5, seed=2),
+])
+def test_cap_is_optional_as_in_the_base_class(make):
+    """Like hugger.Sensing's own queries, a skin's capsule() and palm() default cap to infinity."""
+    a, b = np.array([0.05, 0.0, 0.0]), np.array([0.07, 0.01, 0.0])
+    pose = hugger.look_at([0.0, 0.0, 0.08], [0.0, 0.0, 0.0])
+    t, u = make().capsule(a, b, 0.004), make().capsule(a, b, 0.004, math.inf)
+    assert t.gap == u.gap and np.array_equal(t.normal, u.normal)
+    assert make().palm(pose, 0.03, 0.01) == make().palm(pose, 0.03, 0.01, math.inf)
+
+
 def test_box_palm_gap_matches_the_mesh():
     rng = np.random.default_rng(1)
     skin = skins.BoxSkin((0.05, 0.04, 0.03), (0.0, 0.01, 0.0), random_rotation(rng))

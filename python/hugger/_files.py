@@ -11,7 +11,7 @@ _PART = ".part"  # marks a temporary name: ".<final name>.<pid>-<random>.part<su
 
 
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """A temporary path beside ``path`` with the same suffix (writers pick the format from it);
     renamed to ``path`` when the block ends normally, removed when it raises (an interrupted
     write never leaves a half-written file under the final name). The parent directory must exist."""
@@ -30,7 +30,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         raise
 
 
-def write_atomic(path: str | os.PathLike, data: Any) -> None:
+def write_atomic(path: str | os.PathLike[str], data: Any) -> None:
     """Write ``data`` (bytes or str) to ``path`` atomically."""
     raw = data.encode() if isinstance(data, str) else bytes(data)
     with atomic_path(path) as tmp:
@@ -40,13 +40,13 @@ def write_atomic(path: str | os.PathLike, data: Any) -> None:
             os.fsync(fh.fileno())  # on disk before the rename: a crash leaves the old file or the new one
 
 
-def is_temporary(path: str | os.PathLike) -> bool:
+def is_temporary(path: str | os.PathLike[str]) -> bool:
     """Whether ``path`` is named as :func:`atomic_path`'s temporary files are."""
     name = Path(os.fspath(path)).name
     return name.startswith(".") and _PART + Path(name).suffix in name
 
 
-def remove_temporaries(directory: str | os.PathLike) -> int:
+def remove_temporaries(directory: str | os.PathLike[str]) -> int:
     """Remove the temporary files a killed writer left in ``directory``; returns how many.
     Only for directories that one writer owns (a live writer's temporary would go too)."""
     count = 0

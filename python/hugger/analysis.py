@@ -19,13 +19,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, Callable, cast
 
 import numpy as np
 
 from . import _core
 from ._checks import positive
-from .trajectory import CONTACT_DISTANCE
+from ._types import CONTACT_DISTANCE
+
+if TYPE_CHECKING:
+    from .hand import Hand
 
 __all__ = [
     "Contacts",
@@ -152,7 +155,7 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(starts.tolist(), ends.tolist()))
 
 
-def _golden_min(fun, lo: float, hi: float, iterations: int = 48) -> float:
+def _golden_min(fun: Callable[[float], float], lo: float, hi: float, iterations: int = 48) -> float:
     """Argmin of a (locally unimodal) scalar function on [lo, hi]."""
     g = (math.sqrt(5.0) - 1.0) / 2.0
     a, b = lo, hi
@@ -258,15 +261,16 @@ def _palm_contacts(obj: Any, palm_pose: np.ndarray, radius: float, thickness: fl
                 p = p_new
                 break
             p = p_new
-        return (p @ rot.T + origin)[None]
+        return cast(np.ndarray, (p @ rot.T + origin)[None])
     sel = local[touching]
     ang = 2 * math.pi * np.arange(_PALM_CONTACTS) / _PALM_CONTACTS
     proj = sel[:, :2] @ np.stack([np.cos(ang), np.sin(ang)])
     extreme = sorted(set(np.argmax(proj, axis=0).tolist()))
-    return world[touching[extreme]]
+    return cast(np.ndarray, world[touching[extreme]])
 
 
-def contacts_of(hand: dict, obj: Any, palm_pose: Any, joints: Any, distance: float = CONTACT_DISTANCE) -> Contacts:
+def contacts_of(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joints: Any,
+                distance: float = CONTACT_DISTANCE) -> Contacts:
     """All contacts of a hand configuration with ``obj`` (a :class:`hugger.Object`).
 
     ``hand`` is the hand as a dict (``Hand.to_dict()`` or ``Trajectory.hand``) or a
@@ -354,7 +358,7 @@ def contacts(traj: Any, k: int = -1, distance: float = CONTACT_DISTANCE, obj: An
 # Wrap angle
 # --------------------------------------------------------------------------------------------
 
-def _finger_angles(hand: dict) -> np.ndarray:
+def _finger_angles(hand: dict[str, Any]) -> np.ndarray:
     m = int(hand["fingers"])
     phi = hand.get("finger_angles")
     return np.asarray(phi, dtype=np.float64) if phi is not None else 2 * np.pi * np.arange(m) / m
@@ -504,7 +508,7 @@ def grasp_quality(contacts: Contacts, center: Any, mu: float = 0.5, cone_edges: 
 # --------------------------------------------------------------------------------------------
 
 def analyze(traj: Any, k: int = -1, mu: float = 0.5, distance: float = CONTACT_DISTANCE, cone_edges: int = 8,
-            obj: Any = None, volume: bool = True) -> dict:
+            obj: Any = None, volume: bool = True) -> dict[str, Any]:
     """The grasp of configuration ``k`` of ``traj`` judged over all its contacts, as plain JSON types.
 
     Keys: ``contacts`` (number of contact points), ``links_in_contact``, ``links`` (M * N),

@@ -31,14 +31,14 @@ import argparse
 import json
 import math
 import time
-from typing import Any
+from typing import Any, Callable, cast
 
 import numpy as np
 
 from . import physics, scenarios
 from ._rotation import quaternion_wxyz
+from ._types import CONTACT, DONE
 from .hand import Hand
-from .planner import CONTACT, DONE
 from .trajectory import Trajectory
 from .world import Object
 
@@ -54,7 +54,7 @@ def _mujoco() -> Any:
 def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
     a = axis / np.linalg.norm(axis)
     k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k)
+    return cast(np.ndarray, np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k))
 
 
 class _Scene:
@@ -76,8 +76,8 @@ class _Scene:
         self.model = mujoco.MjModel.from_xml_string(xml)
         self.data = mujoco.MjData(self.model)
         mujoco.mj_resetDataKeyframe(self.model, self.data, 0)
-        body = lambda name: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, name)  # noqa: E731
-        geom = lambda name: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, name)  # noqa: E731
+        body: Callable[[str], int] = lambda name: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, name)  # noqa: E731
+        geom: Callable[[str], int] = lambda name: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, name)  # noqa: E731
         obj_body = body("object")
         hand_geoms = self.model.geom_bodyid != obj_body
         # hand-hand pairs collide here too (parent-child pairs stay filtered by MuJoCo)
@@ -148,7 +148,7 @@ def plan_baseline(hand: Hand, obj: Object, target: Any, palm_pose: Any, step: fl
     angles = np.zeros((m_count, n_count))
     poses, angle_list, states, phases = [pose.copy()], [angles.copy()], [np.zeros(m_count, np.int8)], [0]
 
-    def emit(p, a, st, ph):
+    def emit(p: np.ndarray, a: np.ndarray, st: np.ndarray, ph: int) -> None:
         poses.append(p.copy())
         angle_list.append(a.copy())
         states.append(st.copy())
@@ -159,7 +159,7 @@ def plan_baseline(hand: Hand, obj: Object, target: Any, palm_pose: Any, step: fl
     # Phase 1: turn about P_o until p-hat points at T, no point moving more than s per increment.
     to_t = target - pose[:3, 3]
     normal = pose[:3, 2]
-    alpha = math.acos(max(-1.0, min(1.0, float(normal @ to_t) / np.linalg.norm(to_t))))
+    alpha = math.acos(cast(float, max(-1.0, min(1.0, float(normal @ to_t) / np.linalg.norm(to_t)))))
     state = np.zeros(m_count, np.int8)
     if alpha > 1e-12:
         axis = np.cross(normal, to_t)
@@ -184,7 +184,7 @@ def plan_baseline(hand: Hand, obj: Object, target: Any, palm_pose: Any, step: fl
     iterations = 0
     touched = False
     while iterations < max_iterations:
-        def moved(a):
+        def moved(a: float) -> np.ndarray:
             p = pose.copy()
             p[:3, 3] += a * normal
             return p

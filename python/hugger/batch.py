@@ -171,9 +171,9 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
                 while pending:
                     finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                     for fut in sorted(finished, key=index_of.__getitem__):
-                        exc = fut.exception()
+                        error = fut.exception()
                         done += 1
-                        finish(index_of[fut], exc if exc is not None else fut.result(), done)
+                        finish(index_of[fut], error if error is not None else fut.result(), done)
             except BaseException:
                 for fut in pending:  # e.g. the progress callback raised: drop what has not started
                     fut.cancel()

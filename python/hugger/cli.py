@@ -29,10 +29,17 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Callable, NoReturn, Sequence, TextIO
 
 from ._files import atomic_path, write_atomic
 from ._progress import Progress
+
+if TYPE_CHECKING:
+    from .hand import Hand
+    from .scenarios import Case
+    from .trajectory import Trajectory
+    from .viewer import Viewer
+    from .world import Object
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
 #: ``hugger validate``: the grasp is not held (exit 1, like an internal error but without a traceback).
@@ -46,7 +53,7 @@ class UsageError(Exception):
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, exit 2, no usage dump
+    def error(self, message: str) -> NoReturn:  # one line, exit 2, no usage dump
         raise UsageError(f"{message} (see '{self.prog} --help')")
 
 
@@ -101,7 +108,7 @@ def _case_options(p: argparse.ArgumentParser) -> None:
                    help="plan even when the object's size is implausible for a hand (millimetres read as metres)")
 
 
-def _hand(args: argparse.Namespace):
+def _hand(args: argparse.Namespace) -> Hand:
     import hugger
 
     if getattr(args, "hand", None):
@@ -129,7 +136,7 @@ def _params(args: argparse.Namespace) -> dict[str, Any]:
     return {k: v for k in _PARAMS if (v := getattr(args, k, None)) is not None}
 
 
-def _load(path: str):
+def _load(path: str) -> Trajectory:
     import hugger
 
     if not os.path.isfile(path):
@@ -174,7 +181,7 @@ _ANALYSIS_KEYS = (("palm_contact", "palm_contact"), ("links_in_contact", "links_
                   ("mu", "mu"))
 
 
-def _report(traj, plan_time: float | None = None, obj=None) -> dict[str, Any]:
+def _report(traj: Trajectory, plan_time: float | None = None, obj: Object | None = None) -> dict[str, Any]:
     """Status, sizes, timing and the grasp judgement of the final configuration (``obj``: the
     trajectory's object when already built)."""
     from . import analysis
@@ -189,7 +196,7 @@ def _report(traj, plan_time: float | None = None, obj=None) -> dict[str, Any]:
     return out
 
 
-def _print_table(d: dict[str, Any], stream=None) -> None:
+def _print_table(d: dict[str, Any], stream: TextIO | None = None) -> None:
     stream = stream or sys.stdout
     for key, value in d.items():
         if isinstance(value, float):
@@ -203,7 +210,8 @@ def _note(message: str) -> None:
     print(f"hugger: {message}", file=sys.stderr)
 
 
-def _plan(case, hand, params: dict[str, Any], label: str, timeout: float | None = None):
+def _plan(case: Case, hand: Hand, params: dict[str, Any], label: str,
+          timeout: float | None = None) -> tuple[Trajectory, float]:
     import hugger
 
     t0 = time.perf_counter()
@@ -213,7 +221,7 @@ def _plan(case, hand, params: dict[str, Any], label: str, timeout: float | None 
     return traj, time.perf_counter() - t0
 
 
-def _search(case, hand, args: argparse.Namespace):
+def _search(case: Case, hand: Hand, args: argparse.Namespace) -> tuple[Trajectory, float, dict[str, Any]]:
     """``hugger plan --approaches K``: the best of K approaches around T (hugger.search)."""
     import hugger
 
@@ -249,7 +257,7 @@ def _provenance(args: argparse.Namespace, argv: Sequence[str] | None) -> dict[st
             "arguments": options}
 
 
-def _case(args: argparse.Namespace, hand):
+def _case(args: argparse.Namespace, hand: Hand) -> Case:
     """The scene of ``plan`` and ``simulate``: the object (built-in or mesh file, --scale only for
     files, an implausible size refused unless --force), T and the start pose."""
     import warnings
@@ -320,9 +328,10 @@ def cmd_demo(args: argparse.Namespace) -> int:
     traj.save(out / "plan.npz")
     summary = {"object": "curvy", "hand": repr(hand), **_report(traj, elapsed, case.obj)}
     written = ["plan.npz"]
+    figures: tuple[tuple[str, Callable[..., Any]], ...] = (("fig4.png", viz.fig4), ("fig5.png", viz.fig5),
+                                                           ("tipstate.png", viz.tipstate_plot))
     with Progress("drawing figures", total=3) as p:
-        for i, (name, draw) in enumerate((("fig4.png", viz.fig4), ("fig5.png", viz.fig5),
-                                          ("tipstate.png", viz.tipstate_plot)), start=1):
+        for i, (name, draw) in enumerate(figures, start=1):
             with atomic_path(out / name) as tmp:
                 draw(traj, tmp)
             p.update(i)
@@ -335,7 +344,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     for name in movies:
         with Progress(f"writing {name}", total=1) as p, atomic_path(out / name) as tmp:
             viz.animate(traj, tmp, max_frames=120, hold=1.0,
-                        progress=lambda i, n, p=p: (setattr(p, "total", n), p.update(i)))
+                        progress=lambda i, n, p=p: (setattr(p, "total", n), p.update(i)))  # type: ignore[misc, func-returns-value]
         written.append(name)
     summary["files"] = written
     write_atomic(out / "summary.json", json.dumps(summary, indent=2) + "\n")
@@ -382,9 +391,12 @@ def cmd_render(args: argparse.Namespace) -> int:
             for key, value in (("fps", args.fps), ("max_frames", args.frames), ("view", args.view)):
                 if value is not None:
                     kwargs[key] = value
-            viz.animate(traj, tmp, progress=lambda i, n: (setattr(p, "total", n), p.update(i)), hold=1.0, **kwargs)
+            viz.animate(traj, tmp, progress=lambda i, n: (setattr(p, "total", n), p.update(i)),  # type: ignore[func-returns-value]
+                        hold=1.0, **kwargs)
         else:
-            draw = {"sheet": viz.overview, "fig4": viz.fig4, "fig5": viz.fig5, "tipstate": viz.tipstate_plot}[figure]
+            draws: dict[str, Callable[..., Any]] = {"sheet": viz.overview, "fig4": viz.fig4, "fig5": viz.fig5,
+                                                    "tipstate": viz.tipstate_plot}
+            draw = draws[figure]
             draw(traj, tmp, **kwargs)
             p.update(1)
     print(f"wrote {out}")
@@ -398,7 +410,7 @@ def _hand_info(h: dict[str, Any]) -> dict[str, Any]:
     return {k: h[k] for k in keys if k in h}
 
 
-def _object_info(traj, obj) -> dict[str, Any]:
+def _object_info(traj: Trajectory, obj: Object | None) -> dict[str, Any]:
     prov = traj.provenance
     if obj is None:  # planned with a skin that has no mesh
         return {"name": prov.get("object"), "source": prov.get("object_source"), "recorded": False}
@@ -555,7 +567,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _serve(v) -> None:
+def _serve(v: Viewer) -> None:
     """Serve until interrupted (Ctrl-C)."""
     while True:
         time.sleep(0.5)
@@ -577,7 +589,7 @@ def cmd_export_scene(args: argparse.Namespace) -> int:
 def cmd_hands(args: argparse.Namespace) -> int:
     from .hands import PRESETS
 
-    rows = []
+    rows: list[dict[str, Any]] = []
     for p in PRESETS.values():
         h = p.build()
         rows.append({"name": p.name, "fingers": h.fingers, "links": h.links, "reach_m": round(h.reach, 4),
@@ -799,7 +811,8 @@ def _version() -> str:
     return __version__
 
 
-def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                  file: TextIO | None = None, line: str | None = None) -> None:
     print(f"hugger: warning: {message}", file=sys.stderr)
 
 

@@ -24,11 +24,15 @@ import sys
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
 
 import numpy as np
 
 from ._files import remove_temporaries, write_atomic
+
+if TYPE_CHECKING:
+    from .trajectory import Trajectory
+    from .world import Object
 
 __all__ = ["Dataset", "Grasp", "generate", "parse_hand", "DATASET_FORMAT", "SHARD_FORMAT"]
 
@@ -43,7 +47,7 @@ _HAND_KEYS = {"link_length": float, "link_radius": float, "palm_radius": float, 
 # hands and tasks
 
 
-def parse_hand(spec: str) -> tuple[str, dict]:
+def parse_hand(spec: str) -> tuple[str, dict[str, Any]]:
     """A hand spec ``MxN`` or ``MxN:key=value,...`` (keys ``link_length``, ``link_radius``,
     ``palm_radius``, ``palm_thickness``, in m) -> (label for file names, Hand keyword arguments).
     ``5x5`` is the default hand of ``hugger.Hand()``."""
@@ -81,7 +85,7 @@ def _sha256_file(path: str) -> str:
     return h.hexdigest()
 
 
-def _object_entry(spec: str, scale: float) -> dict:
+def _object_entry(spec: str, scale: float) -> dict[str, Any]:
     """Index entry of one object: name, path (as given, or the built-in name) and content hash."""
     from . import objects
     from .scenarios import load_object
@@ -96,7 +100,7 @@ def _object_entry(spec: str, scale: float) -> dict:
     return {"name": Path(spec).stem, "path": spec, "builtin": False, "sha256": _sha256_file(spec), "scale": scale}
 
 
-def _task_key(task: dict) -> str:
+def _task_key(task: dict[str, Any]) -> str:
     """Hash of everything a shard depends on (not the worker count, backend or output folder)."""
     keep = {k: task[k] for k in ("object", "hand", "approaches", "params", "rules", "validate", "format")}
     return hashlib.sha256(json.dumps(keep, sort_keys=True).encode()).hexdigest()
@@ -121,7 +125,7 @@ def _npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:
     return buf.getvalue()
 
 
-def make_shard(task: dict) -> bytes:
+def make_shard(task: dict[str, Any]) -> bytes:
     """The shard of one (object, hand) task, as the bytes of its .npz file. Pure: the same task
     gives the same bytes in any process."""
     from .hand import Hand
@@ -156,7 +160,7 @@ def make_shard(task: dict) -> bytes:
         "force_closure": np.zeros(k, dtype=bool), "epsilon": np.zeros(k),
     }
     points, normals, finger, link, offsets = [], [], [], [], [0]
-    verdicts: list[dict | None] = []
+    verdicts: list[dict[str, Any] | None] = []
     for i, (cand, traj) in enumerate(zip(result.candidates, result.trajectories or ())):
         if traj is None:
             offsets.append(offsets[-1])
@@ -214,7 +218,7 @@ def _shard_done(path: Path, key: str) -> bool:
 # the run
 
 
-def _ray():
+def _ray() -> Any:
     try:
         import ray
     except ImportError:
@@ -222,11 +226,11 @@ def _ray():
     return ray
 
 
-def generate(objects: Sequence[str], out: str | os.PathLike, approaches: int = 26, hands: Sequence[str] = ("5x5",),
+def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: int = 26, hands: Sequence[str] = ("5x5",),
              validate: bool = False, workers: int | None = None, backend: str = "local", address: str | None = None,
-             scale: float = 1.0, rules: str | None = None, params: dict | None = None,
+             scale: float = 1.0, rules: str | None = None, params: dict[str, Any] | None = None,
              command: Sequence[str] | None = None, log: Callable[[str], Any] | None = None,
-             progress: Callable[[int, int], Any] | None = None) -> dict:
+             progress: Callable[[int, int], Any] | None = None) -> dict[str, Any]:
     """Make (or finish) the dataset in ``out``: one shard per (object, hand); returns the index.
 
     ``objects``: built-in names or mesh files; ``hands``: specs of :func:`parse_hand`;
@@ -245,7 +249,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike, approaches: int = 2
         raise ValueError("give at least one object")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers must be a whole number >= 1, got {workers!r}")
-    ray = _ray() if backend == "ray" else None
+    ray: Any = _ray() if backend == "ray" else None
     from . import __version__
     from .batch import _PARAMS
 
@@ -265,12 +269,12 @@ def generate(objects: Sequence[str], out: str | os.PathLike, approaches: int = 2
     shard_dir = root / "shards"
     shard_dir.mkdir(parents=True, exist_ok=True)
     remove_temporaries(shard_dir)  # left by a killed run
-    tasks = []
+    tasks: list[dict[str, Any]] = []
     from .hand import Hand
 
     for ob, safe_name in zip(obj_list, names):
         for label, kwargs in hand_list:
-            task = {"format": SHARD_FORMAT, "object": ob, "hand": {"label": label, "kwargs": kwargs,
+            task: dict[str, Any] = {"format": SHARD_FORMAT, "object": ob, "hand": {"label": label, "kwargs": kwargs,
                                                                    "json": Hand(**kwargs).to_json()},
                     "approaches": int(approaches), "params": params, "rules": rules, "validate": bool(validate)}
             task["file"] = f"{safe_name}__{label}.npz"
@@ -288,7 +292,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike, approaches: int = 2
     if progress is not None:
         progress(done, len(tasks))
 
-    def finished(task: dict, data: bytes) -> None:
+    def finished(task: dict[str, Any], data: bytes) -> None:
         nonlocal done
         write_atomic(shard_dir / task["file"], data)
         done += 1
@@ -325,7 +329,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike, approaches: int = 2
                 ray.init(address=address, log_to_driver=False)
         try:
             remote = ray.remote(num_cpus=1, max_retries=2)(make_shard)
-            waiting = {}
+            waiting: dict[Any, dict[str, Any]] = {}
             queue = list(todo)
             while queue or waiting:
                 while queue and len(waiting) < max(1, workers):
@@ -387,7 +391,7 @@ class Dataset:
     (deterministic, checked against the stored grasp); ``ds.export_mjcf(i, path)`` writes it as
     MJCF with the ``grasp`` keyframe (as ``hugger export-mjcf``)."""
 
-    def __init__(self, path: str | os.PathLike) -> None:
+    def __init__(self, path: str | os.PathLike[str]) -> None:
         self.root = Path(path)
         index_path = self.root / "index.json"
         if not index_path.is_file():
@@ -395,15 +399,15 @@ class Dataset:
         self.index = json.loads(index_path.read_text())
         if self.index.get("format") != DATASET_FORMAT or self.index.get("format_version") != DATASET_VERSION:
             raise ValueError(f"{index_path} is not a hugger dataset index of version {DATASET_VERSION}")
-        self.shards: list[dict] = list(self.index["shards"])
-        self._cache: dict[int, dict] = {}
+        self.shards: list[dict[str, Any]] = list(self.index["shards"])
+        self._cache: dict[int, dict[str, np.ndarray]] = {}
         self._sizes = [int(self.shard(i)["status"].shape[0]) for i in range(len(self.shards))]
         self._starts = np.concatenate([[0], np.cumsum(self._sizes)]).astype(int)
 
     def __len__(self) -> int:
         return int(self._starts[-1])
 
-    def shard(self, i: int) -> dict:
+    def shard(self, i: int) -> dict[str, np.ndarray]:
         """Every array of shard i (see docs/generation.md), loaded without pickles."""
         if i not in self._cache:
             with np.load(self.root / self.shards[i]["file"], allow_pickle=False) as z:
@@ -434,7 +438,7 @@ class Dataset:
         for i in range(len(self)):
             yield self[i]
 
-    def object(self, name: str):
+    def object(self, name: str) -> Object:
         """The object ``name`` as a :class:`hugger.Object`, checked against its recorded hash."""
         from .scenarios import load_object
 
@@ -450,7 +454,7 @@ class Dataset:
             entry = {**entry, "path": path}
         return load_object(entry["path"], entry["scale"])[1]
 
-    def trajectory(self, i: int):
+    def trajectory(self, i: int) -> Trajectory:
         """Grasp i's whole plan, made again from its stored start pose with the recorded hand and
         parameters (plans are deterministic); raises ``ValueError`` if it does not end in the stored grasp."""
         from .hand import Hand
@@ -471,7 +475,7 @@ class Dataset:
             raise ValueError(f"grasp {i}: re-planning did not reproduce the stored grasp (another hugger version?)")
         return traj
 
-    def export_mjcf(self, i: int, path: str | os.PathLike | None = None, **kwargs: Any) -> str:
+    def export_mjcf(self, i: int, path: str | os.PathLike[str] | None = None, **kwargs: Any) -> str:
         """Grasp i as MJCF (hand, object, the ``grasp`` keyframe): :func:`hugger.physics.export_mjcf`."""
         from . import physics
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import json
 import numbers
 import warnings
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -238,20 +238,60 @@ class Hand:
         if lengths.max() > MAX_LENGTH:
             raise ValueError(f"link_length = {lengths.max():g} m is larger than {MAX_LENGTH:g} m: sizes are in metres")
 
-    fingers = property(lambda self: self._core.fingers, doc="M, the number of fingers")
-    links = property(lambda self: self._core.links, doc="N, the number of links per finger")
-    link_lengths = property(lambda self: self._core.link_lengths, doc="(M, N) link lengths (m)")
-    link_radius = property(lambda self: self._core.link_radius, doc="capsule radius of the links (m)")
-    palm_radius = property(lambda self: self._core.palm_radius, doc="palm disk radius (m)")
-    palm_thickness = property(lambda self: self._core.palm_thickness, doc="palm disk thickness (m)")
-    finger_angles = property(lambda self: np.asarray(self._core.finger_angles),
-                             doc="phi_m (rad): the angle of each finger's direction u_m about the palm normal")
-    general = property(lambda self: bool(self._core.general),
-                       doc="True for a hand made by from_layout (roots, directions, rest angles, limits)")
-    finger_roots = property(lambda self: self._core.finger_roots, doc="(M, 3) roots R_m in the palm frame (m)")
-    finger_directions = property(lambda self: self._core.finger_directions,
-                                 doc="(M, 3) in-plane outward directions u_m in the palm frame (unit)")
-    rest_angles = property(lambda self: self._core.rest_angles, doc="(M, N) rest (FROZEN) joint angles (rad)")
+    @property
+    def fingers(self) -> int:
+        """M, the number of fingers."""
+        return self._core.fingers
+
+    @property
+    def links(self) -> int:
+        """N, the number of links per finger."""
+        return self._core.links
+
+    @property
+    def link_lengths(self) -> np.ndarray:
+        """(M, N) link lengths (m)."""
+        return self._core.link_lengths
+
+    @property
+    def link_radius(self) -> float:
+        """Capsule radius of the links (m)."""
+        return self._core.link_radius
+
+    @property
+    def palm_radius(self) -> float:
+        """Palm disk radius (m)."""
+        return self._core.palm_radius
+
+    @property
+    def palm_thickness(self) -> float:
+        """Palm disk thickness (m)."""
+        return self._core.palm_thickness
+
+    @property
+    def finger_angles(self) -> np.ndarray:
+        """phi_m (rad): the angle of each finger's direction u_m about the palm normal."""
+        return np.asarray(self._core.finger_angles)
+
+    @property
+    def general(self) -> bool:
+        """True for a hand made by from_layout (roots, directions, rest angles, limits)."""
+        return bool(self._core.general)
+
+    @property
+    def finger_roots(self) -> np.ndarray:
+        """(M, 3) roots R_m in the palm frame (m)."""
+        return self._core.finger_roots
+
+    @property
+    def finger_directions(self) -> np.ndarray:
+        """(M, 3) in-plane outward directions u_m in the palm frame (unit)."""
+        return self._core.finger_directions
+
+    @property
+    def rest_angles(self) -> np.ndarray:
+        """(M, N) rest (FROZEN) joint angles (rad)."""
+        return self._core.rest_angles
 
     @property
     def joint_limits(self) -> np.ndarray:
@@ -328,7 +368,7 @@ class Hand:
         missing = [k for k in keys if k not in d]
         if missing:
             raise ValueError(f"the hand description lacks {missing}")
-        whole = lambda x: int(x) if isinstance(x, float) and x.is_integer() else x  # noqa: E731  (JSON may say 5.0)
+        whole: Callable[[Any], Any] = lambda x: int(x) if isinstance(x, float) and x.is_integer() else x  # noqa: E731  (JSON may say 5.0)
         fingers, links = whole(d["fingers"]), whole(d["links"])
         layout_keys = ("finger_roots", "finger_directions", "rest_angles", "joint_limits")
         if not any(k in d for k in layout_keys):

@@ -21,7 +21,7 @@ import json
 import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable, cast
 
 import numpy as np
 
@@ -46,7 +46,7 @@ FAR = 1.0
 OBJECT_DAMPING = (2.0, 2e-3)
 
 
-def _stub_trajectory(hand: Any, obj: Any, target: np.ndarray, pose: np.ndarray):
+def _stub_trajectory(hand: Any, obj: Any, target: np.ndarray, pose: np.ndarray) -> Trajectory:
     """A one-configuration trajectory (C_init) from which physics builds the MJCF model."""
     m, n = hand.fingers, hand.links
     joints = hand.forward(pose, np.zeros((m, n)))[None]
@@ -68,7 +68,7 @@ class Simulation:
         stub = _stub_trajectory(hand, obj, obj.vertices.mean(axis=0), pose)
         xml, info = _ph._build_mjcf(stub, 0, float(mass), float(mu), bool(decompose), None, 0.0)
         root = ET.fromstring(xml.split("-->", 1)[1])
-        world = root.find("worldbody")
+        world = cast(ET.Element, root.find("worldbody"))
         probe = ET.SubElement(world, "body", name="probe", mocap="true")
         for name, kind in (("probe_capsule", "capsule"), ("probe_palm", "cylinder")):
             ET.SubElement(probe, "geom", name=name, type=kind, size="0.01 0.01", contype="0", conaffinity="0",
@@ -82,7 +82,7 @@ class Simulation:
         self.data = mujoco.MjData(self.model)
         mujoco.mj_resetDataKeyframe(self.model, self.data, 0)
         mujoco.mj_forward(self.model, self.data)
-        gid = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, n)  # noqa: E731
+        gid: Callable[[str], int] = lambda n: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, n)  # noqa: E731
         self.pieces = [gid(f"object_{i}") for i in range(info["object_pieces"])]
         self.capsule_geom, self.palm_geom = gid("probe_capsule"), gid("probe_palm")
         self.link_geoms = [[gid(f"f{m}_l{n}") for n in range(hand.links)] for m in range(hand.fingers)]
@@ -90,8 +90,8 @@ class Simulation:
         self.latency = int(latency)
         if self.latency < 0:
             raise ValueError(f"latency must be >= 0 control periods, got {latency!r}")
-        self._ctrl_to = None
-        self._poses: list[tuple[np.ndarray, np.ndarray]] = []
+        self._ctrl_to: np.ndarray | None = None
+        self._poses: list[tuple[list[np.ndarray], list[np.ndarray]]] = []
         self._record_pose()
         self.time = 0.0
 
@@ -139,7 +139,7 @@ class Simulation:
         self._record_pose()
 
     # -- sensing -----------------------------------------------------------------------------
-    def _distance(self, probe: int, cap: float) -> tuple[float, np.ndarray, np.ndarray]:
+    def _distance(self, probe: int, cap: float) -> tuple[float, np.ndarray | None, np.ndarray | None]:
         """Smallest signed distance from the probe geom to the object's pieces as the skin sees
         them (``latency`` periods ago), with the points (on the probe, on the object)."""
         xpos, xmat = self._poses[0]
@@ -147,6 +147,7 @@ class Simulation:
         for g, p, r in zip(self.pieces, xpos, xmat):
             self.data.geom_xpos[g], self.data.geom_xmat[g] = p, r
         fromto = np.zeros(6)
+        pts: tuple[np.ndarray | None, np.ndarray | None]
         best, pts = math.inf, (None, None)
         distmax = FAR if not math.isfinite(cap) else max(cap, 0.0) + 1e-9
         try:
@@ -159,7 +160,8 @@ class Simulation:
                 self.data.geom_xpos[g], self.data.geom_xmat[g] = p, r
         return best, pts[0], pts[1]
 
-    def capsule_gap(self, a: np.ndarray, b: np.ndarray, radius: float, cap: float):
+    def capsule_gap(self, a: np.ndarray, b: np.ndarray, radius: float,
+                    cap: float) -> tuple[float, np.ndarray | None, np.ndarray | None]:
         g = self.capsule_geom
         axis = b - a
         half = 0.5 * float(np.linalg.norm(axis))
@@ -200,7 +202,7 @@ class MujocoSkin(_core.Sensing):
         super().__init__()
         self.sim = sim
 
-    def capsule(self, a: np.ndarray, b: np.ndarray, radius: float, cap: float) -> _core.Touch:
+    def capsule(self, a: np.ndarray, b: np.ndarray, radius: float, cap: float = math.inf) -> _core.Touch:  # type: ignore[override]
         gap, on_probe, on_obj = self.sim.capsule_gap(a, b, radius, cap)
         if on_probe is None or not math.isfinite(gap) or gap >= FAR:
             return _core.Touch(math.inf, a, a, np.array([0.0, 0.0, 1.0]))
@@ -216,9 +218,9 @@ class MujocoSkin(_core.Sensing):
         n = d / norm if gap >= 0 else -d / norm
         ab = b - a
         t = 0.0 if not ab.any() else float(np.clip((on_obj - a) @ ab / (ab @ ab), 0.0, 1.0))
-        return _core.Touch(gap, a + t * ab, on_obj, n)
+        return _core.Touch(gap, a + t * ab, cast(np.ndarray, on_obj), n)
 
-    def palm(self, pose: np.ndarray, radius: float, thickness: float, cap: float) -> float:
+    def palm(self, pose: np.ndarray, radius: float, thickness: float, cap: float = math.inf) -> float:  # type: ignore[override]
         return self.sim.palm_gap(pose, radius, thickness, cap)
 
 
@@ -231,10 +233,10 @@ class LoopResult:
     configurations: int
     object_moved_m: float  #: how far the object's centre moved during the grasp
     links_in_contact: int  #: simulated links within 1 mm of the object at the end
-    hold: dict = field(default_factory=dict)  #: the six-direction test (physics.validate's fields)
+    hold: dict[str, Any] = field(default_factory=dict)  #: the six-direction test (physics.validate's fields)
     trajectory: Any = None  #: the plan, with the object recorded where the simulation left it
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         return {"mode": self.mode, "status": self.status, "configurations": self.configurations,
                 "object_moved_m": self.object_moved_m, "links_in_contact": self.links_in_contact,
                 "held": bool(self.hold.get("held", False)), "hold": self.hold}

@@ -86,11 +86,11 @@ def box(extents: Any = (0.06, 0.05, 0.04), center: Any = (0, 0, 0), divisions: i
     ``divisions`` x ``divisions`` squares."""
     n = max(1, int(divisions))
     e = np.asarray(extents, dtype=np.float64).reshape(3) / 2.0
-    verts: dict[tuple[int, int, int], int] = {}
+    verts: dict[tuple[int, ...], int] = {}
     points: list[np.ndarray] = []
     faces: list[tuple[int, int, int]] = []
 
-    def vid(ijk: tuple[int, int, int]) -> int:
+    def vid(ijk: tuple[int, ...]) -> int:
         if ijk not in verts:
             verts[ijk] = len(points)
             points.append((np.array(ijk, dtype=float) / n * 2.0 - 1.0) * e)
@@ -121,7 +121,7 @@ def cylinder(radius: float = 0.035, height: float = 0.1, center: Any = (0, 0, 0)
     for k in range(r + 1):
         z = -height / 2 + height * k / r
         pts += [np.array([radius * np.cos(a), radius * np.sin(a), z]) for a in ang]
-    ring = lambda k, i: 2 + k * s + (i % s)  # noqa: E731
+    ring: Callable[[int, int], int] = lambda k, i: 2 + k * s + (i % s)  # noqa: E731
     faces = []
     for i in range(s):
         faces.append((0, ring(0, i + 1), ring(0, i)))
@@ -227,7 +227,7 @@ def get(name: str) -> Object:
 MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
 
 
-def load(path: str | os.PathLike, scale: float = 1.0) -> Object:
+def load(path: str | os.PathLike[str], scale: float = 1.0) -> Object:
     """Read a mesh file (any format trimesh reads: STL, OBJ, PLY, OFF, GLB) as an Object.
 
     ``scale`` multiplies the coordinates (0.001 for a file in millimetres). See :func:`load_mesh`
@@ -236,7 +236,7 @@ def load(path: str | os.PathLike, scale: float = 1.0) -> Object:
     return load_mesh(path, scale)[0]
 
 
-def load_mesh(path: str | os.PathLike, scale: float = 1.0) -> tuple[Object, list[str]]:
+def load_mesh(path: str | os.PathLike[str], scale: float = 1.0) -> tuple[Object, list[str]]:
     """Like :func:`load`, and also say what was repaired.
 
     Safe repairs, which change no enclosed volume: coincident vertices merged; faces that
@@ -310,7 +310,7 @@ def _repair(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[
             repairs.append(f"dropped {same} duplicate faces")
     mesh = trimesh.Trimesh(v, f, process=False)
     if mesh.is_watertight and not mesh.is_winding_consistent:
-        trimesh.repair.fix_winding(mesh)
+        trimesh.repair.fix_winding(mesh)  # type: ignore[no-untyped-call]
         if mesh.is_winding_consistent:
             f = np.asarray(mesh.faces, dtype=np.int64)
             repairs.append("re-wound faces to a consistent orientation")

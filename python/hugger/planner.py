@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import json
 import numbers
-from typing import Any, Iterator
+from typing import Any, Iterator, cast
 
 import numpy as np
 
@@ -127,7 +127,8 @@ class Planner:
             raise ValueError(f"contact_tolerance {delta:g} m is below the resolution this scene allows "
                              f"({MIN_RELATIVE_TOLERANCE:g} x its largest coordinate, {extent:g} m)")
         self.hand, self.object, self.sensing, self.target = hand, obj, sensing, t
-        self._core = _core.Planner(hand._core, obj._core if sensing is None else sensing, t, pose, _optional_size("step", step),
+        self._core = _core.Planner(hand._core, cast(Object, obj)._core if sensing is None else sensing, t, pose,
+                                   _optional_size("step", step),
                                    _optional_size("epsilon", epsilon),
                                    delta,
                                    _optional_count("max_iterations", max_iterations), rules,

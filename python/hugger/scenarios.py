@@ -40,8 +40,8 @@ def safe_distance(obj: Object, hand: Hand, target: Any, margin: float = 0.005) -
     ``margin``: the object's radius about T plus the hand's radius about the palm centre."""
     t = np.asarray(target, dtype=np.float64).reshape(3)
     body = float(np.linalg.norm(obj.vertices - t, axis=1).max())
-    hand_radius = max(math.hypot(hand.palm_radius, hand.reach) + hand.link_radius,
-                      math.hypot(hand.palm_radius, hand.palm_thickness))
+    hand_radius: float = max(math.hypot(hand.palm_radius, hand.reach) + hand.link_radius,
+                              math.hypot(hand.palm_radius, hand.palm_thickness))
     if hand.general:  # roots anywhere on the palm, fingers at rest in any pose
         hand_radius = max(hand_radius, float(hand._core.extended_radius) + hand.link_radius)
     return body + hand_radius + margin
@@ -101,7 +101,7 @@ def _load_mesh_cached(path: str, scale: float) -> tuple[Object, list[str]]:
     return obj, repairs
 
 
-def load_object(spec: str | os.PathLike, scale: float = 1.0) -> tuple[str, Object, list[str]]:
+def load_object(spec: str | os.PathLike[str], scale: float = 1.0) -> tuple[str, Object, list[str]]:
     """A built-in name or a mesh file path -> (name, Object, repairs).
 
     ``scale`` multiplies a mesh file's coordinates; built-ins are sized in metres and refuse any
@@ -123,7 +123,7 @@ def load_object(spec: str | os.PathLike, scale: float = 1.0) -> tuple[str, Objec
     raise ValueError(f"{s!r} is neither a built-in object ({', '.join(objects.BUILTINS)}) nor a mesh file")
 
 
-def default_case(spec: str | os.PathLike, hand: Hand | None = None, scale: float = 1.0, target: Any = None,
+def default_case(spec: str | os.PathLike[str], hand: Hand | None = None, scale: float = 1.0, target: Any = None,
                  start: Any = None, normal: Any = None, turn_deg: float = 0.0) -> Case:
     """The case the ``hugger plan`` command solves for ``spec`` (built-in name or mesh file), with
     ``hand`` (default ``Hand()``, the 5 x 5 hand) recorded in the case so that

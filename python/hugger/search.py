@@ -33,8 +33,9 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from ._types import CONTACT_DISTANCE
 from .hand import Hand
-from .trajectory import CONTACT_DISTANCE, Trajectory
+from .trajectory import Trajectory
 from .world import Object
 
 __all__ = ["Candidate", "SearchResult", "approach_directions", "rank", "search"]
@@ -73,7 +74,7 @@ class Candidate:
     def ok(self) -> bool:
         return self.status not in _FAILED
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """Plain JSON types."""
         return {"index": self.index, "direction": [float(x) for x in self.direction], "status": self.status,
                 "configurations": self.configurations, "plan_time_s": self.plan_time_s,
@@ -168,7 +169,7 @@ def _judge(cand: Candidate, traj: Trajectory, hand: Hand, obj: Object, target: n
     return replace(cand, contacts=len(found), force_closure=bool(q.force_closure), epsilon=float(q.epsilon))
 
 
-def _default_key(c: Candidate) -> tuple:
+def _default_key(c: Candidate) -> tuple[Any, ...]:
     return (c.ok, bool(c.force_closure), c.hug, c.epsilon if c.epsilon is not None else -1.0, -c.index)
 
 
@@ -184,6 +185,7 @@ def rank(candidates: Sequence[Candidate], judge: Callable[[Candidate], Candidate
     working = [c for c in out if c.ok]
     if not working:
         raise ValueError("no approach could be planned: " + "; ".join(f"{c.index}: {c.error}" for c in out))
+    best: Candidate | None
     if score is not None:
         for c in working:
             j = judge(c)
@@ -193,7 +195,7 @@ def rank(candidates: Sequence[Candidate], judge: Callable[[Candidate], Candidate
             out[c.index] = replace(j, score=s)
         best = max((c for c in out if c.ok), key=lambda c: (c.score, -c.index))
         return best.index, out
-    best: Candidate | None = None
+    best = None
     for c in sorted(working, key=lambda c: (-c.hug, c.index)):
         if best is not None and best.force_closure and c.hug < best.hug:
             break  # cannot beat a force-closure grasp that hugs more
@@ -268,7 +270,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
                          links_in_contact=int(s["links_in_contact"]), palm_contact=bool(s["palm_contact"])), traj
 
     k = len(dirs)
-    results: list[tuple[Candidate, Trajectory | None]] = [None] * k  # type: ignore[list-item]
+    results: list[tuple[Candidate, Trajectory | None]] = [None] * k
     if workers == 1 or k == 1:
         for i in range(k):
             results[i] = run(i)

@@ -10,7 +10,7 @@ import tokenize
 import zipfile
 import zlib
 from dataclasses import dataclass, field, fields, replace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -72,15 +72,15 @@ class Trajectory:
 
     @property
     def hand(self) -> dict[str, Any]:
-        return json.loads(self.hand_json)
+        return cast(dict[str, Any], json.loads(self.hand_json))
 
     @property
     def params(self) -> dict[str, Any]:
-        return json.loads(self.params_json)
+        return cast(dict[str, Any], json.loads(self.params_json))
 
     @property
     def stats(self) -> dict[str, Any]:
-        return json.loads(self.stats_json)
+        return cast(dict[str, Any], json.loads(self.stats_json))
 
     @property
     def provenance(self) -> dict[str, Any]:
@@ -88,7 +88,7 @@ class Trajectory:
         when missing), and, when the ``hugger`` command or the caller recorded them, ``object``
         (a built-in name or a mesh file's absolute path), ``object_source`` (``builtin`` or
         ``file``), ``command`` (the command line as a list) and ``arguments`` (its parsed options)."""
-        return json.loads(self.provenance_json)
+        return cast(dict[str, Any], json.loads(self.provenance_json))
 
     def with_provenance(self, **fields: Any) -> Trajectory:
         """A copy whose provenance holds ``fields`` (JSON-serialisable) over the present ones."""
@@ -116,7 +116,7 @@ class Trajectory:
         prov.setdefault("hugger_version", _version())
         if "object_sha256" not in prov:  # hashing the mesh only when the provenance lacks it
             prov["object_sha256"] = self.object_sha256()
-        arrays = {
+        arrays: dict[str, Any] = {
             "format_version": np.int64(FORMAT_VERSION),
             "hand_json": np.array(self.hand_json),
             "params_json": np.array(self.params_json),
@@ -170,7 +170,7 @@ class Trajectory:
         version = np.asarray(data["format_version"])
         if version.shape != () or version.dtype.kind not in "iu" or int(version) != FORMAT_VERSION:
             raise ValueError(f"{source}: format_version must be {FORMAT_VERSION}, got {version!r}")
-        strings = {}
+        strings: dict[str, str] = {}
         for key in (*_STRINGS, "stats_json", "provenance_json"):
             if key not in data:
                 strings[key] = "{}"
@@ -179,7 +179,7 @@ class Trajectory:
             if a.shape != () or a.dtype.kind != "U":
                 raise ValueError(f"{source}: {key} must be a string")
             strings[key] = str(a)
-        arrays = {}
+        arrays: dict[str, Any] = {}
         for key, (ndim, kinds) in _ARRAYS.items():
             a = np.asarray(data[key])
             if a.ndim != ndim or a.dtype.kind not in kinds:
@@ -256,7 +256,7 @@ class Trajectory:
                                  "record_object= to judge its contacts")
             obj = Object(self.object_vertices, self.object_faces, warn_size=False)  # warned when it was made
             object.__setattr__(self, "_object", obj)  # a cache on a frozen dataclass
-        return self._object
+        return cast(Object, self._object)
 
     def link_gaps(self, k: int = -1, obj: Object | None = None) -> np.ndarray:
         """(M, N) gap (m) between each link capsule and the object at configuration k."""

@@ -46,7 +46,7 @@ TARGET_RGB = (20, 20, 20)
 OBJECT_OPACITY = 0.45
 
 
-def _viser():
+def _viser() -> Any:
     try:
         import viser
     except ImportError:
@@ -54,7 +54,7 @@ def _viser():
     return viser
 
 
-def _trimesh():
+def _trimesh() -> Any:
     try:
         import trimesh
     except ImportError:
@@ -288,7 +288,7 @@ class Viewer:
         self.fps_number.on_update(lambda _: setattr(self, "fps", float(self.fps_number.value)))
         self.transparent.on_update(lambda _: self._set_opacity())
         self.show_contacts.on_update(lambda _: self.show(self.configuration))
-        self.configuration = self.count - 1
+        self.configuration: int = self.count - 1
         self.show(self.count - 1)
 
     def _set_opacity(self) -> None:
@@ -403,7 +403,7 @@ def view(trajs: Any, *, port: int = 8080, host: str = "127.0.0.1", open_browser:
 
 # --- glTF export ------------------------------------------------------------------------------------
 
-def _colored(trimesh: Any, verts: np.ndarray, faces: np.ndarray, rgb: Sequence[int], alpha: int = 255):
+def _colored(trimesh: Any, verts: np.ndarray, faces: np.ndarray, rgb: Sequence[int], alpha: int = 255) -> Any:
     mesh = trimesh.Trimesh(vertices=verts, faces=faces, process=False)
     mesh.visual = trimesh.visual.ColorVisuals(mesh, face_colors=np.tile([*rgb, alpha], (len(faces), 1)))
     return mesh

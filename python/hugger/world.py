@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import warnings
-from typing import Any
+from typing import Any, Callable, cast
 
 import numpy as np
 
@@ -165,7 +165,7 @@ class Object:
         ref = self._vertices.min(axis=0) / 2 + self._vertices.max(axis=0) / 2  # about the box centre: no cancellation
         tri = self._vertices[self._faces] - ref
         vol = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6.0
-        return ref + (vol[:, None] * tri.sum(axis=1) / 4.0).sum(axis=0) / vol.sum()
+        return cast(np.ndarray, ref + (vol[:, None] * tri.sum(axis=1) / 4.0).sum(axis=0) / vol.sum())
 
     def inside(self, points: Any) -> np.ndarray:
         """Bool (n,): strictly inside O, for points (n, 3) or one point (3,)."""
@@ -190,7 +190,7 @@ class Object:
 
     def section(self, origin: Any, u: Any, v: Any) -> list[np.ndarray]:
         """Planar section by origin + a u + b v (u, v orthonormal): closed loops (k, 2) in (a, b)."""
-        as3 = lambda x: np.asarray(x, dtype=np.float64)  # noqa: E731
+        as3: Callable[[Any], np.ndarray] = lambda x: np.asarray(x, dtype=np.float64)  # noqa: E731
         return self._core.section(as3(origin), as3(u), as3(v))
 
     def __repr__(self) -> str:

@@ -18,7 +18,7 @@ __all__ = ["PRESETS", "Preset", "preset", "from_urdf", "from_mjcf", "to_urdf", "
            "load"]
 
 
-def load(spec: str | os.PathLike, fixed_joints: dict[str, float] | None = None, **kwargs: Any) -> Hand:
+def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = None, **kwargs: Any) -> Hand:
     """A hand from a preset name, or a ``.urdf``, ``.xml``/``.mjcf`` (MJCF) or ``.json`` file.
     ``fixed_joints`` and other keywords go to :func:`from_urdf` / :func:`from_mjcf`.
     ``ValueError`` for an unknown preset, a missing file or an unknown extension."""

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable, cast
 
 import numpy as np
 
@@ -34,7 +34,7 @@ class _Chain:
     radii: list[float] = field(default_factory=list)
 
 
-def _need(module: str):
+def _need(module: str) -> Any:
     try:
         return __import__(module)
     except ImportError:
@@ -96,7 +96,7 @@ def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | No
                                  f"not parallel to {c.joints[0]!r}'s {np.round(a0, 6).tolist()} (palm frame); hold it "
                                  f"with fixed_joints={{{name!r}: value}}")
             signs.append(1.0 if float(a @ a0) > 0 else -1.0)
-        points = c.anchors + [c.tip]
+        points = c.anchors + [cast(np.ndarray, c.tip)]
         names = c.joints + ["the fingertip"]
         for name, p in zip(names, points):
             off = abs(float((p - c.anchors[0]) @ a0))
@@ -141,7 +141,7 @@ def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | No
 
 
 # ------------------------------------------------------------------------------------- URDF
-def from_urdf(path: str | os.PathLike, palm_link: str | None = None, fixed_joints: dict[str, float] | None = None,
+def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_joints: dict[str, float] | None = None,
               link_radius: float | None = None) -> Hand:
     """The hand of a URDF file (read with yourdfpy).
 
@@ -177,11 +177,11 @@ def from_urdf(path: str | os.PathLike, palm_link: str | None = None, fixed_joint
     palm = palm_link if palm_link is not None else roots[0]
     if palm not in links:
         raise ValueError(f"{source}: no link called {palm!r} (links: {sorted(links)})")
-    children: dict[str, list] = {}
+    children: dict[str, list[Any]] = {}
     for j in robot.joints:
         children.setdefault(j.parent, []).append(j)
 
-    def motion(j, value):
+    def motion(j: Any, value: float) -> np.ndarray:
         origin = np.eye(4) if j.origin is None else np.asarray(j.origin, dtype=np.float64)
         if j.type in ("revolute", "continuous") and value != 0.0:
             axis = np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0], dtype=np.float64)
@@ -193,10 +193,10 @@ def from_urdf(path: str | os.PathLike, palm_link: str | None = None, fixed_joint
             return origin @ rot
         return origin
 
-    def is_fixed(j):
+    def is_fixed(j: Any) -> bool:
         return j.type == "fixed" or j.name in fixed
 
-    def cylinders(link, frame):
+    def cylinders(link: str, frame: np.ndarray) -> list[tuple[np.ndarray, float, float]]:
         out = []
         for col in links[link].collisions:
             g = col.geometry
@@ -271,7 +271,7 @@ def from_urdf(path: str | os.PathLike, palm_link: str | None = None, fixed_joint
     return _exact(source, _hand_from_chains(chains, source, link_radius, palm_r, palm_t))
 
 
-def _finger_geometry(hand: Hand):
+def _finger_geometry(hand: Hand) -> list[tuple[np.ndarray, np.ndarray]]:
     """Per finger: anchors (N + 1, 3) of the rest pose in the palm frame and the joint axis a_m."""
     z = np.array([0.0, 0.0, 1.0])
     out = []
@@ -305,14 +305,14 @@ def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
     from yourdfpy import urdf as U
 
     g = _general(hand)
-    def tf(xyz, rot=None):
+    def tf(xyz: Any, rot: Any = None) -> np.ndarray:
         t = np.eye(4)
         t[:3, 3] = xyz
         if rot is not None:
             t[:3, :3] = rot
         return t
 
-    def along(d):  # a rotation taking z onto the unit vector d
+    def along(d: np.ndarray) -> np.ndarray:  # a rotation taking z onto the unit vector d
         d = d / np.linalg.norm(d)
         v = np.cross([0.0, 0.0, 1.0], d)
         s, c = np.linalg.norm(v), float(d[2])
@@ -320,7 +320,7 @@ def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
             return np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
         k = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]]) / s
         ang = math.atan2(s, c)
-        return np.eye(3) + math.sin(ang) * k + (1 - math.cos(ang)) * (k @ k)
+        return cast(np.ndarray, np.eye(3) + math.sin(ang) * k + (1 - math.cos(ang)) * (k @ k))
 
     links = [U.Link(name="palm", collisions=[U.Collision(name="palm", origin=tf([0, 0, -g.palm_thickness / 2]),
                                                          geometry=U.Geometry(cylinder=U.Cylinder(
@@ -369,7 +369,7 @@ def grasp_joint_values(hand: Hand, angles: Any) -> dict[str, float]:
 
 
 # ------------------------------------------------------------------------------------- MJCF
-def from_mjcf(path: str | os.PathLike, palm_body: str | None = None, fixed_joints: dict[str, float] | None = None,
+def from_mjcf(path: str | os.PathLike[str], palm_body: str | None = None, fixed_joints: dict[str, float] | None = None,
               link_radius: float | None = None) -> Hand:
     """The hand of a MuJoCo MJCF file (compiled by MuJoCo itself), as :func:`from_urdf`:
     ``palm_body`` (default the first body below the world that has child bodies) is the palm,
@@ -385,8 +385,8 @@ def from_mjcf(path: str | os.PathLike, palm_body: str | None = None, fixed_joint
         raise ValueError(f"{source}: cannot read the MJCF ({exc})") from None
     data = mujoco.MjData(model)
     fixed = {} if fixed_joints is None else {str(k): float(v) for k, v in dict(fixed_joints).items()}
-    jname = lambda j: mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)  # noqa: E731
-    bname = lambda b: mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b)  # noqa: E731
+    jname: Callable[[int], str] = lambda j: mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)  # noqa: E731
+    bname: Callable[[int], str] = lambda b: mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b)  # noqa: E731
     names = {jname(j): j for j in range(model.njnt)}
     unknown = sorted(set(fixed) - set(names))
     if unknown:
@@ -397,6 +397,7 @@ def from_mjcf(path: str | os.PathLike, palm_body: str | None = None, fixed_joint
     data.qpos[:] = qpos
     mujoco.mj_kinematics(model, data)
     kids: dict[int, list[int]] = {}
+    b: int | None
     for b in range(1, model.nbody):
         kids.setdefault(int(model.body_parentid[b]), []).append(b)
     if palm_body is None:
@@ -408,10 +409,10 @@ def from_mjcf(path: str | os.PathLike, palm_body: str | None = None, fixed_joint
         if palm < 0:
             raise ValueError(f"{source}: no body called {palm_body!r}")
     rot_p, pos_p = data.xmat[palm].reshape(3, 3), data.xpos[palm]
-    to_palm = lambda x: rot_p.T @ (np.asarray(x) - pos_p)  # noqa: E731
+    to_palm: Callable[[Any], np.ndarray] = lambda x: rot_p.T @ (np.asarray(x) - pos_p)  # noqa: E731
     body_joints = {b: [j for j in range(model.njnt) if model.jnt_bodyid[j] == b] for b in range(model.nbody)}
 
-    def moving(b):
+    def moving(b: int) -> list[int]:
         out = []
         for j in body_joints[b]:
             t = model.jnt_type[j]
@@ -426,7 +427,7 @@ def from_mjcf(path: str | os.PathLike, palm_body: str | None = None, fixed_joint
                              f"but one with fixed_joints")
         return out
 
-    def geoms(b):
+    def geoms(b: int) -> list[tuple[float, np.ndarray, np.ndarray]]:
         out = []
         for g in range(model.ngeom):
             if model.geom_bodyid[g] == b and int(model.geom_type[g]) in (int(mujoco.mjtGeom.mjGEOM_CAPSULE),
@@ -446,7 +447,7 @@ def from_mjcf(path: str | os.PathLike, palm_body: str | None = None, fixed_joint
             else:
                 palm_group.add(k)
                 stack.append(k)
-    chains = []
+    chains: list[_Chain] = []
     for b in starts:
         c = _Chain()
         while b is not None:
@@ -494,7 +495,7 @@ def to_mjcf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
     import xml.etree.ElementTree as ET
 
     g = _general(hand)
-    f = lambda v: " ".join(repr(float(x)) for x in np.ravel(v))  # noqa: E731
+    f: Callable[[Any], str] = lambda v: " ".join(repr(float(x)) for x in np.ravel(v))  # noqa: E731
     root = ET.Element("mujoco", model=name)
     ET.SubElement(root, "compiler", angle="radian", autolimits="true")
     world = ET.SubElement(root, "worldbody")

@@ -13,7 +13,7 @@ in the mesh world.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Callable, cast
 
 import numpy as np
 
@@ -43,12 +43,12 @@ def _nearest_on_segment(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarr
     if length2 == 0.0:
         return np.broadcast_to(a, c.shape).copy()
     t = np.clip((c - a) @ ab / length2, 0.0, 1.0)
-    return a + t[:, None] * ab
+    return cast(np.ndarray, a + t[:, None] * ab)
 
 
 def _palm_frame(pose: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Points (k, 3) in the palm frame P (z along the palm normal, origin on the front face)."""
-    return (points - pose[:3, 3]) @ pose[:3, :3]
+    return cast(np.ndarray, (points - pose[:3, 3]) @ pose[:3, :3])
 
 
 def _disk_distance(q: np.ndarray, radius: float, thickness: float) -> np.ndarray:
@@ -59,7 +59,7 @@ def _disk_distance(q: np.ndarray, radius: float, thickness: float) -> np.ndarray
     dz = np.maximum(q[:, 2], -thickness - q[:, 2])  # > 0 outside the slab
     outside = np.hypot(np.maximum(dr, 0.0), np.maximum(dz, 0.0))
     inside = np.minimum(np.maximum(dr, dz), 0.0)
-    return outside + inside
+    return cast(np.ndarray, outside + inside)
 
 
 class SpheresSkin(Sensing):
@@ -78,7 +78,7 @@ class SpheresSkin(Sensing):
             raise ValueError(f"radii must be ({len(c)},) positive finite numbers (m), got {radii!r}")
         self.centers, self.radii = c, r
 
-    def capsule(self, a: np.ndarray, b: np.ndarray, radius: float, cap: float) -> Touch:
+    def capsule(self, a: np.ndarray, b: np.ndarray, radius: float, cap: float = math.inf) -> Touch:  # type: ignore[override]
         p = _nearest_on_segment(a, b, self.centers)
         d = p - self.centers
         dist = np.sqrt(np.einsum("ij,ij->i", d, d))
@@ -92,7 +92,7 @@ class SpheresSkin(Sensing):
             normal = normal / np.linalg.norm(normal)
         return Touch(float(gaps[i]), p[i], self.centers[i] + self.radii[i] * normal, normal)
 
-    def palm(self, pose: np.ndarray, radius: float, thickness: float, cap: float) -> float:
+    def palm(self, pose: np.ndarray, radius: float, thickness: float, cap: float = math.inf) -> float:  # type: ignore[override]
         q = _palm_frame(pose, self.centers)
         return float(np.min(_disk_distance(q, radius, thickness) - self.radii))
 
@@ -100,7 +100,7 @@ class SpheresSkin(Sensing):
         """Signed distance (n,) of points (n, 3) to the union (exact outside it)."""
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         d = np.linalg.norm(p[:, None, :] - self.centers[None], axis=2) - self.radii[None]
-        return d.min(axis=1)
+        return cast(np.ndarray, d.min(axis=1))
 
     def mesh(self, subdivisions: int = 6) -> Any:
         """A closed mesh of the union, star-shaped about the first centre: every sphere must
@@ -133,9 +133,11 @@ class SphereSkin(SpheresSkin):
         return objects.sphere(radius=self.radius, center=self.center, subdivisions=subdivisions)
 
 
-def _gjk_distance(support, tolerance: float = 1e-11, iterations: int = 100) -> float:
+def _gjk_distance(support: Callable[[np.ndarray], np.ndarray], tolerance: float = 1e-11,
+                  iterations: int = 100) -> float:
     """Distance from the origin to a convex set given by its support function (GJK with an exact
     sub-simplex search); 0 when the origin is inside."""
+    v: np.ndarray | None
     v = support(np.array([1.0, 0.0, 0.0]))
     simplex = [v]
     for _ in range(iterations):
@@ -152,7 +154,7 @@ def _gjk_distance(support, tolerance: float = 1e-11, iterations: int = 100) -> f
     return math.sqrt(float(v @ v))
 
 
-def _closest_subsimplex(points: list[np.ndarray]):
+def _closest_subsimplex(points: list[np.ndarray]) -> tuple[np.ndarray | None, list[np.ndarray]]:
     """The point of the simplex nearest the origin and the smallest face holding it; (None, _)
     when the origin lies inside a full tetrahedron."""
     n = len(points)
@@ -182,7 +184,7 @@ def _closest_subsimplex(points: list[np.ndarray]):
     if best is None:  # degenerate: keep the nearest vertex
         i = int(np.argmin(np.einsum("ij,ij->i", P, P)))
         return P[i], [points[i]]
-    return best[1], best_set
+    return best[1], cast(list[np.ndarray], best_set)
 
 
 class BoxSkin(Sensing):
@@ -200,7 +202,7 @@ class BoxSkin(Sensing):
         self.extents, self.center, self.rotation = e, _vector("center", center), R
         self.half = 0.5 * e
 
-    def capsule(self, a: np.ndarray, b: np.ndarray, radius: float, cap: float) -> Touch:
+    def capsule(self, a: np.ndarray, b: np.ndarray, radius: float, cap: float = math.inf) -> Touch:  # type: ignore[override]
         R, c, h = self.rotation, self.center, self.half
         qa, d = (a - c) @ R, (b - a) @ R
         # |p(t) - box|^2 is a quadratic on each interval between the slab crossings of p(t).
@@ -247,7 +249,7 @@ class BoxSkin(Sensing):
             n[i] = 1.0 if p[i] >= 0 else -1.0
         return Touch(dist - radius, c + R @ p, c + R @ on_box, R @ n)
 
-    def palm(self, pose: np.ndarray, radius: float, thickness: float, cap: float) -> float:
+    def palm(self, pose: np.ndarray, radius: float, thickness: float, cap: float = math.inf) -> float:  # type: ignore[override]
         z = pose[:3, 2]
         centre = pose[:3, 3] - 0.5 * thickness * z
         R, c, h = self.rotation, self.center, self.half
@@ -268,7 +270,7 @@ class BoxSkin(Sensing):
     def signed_distance(self, points: Any) -> np.ndarray:
         """Signed distance (n,) of points (n, 3) to the box."""
         q = np.abs((np.asarray(points, dtype=np.float64).reshape(-1, 3) - self.center) @ self.rotation) - self.half
-        return np.linalg.norm(np.maximum(q, 0.0), axis=1) + np.minimum(q.max(axis=1), 0.0)
+        return cast(np.ndarray, np.linalg.norm(np.maximum(q, 0.0), axis=1) + np.minimum(q.max(axis=1), 0.0))
 
     def mesh(self, divisions: int = 4) -> Any:
         """The box as a :class:`hugger.Object` (exact: a box mesh is the box)."""

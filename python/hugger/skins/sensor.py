@@ -21,7 +21,7 @@ planner's queries are deterministic, so a plan is too (bit-identical for the sam
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -98,9 +98,10 @@ class SensorModel(Sensing):
         # Rodrigues: normal is perpendicular to axis.
         return math.cos(angle) * normal + math.sin(angle) * np.cross(axis, normal)
 
-    def capsule(self, a: np.ndarray, b: np.ndarray, radius: float, cap: float) -> Touch:
+    def capsule(self, a: np.ndarray, b: np.ndarray, radius: float, cap: float = math.inf) -> Touch:  # type: ignore[override]
         self.queries += 1
         ask = min(cap, self.range) + 3.0 * self.gap_noise  # what the reading needs to be exact
+        t: Touch | None
         if self.taxel_spacing is None:
             t = self.skin.capsule(a, b, radius, ask)
         else:
@@ -114,12 +115,13 @@ class SensorModel(Sensing):
                 u = self.skin.capsule(p, p, ball, ask)
                 if t is None or u.gap < t.gap:
                     t = u
+            t = cast(Touch, t)  # the loop runs at least once
         gap = self._reading(t.gap, cap)
         if not math.isfinite(t.gap) or t.gap > self.range:  # nothing felt: no contact point either
             return Touch(gap, t.on_hand, t.on_hand, t.normal)
         return Touch(gap, t.on_hand, t.on_object, self._tilt(np.asarray(t.normal)))
 
-    def palm(self, pose: np.ndarray, radius: float, thickness: float, cap: float) -> float:
+    def palm(self, pose: np.ndarray, radius: float, thickness: float, cap: float = math.inf) -> float:  # type: ignore[override]
         self.queries += 1
         ask = min(cap, self.range) + 3.0 * self.gap_noise
         return self._reading(float(self.skin.palm(pose, radius, thickness, ask)), cap)
