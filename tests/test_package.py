@@ -142,7 +142,10 @@ def test_core_stub_matches_the_compiled_module():
     compiled = {name for name in dir(_core) if isinstance(getattr(_core, name), type)}
     assert set(stub) == compiled
     functions = {f.name for f in tree.body if isinstance(f, ast.FunctionDef)}
-    assert functions == {n for n in dir(_core) if not n.startswith("_") and n not in compiled}
+    constants = {a.target.id for a in tree.body
+                 if isinstance(a, ast.AnnAssign) and isinstance(a.target, ast.Name) and not a.target.id.startswith("_")}
+    assert functions | constants == {n for n in dir(_core) if not n.startswith("_") and n not in compiled}
+    assert all(isinstance(getattr(_core, n), float) for n in constants)
     for name, members in stub.items():
         cls = getattr(_core, name)
         own = {m for m in vars(cls) if not m.startswith("_") or m in ("__init__", "__repr__")}

@@ -227,7 +227,7 @@ def test_caged_sphere_is_held_in_all_six_directions(sphere_plan):
     s = res["settings"]
     assert s["mass_kg"] == 0.1 and s["mu"] == 0.6 and s["force_N"] == pytest.approx(10 * 0.1 * 9.81)
     for key in ("timestep_s", "integrator", "condim", "solref", "solimp", "kp_Nm_per_rad", "squeeze_rad", "duration_s",
-                "gravity", "impratio"):
+                "gravity", "impratio", "contact_distance_m"):
         assert key in s
 
 

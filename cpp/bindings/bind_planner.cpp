@@ -149,11 +149,7 @@ void bind_planner(py::module_& m) {
              params.step = optional_param(step, "step");
              params.epsilon = optional_param(epsilon, "epsilon");
              params.contact_tolerance = optional_param(contact_tolerance, "contact_tolerance");
-             if (!max_iterations.is_none()) {
-               const long mi = max_iterations.cast<long>();
-               if (mi < 1) throw py::value_error("max_iterations must be at least 1, got " + std::to_string(mi));
-               params.max_iterations = mi;
-             }
+             if (!max_iterations.is_none()) params.max_iterations = max_iterations.cast<long>();  // checked by Planner
              params.rules = rules_from_string(rules);  // std::invalid_argument -> ValueError
              out->source = source;
              py::gil_scoped_release release;

@@ -264,3 +264,6 @@ def primitive_wrenches(points: typing.Annotated[numpy.typing.ArrayLike, numpy.fl
     """
     Primitive contact wrenches (C * E, 6), contact-major (see grasp_quality).
     """
+
+#: A palm pose is rigid when |R^T R - I| and |det R - 1| are at most this (the engine's rule).
+RIGID_TOLERANCE: float

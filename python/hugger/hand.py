@@ -24,8 +24,9 @@ MAX_LENGTH = 1e6
 #: diameter and the longest finger.
 PLAUSIBLE_SIZE = (1e-3, 3.0)
 
-#: Tolerance of the rigid-pose check: |R^T R - I| and |det R - 1| (the planner uses the same).
-RIGID_TOLERANCE = 1e-6
+#: Tolerance of the rigid-pose check: |R^T R - I| and |det R - 1|. The engine owns it (the
+#: planner refuses a start pose by the same rule); Python reads it from the compiled module.
+RIGID_TOLERANCE: float = _core.RIGID_TOLERANCE
 
 
 def _count(name: str, value: Any) -> int:

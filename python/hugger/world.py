@@ -52,19 +52,14 @@ def _face_indices(faces: Any, nv: int) -> np.ndarray:
 
 
 def _check_surface(v: np.ndarray, f: np.ndarray) -> None:
-    """Checks the engine leaves out, on a mesh it accepted (closed, every directed edge once):
-    inside-out far from the origin, degenerate (zero-area) triangles, the same triangle twice
-    over distinct but coincident vertices, and vertices where the surface touches itself
-    (non-manifold vertices)."""
+    """Checks the engine leaves out, on a mesh it accepted (closed, every directed edge once,
+    enclosing a positive volume): degenerate (zero-area) triangles, the same triangle twice over
+    distinct but coincident vertices, and vertices where the surface touches itself (non-manifold
+    vertices)."""
     nv, nf = len(v), len(f)
-    # Inside-out, measured about the bounding box's centre: far from the origin the triple
-    # products a . (b x c) of raw coordinates cancel catastrophically and their sum's sign is noise.
+    # Edges taken about the bounding box's centre: far from the origin raw coordinates lose digits.
     centre = 0.5 * (v.min(axis=0) + v.max(axis=0))
     a, b, c = v[f[:, 0]] - centre, v[f[:, 1]] - centre, v[f[:, 2]] - centre
-    volume = float(np.einsum("ij,ij->", a, np.cross(b, c))) / 6.0
-    if not volume > 0.0:
-        raise ValueError(f"object mesh encloses a non-positive volume ({volume:g} m^3): its faces point inward "
-                         f"(reverse the winding) or it is flat")
     ab, bc, ca = b - a, c - b, a - c
     twice_area = np.sqrt(np.einsum("ij,ij->i", *(np.cross(ab, ca),) * 2))
     longest = np.maximum(np.maximum(np.einsum("ij,ij->i", ab, ab), np.einsum("ij,ij->i", bc, bc)),

@@ -19,5 +19,8 @@ using MatrixX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::Row
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kPi = 3.14159265358979323846;
+/// A palm pose is rigid when |R^T R - I| (largest entry) and |det R - 1| are at most this.
+/// The one owner of the rule: Python reads it as hugger._core.RIGID_TOLERANCE.
+constexpr double kRigidTolerance = 1e-6;
 
 }  // namespace hugger

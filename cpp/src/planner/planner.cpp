@@ -84,7 +84,8 @@ Planner::Planner(HandModel hand, std::shared_ptr<const Sensing> sensing, const V
 
   const Mat3 R = palm_pose.linear();
   const double orth = (R.transpose() * R - Mat3::Identity()).cwiseAbs().maxCoeff();
-  if (!palm_pose.matrix().allFinite() || !(orth <= 1e-6) || !(std::abs(R.determinant() - 1.0) <= 1e-6))
+  if (!palm_pose.matrix().allFinite() || !(orth <= kRigidTolerance) ||
+      !(std::abs(R.determinant() - 1.0) <= kRigidTolerance))
     invalid("palm_pose must be a rigid transform (orthonormal rotation with determinant +1); orthonormality error " +
             fmt(orth));
   // Re-orthonormalise so that every emitted pose is rigid to machine precision.

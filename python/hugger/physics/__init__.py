@@ -73,7 +73,8 @@ from .decompose import COACD_SETTINGS as COACD_SETTINGS, CONVEX_RATIO as CONVEX_
 from .decompose import convex_pieces, default_cache_dir
 from .hold import DIRECTIONS as DIRECTIONS, MAX_DISPLACEMENT as MAX_DISPLACEMENT
 from .hold import MAX_ROTATION_DEG as MAX_ROTATION_DEG, SETTLE as SETTLE, SQUEEZE_RAMP as SQUEEZE_RAMP
-from .hold import TOUCH_DISTANCE as TOUCH_DISTANCE, PERTURBATIONS
+from .._types import CONTACT_DISTANCE as CONTACT_DISTANCE
+from .hold import PERTURBATIONS
 from .hold import _rotation_deg as _rotation_deg, _run_jobs as _run_jobs, _validate_job as _validate_job
 from .hold import touching_fingers, validate, validate_robust
 from .mass import hull_volume, mass_properties

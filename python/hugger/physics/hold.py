@@ -16,8 +16,6 @@ from .decompose import COACD_SETTINGS, CONVEX_RATIO, convex_pieces
 from .mjcf import (ARMATURE, CONDIM, DAMPRATIO, GRAVITY, IMPRATIO, KP, LINK_DENSITY, ROLLING_FRICTION, SOLIMP, SOLREF,
                    SQUEEZE, TIMESTEP, TORSIONAL_FRICTION, _build_mjcf)
 
-#: A finger "touches" when one of its links is within this gap (m) of the object.
-TOUCH_DISTANCE = CONTACT_DISTANCE
 #: Squeeze ramp and settle times (s).
 SQUEEZE_RAMP = 0.1
 SETTLE = 0.4
@@ -33,8 +31,9 @@ def _rotation_deg(q0: np.ndarray, q1: np.ndarray) -> float:
     return math.degrees(2.0 * math.acos(min(1.0, float(dot))))
 
 
-def touching_fingers(traj: Any, k: int = -1, distance: float = TOUCH_DISTANCE) -> np.ndarray:
-    """Bool (M,): fingers with a link within ``distance`` (m) of the object at configuration k."""
+def touching_fingers(traj: Any, k: int = -1, distance: float = CONTACT_DISTANCE) -> np.ndarray:
+    """Bool (M,): fingers with a link within ``distance`` (m) of the object at configuration k (a finger
+    "touches" by the same gap as every contact of the summaries and the analysis)."""
     traj = _trajectory(traj)
     k = _index(traj, k)
     return cast(np.ndarray, np.asarray(traj.link_gaps(k) <= distance).any(axis=1))
@@ -127,7 +126,7 @@ def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: flo
         "solref": list(SOLREF), "solimp": list(SOLIMP), "timestep_s": TIMESTEP, "integrator": "implicitfast",
         "solver": "Newton", "jacobian": "dense", "kp_Nm_per_rad": kp, "dampratio": DAMPRATIO, "armature_kgm2": ARMATURE,
         "link_density_kg_m3": LINK_DENSITY, "link_radius_simulated_m": info["link_radius_simulated"],
-        "squeeze_rad": squeeze, "touch_distance_m": TOUCH_DISTANCE, "squeeze_ramp_s": SQUEEZE_RAMP,
+        "squeeze_rad": squeeze, "contact_distance_m": CONTACT_DISTANCE, "squeeze_ramp_s": SQUEEZE_RAMP,
         "settle_s": SETTLE, "gravity": "off (hand held by an arm; the six directions replace gravity)",
         "force_factor": force_factor, "force_N": force, "force_point": "object centre of mass",
         "duration_s": duration, "max_displacement_m": MAX_DISPLACEMENT, "max_rotation_deg": MAX_ROTATION_DEG,
