@@ -84,18 +84,15 @@ def check_file(checker, path: Path, every: int = 1, motion: bool = False,
     d = checker.load(str(path))
     rep = checker.Report()
     if checker.check_structure(d, rep):
-        import json
-
-        hand = json.loads(str(d["hand_json"]))
-        r = float(hand["link_radius"])
-        tol = max(0.02 * r, 5e-5)
-        checker.check_kinematics(d, rep, 1e-7)
-        checker.check_algorithm(d, rep, 1e-7)
-        cache = checker.check_collision(d, rep, tol, every)
+        layout = checker.hand_layout(d)
+        tol = max(0.02 * layout.r, 5e-5)
+        checker.check_kinematics(d, rep, checker.LIN_TOL)
+        checker.check_algorithm(d, rep, checker.LIN_TOL)
+        # one collision mesh for both checks (the checker builds its own when given none)
+        mq = checker.MeshQuery(d["object_vertices"].astype(float), d["object_faces"].astype(np.int32), layout, tol)
+        cache = checker.check_collision(d, rep, tol, every, mq)
         if motion:
-            mq = checker.MeshQuery(d["object_vertices"].astype(float), d["object_faces"].astype(np.int32),
-                                   checker.hand_layout(d), tol)
-            checker.check_motion(d, rep, 1e-7, tol, mq, cache, 4.0, swept_every)
+            checker.check_motion(d, rep, checker.LIN_TOL, tol, mq, cache, 4.0, swept_every)
     return rep.ok(), rep.failures, rep.figures
 
 

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pytest
@@ -74,6 +74,13 @@ def test_case_forms_and_shared_hand(cases, sequential, hand):
     out = hugger.plan_many(forms, hand=hand, threads=2)
     for t, ref in zip(out, sequential[:3]):
         assert same(t, ref)
+
+
+def test_a_case_without_a_hand_takes_plan_many_s_hand(hand):
+    with_hand = hugger.scenarios.default_case("sphere", hand)
+    without = replace(with_hand, hand=None)
+    a, b = hugger.plan_many([with_hand, without], hand=hand, threads=1)
+    assert same(a, b)
 
 
 def test_a_mapping_case_names_the_object_obj_only(cases, hand):

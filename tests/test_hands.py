@@ -14,6 +14,8 @@ import pytest
 import hugger
 from hugger import hands
 
+from helpers import check_file
+
 REST_RULE = "is FROZEN but not extended"  # the checker's rule for rest = 0; see docs/hands.md
 
 
@@ -24,18 +26,9 @@ def full_check(checker, path: Path, rest_nonzero: bool) -> tuple[list[str], dict
     that count: the checker does not read rest_angles yet, so for a hand with non-zero rest
     angles its "FROZEN but not extended" rule is set aside (our own assert_plan_properties
     asserts that FROZEN fingers stay at rest)."""
-    d = checker.load(str(path))
-    rep = checker.Report()
-    assert checker.check_structure(d, rep), rep.failures
-    lay = checker.hand_layout(d)
-    tol = max(0.02 * lay.r, 5e-5)
-    checker.check_kinematics(d, rep, checker.LIN_TOL)
-    checker.check_algorithm(d, rep, checker.LIN_TOL)
-    mq = checker.MeshQuery(d["object_vertices"].astype(float), d["object_faces"].astype(np.int32), lay, tol)
-    cache = checker.check_collision(d, rep, tol, 1, mq)
-    checker.check_motion(d, rep, checker.LIN_TOL, tol, mq, cache, 4.0, 1)
-    fails = [f for f in rep.failures if not (rest_nonzero and REST_RULE in f)]
-    return fails, rep.figures
+    _, failures, figures = check_file(checker, path, motion=True)
+    assert not any(f.startswith("structure:") for f in failures), failures
+    return [f for f in failures if not (rest_nonzero and REST_RULE in f)], figures
 
 
 def random_layout(rng: np.random.Generator) -> hugger.Hand:
@@ -311,3 +304,13 @@ def test_mjcf_with_a_non_planar_finger_names_the_joint(tmp_path):
     f.write_text(bad)
     with pytest.raises(ValueError, match="joint 'f0_j1' breaks planarity"):
         hugger.Hand.from_mjcf(f)
+
+
+def test_urdf_grasp_comment_gives_plain_joint_values():
+    pytest.importorskip("yourdfpy")
+    hand = hands.preset("barrett_bh8")
+    angles = hand.rest_angles + 0.05
+    text = hands.to_urdf(hand, angles)
+    line = next(x for x in text.splitlines() if "grasp joint values" in x)
+    pairs = dict(item.split("=") for item in line.split(":", 1)[1].replace("-->", "").split())
+    assert {k: float(v) for k, v in pairs.items()} == hands.grasp_joint_values(hand, angles)

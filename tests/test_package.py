@@ -161,3 +161,10 @@ def test_mypy_strict_is_clean():
     out, err, status = api.run(["--strict", "--no-incremental", "--config-file", str(root / "pyproject.toml"),
                                 str(root / "python" / "hugger")])
     assert status == 0, out + err
+
+
+def test_the_installed_version_is_the_package_s():
+    """pyproject.toml reads the version from hugger._types.VERSION: one owner."""
+    import importlib.metadata
+
+    assert importlib.metadata.version("hugger") == hugger.__version__ == hugger._types.VERSION

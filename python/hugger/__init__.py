@@ -19,14 +19,14 @@ from typing import Any as _Any
 from . import hands, objects, scenarios, skins
 from .batch import CaseError, PlanManyError, plan_many
 from .hand import Hand
-from ._types import CONTACT, DONE, FROZEN, Configuration, TipState
+from ._types import CONTACT, DONE, FROZEN, VERSION, Configuration, TipState
 from .planner import Planner, look_at, plan
 from .search import Candidate, SearchResult, approach_directions, search
 from .trajectory import FORMAT_VERSION, Trajectory
 from .world import Object
 from .skins import Sensing, Touch
 
-__version__ = "0.1.0"
+__version__ = VERSION
 
 _LAZY = ("analysis", "viz", "physics", "cli", "viewer", "dataset", "baselines")
 

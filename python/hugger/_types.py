@@ -15,6 +15,8 @@ import numpy as np
 #: Largest number of fingers M and of links per finger N. The engine checks every pair of
 #: fingers each iteration (O(M^2 N^2)), so a plan with more fingers would be unusably slow; the
 #: limits are checked before anything is allocated, so ``Hand(fingers=10**6)`` fails at once.
+#: The package version (hugger.__version__), recorded in trajectory files and dataset indexes.
+VERSION = "0.1.0"
 MAX_FINGERS = 64
 MAX_LINKS = 256
 

@@ -46,9 +46,6 @@ _PALM = -1
 _MAX_SPACING = 1e-3
 #: At most this many samples per link axis (bounds the cost for huge, thin links).
 _MAX_LINK_SAMPLES = 400
-#: The origin must be at least this far (relative to the largest wrench coordinate) inside the
-#: grasp wrench space to count as force closure; smaller epsilons are rounding, reported as 0.
-_CLOSURE_TOL = 1e-9
 #: At most this many representative contacts from the palm's touching region.
 _PALM_CONTACTS = 8
 

@@ -82,7 +82,8 @@ def _job(index: int, case: Any, hand: Hand | None, params: dict[str, Any], timeo
             raise ValueError(f"case {index}: a tuple case must be (hand, obj, target, palm_pose[, params]), "
                              f"got {len(case)} items")
     elif all(hasattr(case, a) for a in ("obj", "target", "palm_pose")):
-        c_hand, obj, target, pose = getattr(case, "hand", hand), case.obj, case.target, case.palm_pose
+        own_hand = getattr(case, "hand", None)  # a Case may carry hand=None: plan_many's hand then
+        c_hand, obj, target, pose = own_hand if own_hand is not None else hand, case.obj, case.target, case.palm_pose
     else:
         raise ValueError(f"case {index}: expected a mapping, a (hand, obj, target, palm_pose) tuple or an object "
                          f"with obj, target and palm_pose; got {type(case).__name__}")

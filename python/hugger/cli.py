@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any, Callable, NoReturn, Sequence, TextIO
 
 from ._files import atomic_path, write_atomic
 from ._progress import Progress
+from ._types import VERSION
 
 if TYPE_CHECKING:
     from .hand import Hand
@@ -513,7 +514,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
     if args.address is not None and args.backend != "ray":
         raise UsageError("--address applies to --backend ray only")
     interactive = sys.stderr.isatty()
-    log = None if interactive else dataset._log_line  # plain lines in logs, a bar on a terminal
+    log = None if interactive else _note  # plain lines in logs, a bar on a terminal
     argv = args._argv
     with Progress("generating shards", total=1, delay=0.0) as p:
         def progress(done: int, total: int) -> None:
@@ -667,7 +668,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap = _Parser(prog="hugger", description="Hugging grasps for multi-finger hands (Reznik & Lumelsky, ICRA 1994).",
                  epilog="Exit status: 0 success, 2 bad input or missing optional dependency, 1 internal error "
                         "(hugger validate: 1 also when the grasp is not held).")
-    ap.add_argument("--version", action="version", version=f"hugger {_version()}")
+    ap.add_argument("--version", action="version", version=f"hugger {VERSION}")
     sub = ap.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
 
@@ -803,12 +804,6 @@ def _count(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {value}")
     return value
-
-
-def _version() -> str:
-    from . import __version__
-
-    return __version__
 
 
 def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,

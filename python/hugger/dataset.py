@@ -20,7 +20,6 @@ import io
 import json
 import os
 import re
-import sys
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,6 +28,7 @@ from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
 import numpy as np
 
 from ._files import remove_temporaries, write_atomic
+from ._types import VERSION
 
 if TYPE_CHECKING:
     from .trajectory import Trajectory
@@ -250,7 +250,6 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers must be a whole number >= 1, got {workers!r}")
     ray: Any = _ray() if backend == "ray" else None
-    from . import __version__
     from .batch import _PARAMS
 
     params = dict(params or {})
@@ -272,12 +271,12 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     tasks: list[dict[str, Any]] = []
     from .hand import Hand
 
+    hand_entries = [{"label": label, "kwargs": kwargs, "json": Hand(**kwargs).to_json()} for label, kwargs in hand_list]
     for ob, safe_name in zip(obj_list, names):
-        for label, kwargs in hand_list:
-            task: dict[str, Any] = {"format": SHARD_FORMAT, "object": ob, "hand": {"label": label, "kwargs": kwargs,
-                                                                   "json": Hand(**kwargs).to_json()},
-                    "approaches": int(approaches), "params": params, "rules": rules, "validate": bool(validate)}
-            task["file"] = f"{safe_name}__{label}.npz"
+        for entry in hand_entries:
+            task: dict[str, Any] = {"format": SHARD_FORMAT, "object": ob, "hand": entry, "approaches": int(approaches),
+                                    "params": params, "rules": rules, "validate": bool(validate)}
+            task["file"] = f"{safe_name}__{entry['label']}.npz"
             task["key"] = _task_key(task)
             tasks.append(task)
     todo = [t for t in tasks if not _shard_done(shard_dir / t["file"], t["key"])]
@@ -342,12 +341,12 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
             if started_here:
                 ray.shutdown()
     index = {
-        "format": DATASET_FORMAT, "format_version": DATASET_VERSION, "hugger_version": __version__,
+        "format": DATASET_FORMAT, "format_version": DATASET_VERSION, "hugger_version": VERSION,
         "command": list(command) if command is not None else None,
         "parameters": {"approaches": int(approaches), "validate": bool(validate), "rules": rules, "scale": float(scale),
                        "planner": params},
         "objects": obj_list,
-        "hands": [{"label": label, "kwargs": kwargs, "json": Hand(**kwargs).to_json()} for label, kwargs in hand_list],
+        "hands": hand_entries,
         "shards": [{"file": f"shards/{t['file']}", "object": t["object"]["name"], "hand": t["hand"]["label"],
                     "task_sha256": t["key"], "sha256": _sha256_file(str(shard_dir / t["file"]))} for t in tasks],
     }
@@ -401,7 +400,10 @@ class Dataset:
             raise ValueError(f"{index_path} is not a hugger dataset index of version {DATASET_VERSION}")
         self.shards: list[dict[str, Any]] = list(self.index["shards"])
         self._cache: dict[int, dict[str, np.ndarray]] = {}
-        self._sizes = [int(self.shard(i)["status"].shape[0]) for i in range(len(self.shards))]
+        self._sizes = []
+        for s in self.shards:  # the grasp counts only: whole shards load on first use (shard())
+            with np.load(self.root / s["file"], allow_pickle=False) as z:
+                self._sizes.append(int(z["status"].shape[0]))
         self._starts = np.concatenate([[0], np.cumsum(self._sizes)]).astype(int)
 
     def __len__(self) -> int:
@@ -480,7 +482,3 @@ class Dataset:
         from . import physics
 
         return physics.export_mjcf(self.trajectory(i), path, **kwargs)
-
-
-def _log_line(message: str) -> None:
-    print(f"hugger: {message}", file=sys.stderr, flush=True)

@@ -28,6 +28,7 @@ import numpy as np
 from . import _core
 from . import physics as _ph
 from ._rotation import quaternion_wxyz
+from ._types import CONTACT_DISTANCE
 from .planner import Planner
 from .trajectory import Trajectory
 from .world import Object
@@ -257,7 +258,7 @@ def _finish(sim: Simulation, traj: Any, mode: str, start_centre: np.ndarray) -> 
     hold = _ph.validate(moved) if len(traj) else {"held": False}
     return LoopResult(mode=mode, status=traj.status, configurations=len(traj),
                       object_moved_m=float(np.linalg.norm(sim.data.xpos[sim.body] - start_centre)),
-                      links_in_contact=int(np.sum(gaps <= 1e-3)), hold=hold, trajectory=moved)
+                      links_in_contact=int(np.sum(gaps <= CONTACT_DISTANCE)), hold=hold, trajectory=moved)
 
 
 def simulate(hand: Any, obj: Any, target: Any, palm_pose: Any, offset: Any = (0.0, 0.0, 0.0), push: float = 0.0,

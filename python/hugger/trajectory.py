@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import hashlib
-import importlib.metadata
 import json
 import os
 import struct
@@ -15,7 +14,7 @@ from typing import Any, cast
 import numpy as np
 
 from ._files import atomic_path
-from ._types import CONTACT_DISTANCE, MAX_FINGERS, MAX_LINKS, Configuration
+from ._types import CONTACT_DISTANCE, MAX_FINGERS, MAX_LINKS, VERSION, Configuration
 from .world import Object
 
 FORMAT_VERSION = 1
@@ -113,7 +112,7 @@ class Trajectory:
         leaves a partial file under ``path``. The provenance gets ``hugger_version`` and
         ``object_sha256`` when it lacks them."""
         prov = dict(self.provenance)
-        prov.setdefault("hugger_version", _version())
+        prov.setdefault("hugger_version", VERSION)
         if "object_sha256" not in prov:  # hashing the mesh only when the provenance lacks it
             prov["object_sha256"] = self.object_sha256()
         arrays: dict[str, Any] = {
@@ -338,11 +337,3 @@ def _check_hand_sizes(hand: dict[str, Any], m: int, n: int, source: str) -> None
             a = np.zeros(0)
         if a.shape != shape or not np.all(np.isfinite(a)):
             raise ValueError(f"{source}: hand_json {key} must be a {shape} list of finite numbers")
-
-
-def _version() -> str:
-    """The installed hugger's version (``unknown`` when run from a source tree without metadata)."""
-    try:
-        return importlib.metadata.version("hugger")
-    except importlib.metadata.PackageNotFoundError:
-        return "unknown"

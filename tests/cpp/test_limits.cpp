@@ -50,6 +50,16 @@ struct LimitedChain {
     for (int n = 0; n < N; ++n) c[n + 1] = c[n] + lengths[n] * unit(theta += 2.0 * u(rng));
     return c;
   }
+  /// Every link keeps its exact length, and joints `first`..N-1 are within their limits.
+  void expect_lengths_and_limits(const Chain& c, int first) const {
+    double angles[N];
+    HandModel::planar_angles(c, angles);
+    for (int n = 0; n < N; ++n) EXPECT_NEAR((c[n + 1] - c[n]).norm(), lengths[n], 1e-15);
+    for (int n = first; n < N; ++n) {
+      EXPECT_GE(angles[n], lower[n] - 1e-12);
+      EXPECT_LE(angles[n], upper[n] + 1e-12);
+    }
+  }
 };
 
 }  // namespace
@@ -98,21 +108,13 @@ TEST(Limits, TailToHeadHoldsEveryJointWithinItsLimits) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const LimitedChain lc;
-  const int N = LimitedChain::N;
-  const double *lengths = lc.lengths, *lower = lc.lower, *upper = lc.upper;
   const SnakeRequest req = lc.request();
   for (int i = 0; i < 500; ++i) {
     Chain c = lc.random_chain(rng, u);
     const Vec2 root(0.03, 0.004 * (u(rng) + 1.0));
     ASSERT_TRUE(tail_to_head(skin, req, root, c));
     EXPECT_TRUE(c[0] == root);
-    double angles[N];
-    HandModel::planar_angles(c, angles);
-    for (int n = 0; n < N; ++n) {
-      EXPECT_NEAR((c[n + 1] - c[n]).norm(), lengths[n], 1e-15);
-      EXPECT_GE(angles[n], lower[n] - 1e-12);
-      EXPECT_LE(angles[n], upper[n] + 1e-12);
-    }
+    lc.expect_lengths_and_limits(c, 0);
   }
 }
 
@@ -124,20 +126,13 @@ TEST(Limits, HeadToTailHoldsTheJointsItPassesWithinTheirLimits) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const LimitedChain lc;
   const int N = LimitedChain::N;
-  const double *lengths = lc.lengths, *lower = lc.lower, *upper = lc.upper;
   const SnakeRequest req = lc.request();
   for (int i = 0; i < 500; ++i) {
     Chain c = lc.random_chain(rng, u);
     const Vec2 head = c[N] + 0.003 * Vec2(u(rng), u(rng));
     ASSERT_TRUE(head_to_tail(skin, req, head, c));
     EXPECT_TRUE(c[N] == head);
-    double angles[N];
-    HandModel::planar_angles(c, angles);
-    for (int n = 0; n < N; ++n) EXPECT_NEAR((c[n + 1] - c[n]).norm(), lengths[n], 1e-15);
-    for (int n = 1; n < N; ++n) {
-      EXPECT_GE(angles[n], lower[n] - 1e-12);
-      EXPECT_LE(angles[n], upper[n] + 1e-12);
-    }
+    lc.expect_lengths_and_limits(c, 1);  // joint 0, at the root, is Tail2Head's
   }
 }
 

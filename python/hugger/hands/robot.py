@@ -44,11 +44,15 @@ def _need(module: str) -> Any:
 _EMBED = "hugger-hand "
 
 
-def _embed(text: str, hand: Hand) -> str:
-    """``text`` (XML) with the hand's exact description as a comment after the XML declaration."""
-    comment = f"<!-- {_EMBED}{hand.to_json()} -->\n"
+def _after_declaration(text: str, comment: str) -> str:
+    """``text`` (XML) with ``comment`` inserted after its XML declaration (first if it has none)."""
     head, sep, rest = text.partition("?>")
     return head + sep + "\n" + comment + rest.lstrip("\n") if sep and head.lstrip().startswith("<?xml") else comment + text
+
+
+def _embed(text: str, hand: Hand) -> str:
+    """``text`` (XML) with the hand's exact description as a comment after the XML declaration."""
+    return _after_declaration(text, f"<!-- {_EMBED}{hand.to_json()} -->\n")
 
 
 def _exact(source: str, hand: Hand) -> Hand:
@@ -350,21 +354,22 @@ def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
     text = yourdfpy.URDF(robot=robot, build_scene_graph=False, load_meshes=False).write_xml_string()
     text = text.decode() if isinstance(text, bytes) else str(text)
     if angles is not None:
-        a = np.asarray(angles, dtype=np.float64)
-        if a.shape != (g.fingers, g.links):
-            raise ValueError(f"angles must have shape ({g.fingers}, {g.links}), got {a.shape}")
-        q = a - g.rest_angles
-        values = " ".join(f"f{m}_j{n}={q[m, n]!r}" for m in range(g.fingers) for n in range(g.links))
-        comment = f"<!-- hugger grasp joint values (rad): {values} -->\n"
-        head, sep, rest = text.partition("?>")
-        text = head + sep + "\n" + comment + rest.lstrip("\n") if sep else comment + text
+        values = " ".join(f"{k}={v!r}" for k, v in grasp_joint_values(hand, angles).items())
+        text = _after_declaration(text, f"<!-- hugger grasp joint values (rad): {values} -->\n")
     return _embed(text, hand)
+
+
+def _joint_values(hand: Hand, angles: Any) -> np.ndarray:
+    """URDF/MJCF joint values q = theta - rest (M, N) of hugger angles (M, N)."""
+    a = np.asarray(angles, dtype=np.float64)
+    if a.shape != (hand.fingers, hand.links):
+        raise ValueError(f"angles must have shape ({hand.fingers}, {hand.links}), got {a.shape}")
+    return cast(np.ndarray, a - hand.rest_angles)
 
 
 def grasp_joint_values(hand: Hand, angles: Any) -> dict[str, float]:
     """URDF/MJCF joint values ``{f{m}_j{n}: q}`` (rad) of hugger angles (M, N): q = theta - rest."""
-    a = np.asarray(angles, dtype=np.float64)
-    q = a - hand.rest_angles
+    q = _joint_values(hand, angles)
     return {f"f{m}_j{n}": float(q[m, n]) for m in range(hand.fingers) for n in range(hand.links)}
 
 
@@ -519,10 +524,7 @@ def to_mjcf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
             parent, base = body, pts[n]
         ET.SubElement(parent, "site", name=f"f{m}_tip", pos=f(pts[-1] - pts[-2]))
     if angles is not None:
-        a = np.asarray(angles, dtype=np.float64)
-        if a.shape != (g.fingers, g.links):
-            raise ValueError(f"angles must have shape ({g.fingers}, {g.links}), got {a.shape}")
         key = ET.SubElement(root, "keyframe")
-        ET.SubElement(key, "key", name="grasp", qpos=f(a - g.rest_angles))
+        ET.SubElement(key, "key", name="grasp", qpos=f(_joint_values(g, angles)))
     ET.indent(root)
     return _embed(ET.tostring(root, encoding="unicode") + "\n", hand)

@@ -276,9 +276,10 @@ class BoxSkin(Sensing):
         """The box as a :class:`hugger.Object` (exact: a box mesh is the box)."""
         from .. import objects
 
-        obj = objects.box(extents=self.extents, center=(0.0, 0.0, 0.0), divisions=divisions)
         if np.allclose(self.rotation, np.eye(3)):
             return objects.box(extents=self.extents, center=self.center, divisions=divisions)
         from ..world import Object
+
+        obj = objects.box(extents=self.extents, center=(0.0, 0.0, 0.0), divisions=divisions)
 
         return Object(obj.vertices @ self.rotation.T + self.center, obj.faces)
