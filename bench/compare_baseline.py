@@ -28,6 +28,7 @@ import numpy as np
 
 import hugger
 from hugger import physics
+from hugger._files import write_atomic
 
 from hugger import baselines
 
@@ -192,9 +193,9 @@ def main(argv: list[str] | None = None) -> int:
     text = markdown(rows, not args.no_validate, command)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text)
+    write_atomic(out, text)
     if args.json:
-        Path(args.json).write_text(json.dumps(rows, indent=2) + "\n")
+        write_atomic(args.json, json.dumps(rows, indent=2) + "\n")
     print(text)
     print(f"written to {out} in {time.perf_counter() - t0:.0f} s")
     return 0

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import hugger
 from hugger import analysis, scenarios
+from hugger._files import write_atomic
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared"
@@ -71,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
             print(row, flush=True)
     if args.out:
         args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text("\n".join(rows) + "\n")
+        write_atomic(args.out, "\n".join(rows) + "\n")
     print(json.dumps({"objects": len(specs)}), file=sys.stderr)
     return 0
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 import tempfile
 import time
@@ -25,7 +24,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 import numpy as np  # noqa: E402
 
 import hugger  # noqa: E402
-from hugger._files import write_atomic  # noqa: E402
+from hugger._files import atomic_path, write_atomic  # noqa: E402
 from hugger import analysis, physics, skins  # noqa: E402
 from hugger.scenarios import default_case  # noqa: E402
 from helpers import CHECKER, check_file, load_checker  # noqa: E402
@@ -154,9 +153,8 @@ def plot(rows: list[dict], path: str, physics_done: bool, matched: list[dict] | 
     axes[0].set_ylabel("fraction of the 4 objects")
     axes[0].legend(fontsize=7, loc="lower left")
     fig.tight_layout()
-    tmp = path + ".tmp.png"
-    fig.savefig(tmp, dpi=90)
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=90)
 
 
 if __name__ == "__main__":

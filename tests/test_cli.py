@@ -372,6 +372,14 @@ def test_progress_draws_on_a_terminal_only():
     assert pipe.getvalue() == ""
 
 
+def test_progress_update_is_a_done_total_callback():
+    tty = _Tty()
+    with Progress("frames", total=1, stream=tty, delay=0.0) as p:
+        for i in range(1, 8):
+            p.update(i, 7)  # as progress(done, total) callbacks call it
+    assert p.total == 7 and "7/7" in tty.getvalue()
+
+
 def test_progress_spinner_runs_while_the_main_thread_works():
     import time
 

@@ -105,6 +105,19 @@ def test_nonconvex_object_is_decomposed_and_cached(monkeypatch, cache):
     assert len(physics.convex_pieces(blob.vertices, blob.faces, decompose=False)) == 1
 
 
+def test_pieces_are_remembered_per_mesh_and_cache(monkeypatch, tmp_path):
+    """The hull test (a MuJoCo compile) runs once per mesh and cache folder in a process."""
+    from hugger.physics import decompose
+
+    ball = hugger.objects.sphere(0.04, subdivisions=3)
+    first = physics.convex_pieces(ball.vertices, ball.faces, cache_dir=tmp_path)
+    monkeypatch.setattr(decompose, "hull_volume", lambda v: pytest.fail("asked again"))
+    again = physics.convex_pieces(ball.vertices.copy(), ball.faces, cache_dir=tmp_path)
+    assert len(again) == 1 and np.array_equal(again[0][0], first[0][0]) and not again[0][0].flags.writeable
+    with pytest.raises(pytest.fail.Exception, match="asked again"):  # another folder is another cache
+        physics.convex_pieces(ball.vertices, ball.faces, cache_dir=tmp_path / "other")
+
+
 def test_missing_coacd_raises_import_error_naming_the_extra(monkeypatch, tmp_path):
     blob = hugger.objects.blob(0.04, amplitude=0.6, seed=1, subdivisions=2)
     assert physics.hull_volume(blob.vertices) / blob.volume > physics.CONVEX_RATIO

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import math
+import numbers
+import os
 from typing import Any
 
 
@@ -16,3 +18,20 @@ def positive(name: str, value: Any, allow_zero: bool = False) -> float:
         kind = "non-negative" if allow_zero else "positive"
         raise ValueError(f"{name} must be a {kind} finite number, got {value!r}")
     return x
+
+
+def cpus() -> int:
+    """The CPUs this process may run on (all of them where the OS cannot say)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def workers(name: str, value: Any) -> int:
+    """A count of threads or processes: a whole number >= 1, or None for :func:`cpus`."""
+    if value is None:
+        return cpus()
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+        raise ValueError(f"{name} must be a whole number >= 1 or None, got {value!r}")
+    return int(value)

@@ -33,7 +33,10 @@ class Progress:
             self._thread.start()
         return self
 
-    def update(self, done: int) -> None:
+    def update(self, done: int, total: int | None = None) -> None:
+        """``done`` of ``total`` (when given, it replaces the total): a ``progress(done, total)`` callback."""
+        if total is not None:
+            self.total = total
         self._done = done
         if self.enabled and self.total and time.perf_counter() - self._start >= self.delay:
             frac = min(1.0, done / self.total)

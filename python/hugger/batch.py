@@ -6,11 +6,10 @@ and its exception is reported with the case's index, never lost.
 """
 from __future__ import annotations
 
-import numbers
-import os
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Mapping
 
+from . import _checks
 from .hand import Hand
 from .planner import Planner, _timeout
 from .trajectory import Trajectory
@@ -124,13 +123,7 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
     """
     if errors not in ("raise", "return"):
         raise ValueError(f"errors must be 'raise' or 'return', got {errors!r}")
-    if threads is None:
-        try:
-            threads = len(os.sched_getaffinity(0))
-        except AttributeError:  # not on Linux
-            threads = os.cpu_count() or 1
-    elif isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1:
-        raise ValueError(f"threads must be a whole number >= 1 or None, got {threads!r}")
+    threads = _checks.workers("threads", threads)
     if progress is not None and not callable(progress):
         raise ValueError("progress must be callable as progress(done, total), or None")
     if hand is not None and not isinstance(hand, Hand):

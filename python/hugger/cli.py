@@ -231,7 +231,7 @@ def _search(case: Case, hand: Hand, args: argparse.Namespace) -> tuple[Trajector
     pole = case.palm_pose[:3, 3] - case.target
     with Progress(f"searching {args.approaches} approaches of {case.name}", total=args.approaches) as p:
         result = hugger.search(hand, case.obj, case.target, approaches=args.approaches, threads=args.threads,
-                               pole=pole, timeout=args.timeout, progress=lambda i, n: p.update(i),
+                               pole=pole, timeout=args.timeout, progress=p.update,
                                verify=args.verify, **_params(args))
     chosen = result.chosen
     summary = {"approaches": len(result.candidates), "best": result.best,
@@ -344,8 +344,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         _note("ffmpeg not found: writing the GIF only (pip install imageio-ffmpeg for MP4)")
     for name in movies:
         with Progress(f"writing {name}", total=1) as p, atomic_path(out / name) as tmp:
-            viz.animate(traj, tmp, max_frames=120, hold=1.0,
-                        progress=lambda i, n, p=p: (setattr(p, "total", n), p.update(i)))  # type: ignore[misc, func-returns-value]
+            viz.animate(traj, tmp, max_frames=120, hold=1.0, progress=p.update)
         written.append(name)
     summary["files"] = written
     write_atomic(out / "summary.json", json.dumps(summary, indent=2) + "\n")
@@ -392,7 +391,7 @@ def cmd_render(args: argparse.Namespace) -> int:
             for key, value in (("fps", args.fps), ("max_frames", args.frames), ("view", args.view)):
                 if value is not None:
                     kwargs[key] = value
-            viz.animate(traj, tmp, progress=lambda i, n: (setattr(p, "total", n), p.update(i)),  # type: ignore[func-returns-value]
+            viz.animate(traj, tmp, progress=p.update,
                         hold=1.0, **kwargs)
         else:
             draws: dict[str, Callable[..., Any]] = {"sheet": viz.overview, "fig4": viz.fig4, "fig5": viz.fig5,
@@ -517,14 +516,10 @@ def cmd_generate(args: argparse.Namespace) -> int:
     log = None if interactive else _note  # plain lines in logs, a bar on a terminal
     argv = args._argv
     with Progress("generating shards", total=1, delay=0.0) as p:
-        def progress(done: int, total: int) -> None:
-            p.total = total
-            p.update(done)
-
         index = dataset.generate(args.objects, args.out, approaches=args.approaches, hands=args.hands or ["5x5"],
                                  validate=args.validate, workers=args.workers, backend=args.backend,
                                  address=args.address, scale=args.scale, params=_params(args),
-                                 command=["hugger", *argv], log=log, progress=progress)
+                                 command=["hugger", *argv], log=log, progress=p.update)
     grasps = len(index["shards"]) * int(index["parameters"]["approaches"])
     print(f"wrote {args.out}/index.json: {len(index['shards'])} shards, {grasps} grasps")
     return EXIT_OK

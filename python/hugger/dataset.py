@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
 
 import numpy as np
 
+from . import _checks
 from ._files import remove_temporaries, write_atomic
 from ._types import VERSION
 
@@ -247,8 +248,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
     if not objects:
         raise ValueError("give at least one object")
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
-        raise ValueError(f"workers must be a whole number >= 1, got {workers!r}")
+    workers = _checks.workers("workers", workers)
     ray: Any = _ray() if backend == "ray" else None
     from .batch import _PARAMS
 
@@ -282,11 +282,6 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     todo = [t for t in tasks if not _shard_done(shard_dir / t["file"], t["key"])]
     say = log or (lambda s: None)
     say(f"{len(tasks) - len(todo)} of {len(tasks)} shards already done; making {len(todo)}")
-    if workers is None:
-        try:
-            workers = max(1, len(os.sched_getaffinity(0)))
-        except AttributeError:
-            workers = os.cpu_count() or 1
     done = len(tasks) - len(todo)
     if progress is not None:
         progress(done, len(tasks))

@@ -26,13 +26,13 @@ from __future__ import annotations
 
 import math
 import numbers
-import os
 import time
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from . import _checks
 from ._types import CONTACT_DISTANCE
 from .hand import Hand
 from .trajectory import Trajectory
@@ -136,17 +136,6 @@ def approach_directions(count: int, pole: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
     return out
 
 
-def _threads(threads: Any) -> int:
-    if threads is None:
-        try:
-            return max(1, len(os.sched_getaffinity(0)))
-        except AttributeError:
-            return os.cpu_count() or 1
-    if isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1:
-        raise ValueError(f"threads must be a whole number >= 1 or None, got {threads!r}")
-    return int(threads)
-
-
 def torque_scale(obj: Object, target: np.ndarray) -> float:
     """The torque scale of the ranking's grasp quality: the object's largest distance from T (m)."""
     return float(np.linalg.norm(obj.vertices - target, axis=1).max())
@@ -246,7 +235,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
     if rules is not None:
         params = {**params, "rules": rules}
     limit = _timeout(timeout)
-    workers = _threads(threads)
+    workers = _checks.workers("threads", threads)
     t = interior_target(obj) if target is None else np.asarray(target, dtype=np.float64).reshape(3)
     if not np.all(np.isfinite(t)) or not bool(obj.inside(t[None])[0]):
         raise ValueError(f"target T {t.tolist()} is not inside the object")

@@ -9,7 +9,7 @@ from typing import Any, cast
 
 import numpy as np
 
-from .._checks import positive as _positive
+from .._checks import positive as _positive, workers as _workers
 from .._types import CONTACT_DISTANCE
 from ._common import _index, _mujoco, _trajectory
 from .decompose import COACD_SETTINGS, CONVEX_RATIO, convex_pieces
@@ -186,11 +186,7 @@ def validate_robust(traj: Any, k: int = -1, *, workers: int | None = None, bisec
     """
     traj = _trajectory(traj)
     k = _index(traj, k)
-    if workers is None:
-        try:
-            workers = max(1, len(os.sched_getaffinity(0)))
-        except AttributeError:
-            workers = os.cpu_count() or 1
+    workers = _workers("workers", workers)
     weight = 0.1 * GRAVITY
     nominal_force = 10.0 * weight
     names = list(PERTURBATIONS)
