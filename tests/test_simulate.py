@@ -16,12 +16,6 @@ from hugger import mujoco_skin  # noqa: E402
 
 #: Long runs (minutes): with HUGGER_SLOW=1 (bench/closed_loop.py prints the same figures).
 LONG = pytest.mark.skipif(not os.environ.get("HUGGER_SLOW"), reason="long run: set HUGGER_SLOW=1")
-HAND = dict(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
-
-
-@pytest.fixture(scope="module")
-def hand():
-    return hugger.Hand(**HAND)
 
 
 def test_mujoco_skin_gaps_match_the_mesh_world(hand):

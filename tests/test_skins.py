@@ -15,7 +15,6 @@ from helpers import SHARED_MISSING, CHECKER, check_file, random_rotation
 
 #: Long runs (minutes): with HUGGER_SLOW=1 (bench/skins_agreement.py prints the same figures).
 LONG = pytest.mark.skipif(not os.environ.get("HUGGER_SLOW"), reason="long run: set HUGGER_SLOW=1")
-HAND = dict(fingers=5, links=5, link_length=0.02, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01)
 
 
 # A skin written from docs/skins.md alone: a ball of radius R about c.
@@ -37,11 +36,6 @@ class Ball(hugger.Sensing):
         rho, z = math.hypot(q[0], q[1]), q[2]
         dr, dz = rho - radius, max(z, -thickness - z)
         return math.hypot(max(dr, 0.0), max(dz, 0.0)) + min(max(dr, dz), 0.0) - self.R
-
-
-@pytest.fixture(scope="module")
-def hand():
-    return hugger.Hand(**HAND)
 
 
 def start():

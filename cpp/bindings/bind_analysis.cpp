@@ -53,25 +53,4 @@ void bind_analysis(py::module_& m) {
       py::arg("torque_scale") = 1.0, py::arg("volume") = true,
       "Force closure, epsilon and volume of the L1 grasp wrench space of contacts at points (C, 3) (m, world) "
       "with outward normals (C, 3), torques about center (3,) divided by torque_scale (m). Qhull, GIL released. volume=False skips the full hull (volume reported 0): epsilon by cutting planes, ~1 ms.");
-
-  m.def(
-      "primitive_wrenches",
-      [](const ArrayD& points, const ArrayD& normals, const ArrayD& center, double mu, int cone_edges,
-         double torque_scale) {
-        const PointsN3 p = to_points(points, "points");
-        const PointsN3 n = to_points(normals, "normals");
-        if (n.rows() != p.rows())
-          throw py::value_error("normals must have shape (" + std::to_string(p.rows()) + ", 3), got (" +
-                                std::to_string(n.rows()) + ", 3)");
-        analysis::QualityRequest req;
-        req.mu = mu;
-        req.cone_edges = cone_edges;
-        req.torque_scale = torque_scale;
-        const MatrixX w = analysis::primitive_wrenches(p, n, to_vec3(center, "center"), req);
-        py::array_t<double> out({static_cast<py::ssize_t>(w.rows()), py::ssize_t(6)});
-        std::copy(w.data(), w.data() + w.size(), out.mutable_data());
-        return out;
-      },
-      py::arg("points"), py::arg("normals"), py::arg("center"), py::arg("mu") = 0.5, py::arg("cone_edges") = 8,
-      py::arg("torque_scale") = 1.0, "Primitive contact wrenches (C * E, 6), contact-major (see grasp_quality).");
 }

@@ -8,7 +8,7 @@ import numpy
 import numpy.typing
 import typing
 __all__: list[str] = ['HandModel', 'Object', 'Planner', 'QualityResult', 'Sensing', 'SimulatedWorld', 'Touch',
-                      'grasp_quality', 'primitive_wrenches']
+                      'grasp_quality']
 class HandModel:
     """
     Immutable hand: M fingers of N links on a round palm (metres).
@@ -260,10 +260,7 @@ def grasp_quality(points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64
     """
     Force closure, epsilon and volume of the L1 grasp wrench space of contacts at points (C, 3) (m, world) with outward normals (C, 3), torques about center (3,) divided by torque_scale (m). Qhull, GIL released. volume=False skips the full hull (volume reported 0): epsilon by cutting planes.
     """
-def primitive_wrenches(points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], normals: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], center: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], mu: typing.SupportsFloat = 0.5, cone_edges: typing.SupportsInt = 8, torque_scale: typing.SupportsFloat = 1.0) -> numpy.typing.NDArray[numpy.float64]:
-    """
-    Primitive contact wrenches (C * E, 6), contact-major (see grasp_quality).
-    """
+
 
 #: A palm pose is rigid when |R^T R - I| and |det R - 1| are at most this (the engine's rule).
 RIGID_TOLERANCE: float

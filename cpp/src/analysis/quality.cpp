@@ -81,20 +81,14 @@ MatrixX primitive_wrenches(const PointsN3& points, const PointsN3& normals, cons
 
 namespace {
 
-/// One Qhull run over the rows `rows` of w: every facet's unit normal and depth (-offset: the
-/// origin's distance inside it, negative outside) and, when asked, the hull volume.
-struct Hull {
-  std::vector<std::array<double, 6>> normal;
-  std::vector<double> depth;
-  double volume = 0.0;
-};
-
-bool run_qhull(const MatrixX& w, const std::vector<Eigen::Index>& rows, bool want_volume, Hull* out) {
-  const int n = static_cast<int>(rows.size());
+/// One Qhull run over the rows of w (n, 6): the smallest facet depth (-offset: the origin's
+/// distance inside the facet, negative outside; -inf without facets) and, when asked, the volume.
+bool run_qhull(const MatrixX& w, bool want_volume, double* min_depth, double* volume) {
+  const int n = static_cast<int>(w.rows());
   if (n < 7) return false;
   std::vector<coordT> pts(static_cast<std::size_t>(n) * 6);
   for (int i = 0; i < n; ++i)
-    for (int k = 0; k < 6; ++k) pts[static_cast<std::size_t>(i) * 6 + k] = w(rows[i], k);
+    for (int k = 0; k < 6; ++k) pts[static_cast<std::size_t>(i) * 6 + k] = w(i, k);
   qhT qh_qh;
   qhT* qh = &qh_qh;
   FILE* err = quiet_stream();
@@ -106,18 +100,17 @@ bool run_qhull(const MatrixX& w, const std::vector<Eigen::Index>& rows, bool wan
   const int code = qh_new_qhull(qh, 6, n, pts.data(), False, cmd, nullptr, err);
   const bool ok = code == 0;
   if (ok) {
-    out->normal.clear();
-    out->depth.clear();
+    double depth = kInf;
+    bool any = false;
     facetT* facet;
     FORALLfacets {
-      std::array<double, 6> u;
-      for (int k = 0; k < 6; ++k) u[k] = facet->normal[k];
-      out->normal.push_back(u);
-      out->depth.push_back(-facet->offset);
+      depth = std::min(depth, -facet->offset);
+      any = true;
     }
+    *min_depth = any ? depth : -kInf;
     if (want_volume) {
       qh_getarea(qh, qh->facet_list);
-      out->volume = qh->totvol;
+      *volume = qh->totvol;
     }
   }
   qh_freeqhull(qh, !qh_ALL);
@@ -131,13 +124,7 @@ bool run_qhull(const MatrixX& w, const std::vector<Eigen::Index>& rows, bool wan
 bool wrench_hull(const MatrixX& wrenches, double* min_depth, double* volume) {
   if (wrenches.cols() != 6)
     throw std::invalid_argument("wrenches must be (n, 6), got " + std::to_string(wrenches.cols()) + " columns");
-  std::vector<Eigen::Index> all(static_cast<std::size_t>(wrenches.rows()));
-  std::iota(all.begin(), all.end(), Eigen::Index(0));
-  Hull h;
-  if (!run_qhull(wrenches, all, true, &h)) return false;
-  *min_depth = h.depth.empty() ? -kInf : *std::min_element(h.depth.begin(), h.depth.end());
-  *volume = h.volume;
-  return true;
+  return run_qhull(wrenches, true, min_depth, volume);
 }
 
 namespace {
@@ -250,12 +237,9 @@ bool min_depth_by_cuts(const MatrixX& w, double* min_depth, int* hull_runs) {
       return true;
     }
   }
-  std::vector<Eigen::Index> all(static_cast<std::size_t>(n));
-  std::iota(all.begin(), all.end(), Eigen::Index(0));
-  Hull h;
-  if (!run_qhull(w, all, false, &h)) return false;
+  double unused = 0.0;
+  if (!run_qhull(w, false, min_depth, &unused)) return false;
   ++*hull_runs;
-  *min_depth = *std::min_element(h.depth.begin(), h.depth.end());
   return true;
 }
 

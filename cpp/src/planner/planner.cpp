@@ -499,6 +499,7 @@ void Planner::phase2_iteration() {
   // (c) the palm step sigma, clipped to [0, s] and to the free distance of the palm, the FROZEN
   // fingers, the roots and the DONE fingers (which move only rigidly with the palm).
   double sigma = 0.0;
+  const double min_sigma = 1e-2 * delta;  // smaller palm steps are rounding, not motion
   if (!palm_touched_) {
     const bool none_in_contact =
         std::none_of(states_.begin(), states_.end(), [](TipState t) { return t == TipState::kContact; });
@@ -535,14 +536,15 @@ void Planner::phase2_iteration() {
       for (int m = 0; m < M && sigma > 0.0; ++m)
         if (states_[m] == TipState::kDone) sigma = translation_free(m, old[m], sigma);
       // Steps below a hundredth of delta are rounding, not motion (they would crawl forever).
-      if (sigma < 1e-2 * delta) sigma = 0.0;
+      if (sigma < min_sigma) sigma = 0.0;
     }
   }
 
   // (d) Tail2Head toward the moved roots; commit finger by finger, checking the motion of each
   // finger (joint steps, swept collision) and the fingers against each other. If anything fails
   // with the palm moved, retry with a shorter palm step, and finally with the palm still.
-  auto attempt = [&](double sig, bool last, std::vector<Chain>& out, std::vector<TipState>& st) {
+  auto attempt = [&](double sig, std::vector<Chain>& out, std::vector<TipState>& st) {
+    const bool last = sig == 0.0;  // the palm still: what cannot move stays where it is, DONE
     out = old;
     st = states_;
     const double new_eta = eta_ + sig;
@@ -591,14 +593,14 @@ void Planner::phase2_iteration() {
   std::vector<Chain> next;
   std::vector<TipState> next_states;
   bool committed = false;
-  for (double sig = sigma; sig >= 1e-2 * delta && !committed; sig *= 0.25) {
-    committed = attempt(sig, false, next, next_states);
+  for (double sig = sigma; sig >= min_sigma && !committed; sig *= 0.25) {
+    committed = attempt(sig, next, next_states);
     if (committed) sigma = sig;
     else ++stats_.sigma_retries;
   }
   if (!committed) {
     sigma = 0.0;
-    attempt(0.0, true, next, next_states);
+    attempt(0.0, next, next_states);
   }
   bool starts_closing = false;  // a finger starts closing: the next iteration moves it
   for (int m = 0; m < M; ++m) {
