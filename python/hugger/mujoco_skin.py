@@ -143,10 +143,12 @@ class Simulation:
     def _distance(self, probe: int, cap: float) -> tuple[float, np.ndarray | None, np.ndarray | None]:
         """Smallest signed distance from the probe geom to the object's pieces as the skin sees
         them (``latency`` periods ago), with the points (on the probe, on the object)."""
-        xpos, xmat = self._poses[0]
-        live = [(self.data.geom_xpos[g].copy(), self.data.geom_xmat[g].copy()) for g in self.pieces]
-        for g, p, r in zip(self.pieces, xpos, xmat):
-            self.data.geom_xpos[g], self.data.geom_xmat[g] = p, r
+        delayed = self.latency > 0  # without latency the pose recorded last is the live one
+        live = [(self.data.geom_xpos[g].copy(), self.data.geom_xmat[g].copy()) for g in self.pieces] if delayed else []
+        if delayed:
+            xpos, xmat = self._poses[0]
+            for g, p, r in zip(self.pieces, xpos, xmat):
+                self.data.geom_xpos[g], self.data.geom_xmat[g] = p, r
         fromto = np.zeros(6)
         pts: tuple[np.ndarray | None, np.ndarray | None]
         best, pts = math.inf, (None, None)
@@ -157,7 +159,7 @@ class Simulation:
                 if d < best:
                     best, pts = d, (fromto[:3].copy(), fromto[3:].copy())
         finally:
-            for g, (p, r) in zip(self.pieces, live):
+            for g, (p, r) in zip(self.pieces, live):  # nothing to restore without latency
                 self.data.geom_xpos[g], self.data.geom_xmat[g] = p, r
         return best, pts[0], pts[1]
 
