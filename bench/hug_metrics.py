@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import importlib.util
 import io
 import json
 import math
@@ -35,17 +34,12 @@ import hugger
 from hugger import analysis, scenarios
 
 ROOT = Path(__file__).resolve().parents[1]
-CHECKER = ROOT.parent / "shared" / "tools" / "check_trajectory.py"
+sys.path.insert(0, str(ROOT / "tests"))
+
+from helpers import CHECKER, load_checker, random_rotation as _rotation  # noqa: E402
+
 KINDS = ("sphere", "ellipsoid", "box", "cylinder", "blob")
 RULES = ("paper", "hug")
-
-
-def _rotation(rng: np.random.Generator) -> np.ndarray:
-    q = rng.normal(size=4)
-    w, x, y, z = q / np.linalg.norm(q)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
 def fits(extents: np.ndarray, hand: hugger.Hand) -> bool:
@@ -104,15 +98,6 @@ def random_case(seed: int) -> tuple[str, hugger.Hand, hugger.Object, np.ndarray,
     return kind, hand, obj, target, pose
 
 
-def _checker():
-    if not CHECKER.is_file():
-        return None
-    spec = importlib.util.spec_from_file_location("check_trajectory", CHECKER)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
 def run_case(seed: int, rules: str, checker=None) -> dict:
     """Plan case ``seed`` with ``rules``; its status, contacts and (with a checker) verdict."""
     kind, hand, obj, target, pose = random_case(seed)
@@ -152,7 +137,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--check", action="store_true", help="run the independent checker on every plan")
     ap.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     args = ap.parse_args(argv)
-    checker = _checker() if args.check else None
+    checker = load_checker() if args.check and CHECKER.is_file() else None
     if args.check and checker is None:
         print(f"note: {CHECKER} is absent; plans are not checked", file=sys.stderr)
     result = {}

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import importlib.util
 import io
 import json
@@ -29,10 +30,16 @@ ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared"
 
 
-def checker_verdict(path: Path) -> str:
+@functools.lru_cache(maxsize=None)
+def _checker():  # loaded once, not once per plan
     spec = importlib.util.spec_from_file_location("check_trajectory", SHARED / "tools" / "check_trajectory.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
+    return mod
+
+
+def checker_verdict(path: Path) -> str:
+    mod = _checker()
     with contextlib.redirect_stdout(io.StringIO()):
         return "pass" if mod.main([str(path)]) == 0 else "FAIL"
 
@@ -59,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
             t0 = time.perf_counter()
             traj = hugger.Planner(hand, case.obj, case.target, case.palm_pose, rules=rules).plan()
             ms = 1000 * (time.perf_counter() - t0)
-            a = analysis.analyze(traj)
+            a = analysis.analyze(traj, obj=case.obj, volume=False)  # the volume is not printed
             row = (f"| {Path(case.name).stem} | {len(case.obj.faces)} | {rules} | {traj.status} | {len(traj)} | "
                    f"{a['links_in_contact']}/{a['links']} | {'yes' if a['palm_contact'] else 'no'} | "
                    f"{a['epsilon']:.3f} | {ms:.1f} |")

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import hugger
+from hugger._rotation import quaternion_wxyz
 from hugger import cli, viewer
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -71,7 +72,7 @@ def test_link_frames_put_each_capsule_on_its_link(plans):
             tip = frames[..., :3, 3] + rot[..., :, 2] * plan.lengths[..., None]
             assert np.allclose(frames[..., :3, 3], j[:, :-1]) and np.allclose(tip, j[:, 1:], atol=1e-9)
             for m in range(plan.fingers):  # the quaternion is the rotation
-                q = viewer._wxyz(rot[m, 0])
+                q = quaternion_wxyz(rot[m, 0])
                 w, x, y, z = q
                 r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
                               [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],

@@ -245,15 +245,15 @@ def _search(case: Case, hand: Hand, args: argparse.Namespace) -> tuple[Trajector
 # Commands
 
 
-def _provenance(args: argparse.Namespace, argv: Sequence[str] | None) -> dict[str, Any]:
-    """What made a trajectory file: the command line, its parsed options and the object's name or
-    path (``argv``: the arguments main() was given, None for the process's own)."""
+def _provenance(args: argparse.Namespace) -> dict[str, Any]:
+    """What made a trajectory file: the command line (the arguments main() was given), its parsed
+    options and the object's name or path."""
     from .objects import BUILTINS
 
     spec = os.fspath(args.object)
     builtin = spec in BUILTINS
     options = {k: v for k, v in sorted(vars(args).items()) if k not in ("func", "json") and not k.startswith("_")}
-    return {"command": ["hugger", *(sys.argv[1:] if argv is None else argv)],
+    return {"command": ["hugger", *args._argv],
             "object": spec if builtin else os.path.abspath(spec), "object_source": "builtin" if builtin else "file",
             "arguments": options}
 
@@ -293,7 +293,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         traj, elapsed, searched = _search(case, hand, args)
     else:
         traj, elapsed = _plan(case, hand, _params(args), case.name, args.timeout)
-    traj = traj.with_provenance(**_provenance(args, args._argv))
+    traj = traj.with_provenance(**_provenance(args))
     traj.save(out)
     report = {"object": case.name, "out": str(out), **_report(traj, elapsed, case.obj)}
     if searched is not None:

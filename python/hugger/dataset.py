@@ -286,9 +286,12 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     if progress is not None:
         progress(done, len(tasks))
 
+    digests: dict[str, str] = {}  # of the shards written now (kept ones are hashed from disk)
+
     def finished(task: dict[str, Any], data: bytes) -> None:
         nonlocal done
         write_atomic(shard_dir / task["file"], data)
+        digests[task["file"]] = hashlib.sha256(data).hexdigest()
         done += 1
         say(f"shard {done}/{len(tasks)} written: {task['file']}")
         if progress is not None:
@@ -343,7 +346,8 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         "objects": obj_list,
         "hands": hand_entries,
         "shards": [{"file": f"shards/{t['file']}", "object": t["object"]["name"], "hand": t["hand"]["label"],
-                    "task_sha256": t["key"], "sha256": _sha256_file(str(shard_dir / t["file"]))} for t in tasks],
+                    "task_sha256": t["key"],
+                    "sha256": digests.get(t["file"]) or _sha256_file(str(shard_dir / t["file"]))} for t in tasks],
     }
     write_atomic(root / "index.json", json.dumps(index, indent=1, sort_keys=True) + "\n")
     return index
@@ -395,6 +399,7 @@ class Dataset:
             raise ValueError(f"{index_path} is not a hugger dataset index of version {DATASET_VERSION}")
         self.shards: list[dict[str, Any]] = list(self.index["shards"])
         self._cache: dict[int, dict[str, np.ndarray]] = {}
+        self._objects: dict[str, Object] = {}
         self._sizes = []
         for s in self.shards:  # the grasp counts only: whole shards load on first use (shard())
             with np.load(self.root / s["file"], allow_pickle=False) as z:
@@ -436,7 +441,12 @@ class Dataset:
             yield self[i]
 
     def object(self, name: str) -> Object:
-        """The object ``name`` as a :class:`hugger.Object`, checked against its recorded hash."""
+        """The object ``name`` as a :class:`hugger.Object`, checked against its recorded hash (once)."""
+        if name not in self._objects:
+            self._objects[name] = self._load_object(name)
+        return self._objects[name]
+
+    def _load_object(self, name: str) -> Object:
         from .scenarios import load_object
 
         entry = next((o for o in self.index["objects"] if o["name"] == name), None)

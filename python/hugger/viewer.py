@@ -117,11 +117,6 @@ def _rotation_z_to(d: np.ndarray) -> np.ndarray:
     return np.column_stack([x, np.cross(d, x), d])
 
 
-def _wxyz(r: np.ndarray) -> np.ndarray:
-    """The unit quaternion (w, x, y, z) of a rotation matrix."""
-    return quaternion_wxyz(r)
-
-
 @dataclass(frozen=True)
 class _Plan:
     """What both the viewer and the exporter draw of one trajectory."""
@@ -240,8 +235,9 @@ class Viewer:
         self.offsets = offsets
         self.objects, self.palms, self.links, self.contact_clouds = [], [], [], []
         # the camera frames the final grasps (what is shown first)
-        lo = np.min([p.extent(True)[0] + o for p, o in zip(self.plans, offsets)], axis=0)
-        hi = np.max([p.extent(True)[1] + o for p, o in zip(self.plans, offsets)], axis=0)
+        finals = [p.extent(True) for p in self.plans]
+        lo = np.min([e[0] + o for e, o in zip(finals, offsets)], axis=0)
+        hi = np.max([e[1] + o for e, o in zip(finals, offsets)], axis=0)
         for i, (plan, off) in enumerate(zip(self.plans, offsets)):
             t = plan.traj
             names = scene_nodes(plan.fingers, plan.links, i)
@@ -266,7 +262,7 @@ class Viewer:
                 names["contacts"][0], np.zeros((1, 3)), colors=CONTACT_RGB, point_size=max(plan.radius, 2e-3),
                 point_shape="circle", precision="float32"))
             label = labels[i] if labels is not None else f"plan {i}: {t.status}, {len(t)} configurations"
-            top = plan.extent(True)[1][2]
+            top = finals[i][1][2]
             scene.add_label(f"/plan{i}/label", label, position=(float(t.target[0]), float(t.target[1]), float(top)))
         centre = 0.5 * (lo + hi)
         size = float(np.max(hi - lo))
@@ -316,7 +312,7 @@ class Viewer:
                 kk = min(k, len(t) - 1)
                 pose = t.palm_pose[kk]
                 self.palms[i].position = pose[:3, 3]
-                self.palms[i].wxyz = _wxyz(pose[:3, :3])
+                self.palms[i].wxyz = quaternion_wxyz(pose[:3, :3])
                 frames = plan.link_frames(kk)
                 states = t.tip_state[kk]
                 for m in range(plan.fingers):
@@ -324,7 +320,7 @@ class Viewer:
                     for n in range(plan.links):
                         h = self.links[i][m * plan.links + n]
                         h.position = frames[m, n, :3, 3]
-                        h.wxyz = _wxyz(frames[m, n, :3, :3])
+                        h.wxyz = quaternion_wxyz(frames[m, n, :3, :3])
                         h.color = color
                 cloud = self.contact_clouds[i]
                 pts = self._contacts(i, kk) if self.show_contacts.value else np.zeros((0, 3))

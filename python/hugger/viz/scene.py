@@ -193,7 +193,6 @@ class _Scene:
         self.tris = tris[:, [0, 1, 2, 2]]  # drawn as quads with a repeated corner: one array, no ragged rows
         norm = np.linalg.norm(n, axis=1, keepdims=True)
         self.tri_normals = n / np.where(norm > 0, norm, 1.0)
-        self._object: Object | None = None
         self._contacts: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     def to_display(self, p: np.ndarray) -> np.ndarray:
@@ -201,13 +200,7 @@ class _Scene:
 
     @property
     def object(self) -> Object:
-        if self._object is None:
-            self._object = self.traj.object()
-        return self._object
-
-    def contacts(self, k: int) -> np.ndarray:
-        """Contact points (C, 3) of configuration k, in the world frame."""
-        return self._contact_set(k)[0]
+        return self.traj.object()  # built once and kept by the trajectory
 
     def _contact_set(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Contact points (C, 3) of configuration k and which of them are the palm's (C,) bool."""
