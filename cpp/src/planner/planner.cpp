@@ -480,9 +480,7 @@ void Planner::phase2_iteration() {
       rr.front = eta_;
       // The distal joint flexes at most to kMaxSwingFlexion: a finger that swings free of O
       // stops there (its tip then moves less than epsilon and it becomes DONE).
-      const Vec2 d1 = old[m][N] - old[m][N - 1];
-      const Vec2 d0 = N >= 2 ? Vec2(old[m][N - 1] - old[m][N - 2]) : Vec2(0.0, 1.0);
-      const double flexion = std::atan2(d0.x() * d1.y() - d0.y() * d1.x(), d0.dot(d1));
+      const double flexion = relative_angle(old[m], N - 1, old[m][N] - old[m][N - 1]);
       // ... and never beyond the distal joint's upper limit.
       const double reach = std::min(kMaxSwingFlexion, hand_.upper()(m, N - 1));
       rr.max_angle = std::clamp(reach - flexion, 0.0, s / hand_.link_length(m, N - 1));
@@ -508,13 +506,8 @@ void Planner::phase2_iteration() {
     } else if (hug) {
       // Every touching finger yields (it bends, clinging, as the palm advances), so the palm
       // advances a full step, clipped below like the paper's (and by the fingers' motion).
-      int count = 0;
       for (int m = 0; m < M; ++m)
-        if (states_[m] == TipState::kContact && touching[m]) {
-          sigma += s;
-          ++count;
-        }
-      sigma = count > 0 ? std::clamp(sigma / count, 0.0, s) : 0.0;
+        if (states_[m] == TipState::kContact && touching[m]) sigma = s;
     } else {
       for (int m = 0; m < M; ++m)
         if (states_[m] == TipState::kContact) sigma += (cand[m][0].y() - eta_) / M;

@@ -15,13 +15,12 @@ Vec2 base_of(const Chain& chain, int joint) {
 }  // namespace
 
 double relative_angle(const Chain& chain, int joint, const Vec2& dir) {
-  const Vec2 prev = base_of(chain, joint);
-  return std::atan2(prev.x() * dir.y() - prev.y() * dir.x(), prev.dot(dir));
+  return signed_angle(base_of(chain, joint), dir);
 }
 
 bool angle_within_limits(double lo, double hi, const Vec2& base, Vec2& dir, bool clamp) {
   if (lo == -kInf && hi == kInf) return true;
-  const double q = std::atan2(base.x() * dir.y() - base.y() * dir.x(), base.dot(dir));
+  const double q = signed_angle(base, dir);
   if (q >= lo - kLimitSlack && q <= hi + kLimitSlack) return true;
   if (!clamp) return false;
   const double target = q < lo ? lo : hi;

@@ -3,6 +3,7 @@
 /// Lumelsky's algorithm A_m): Head2Tail and Tail2Head with the clinging collision rule.
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include "hugger/sensing/sensing.hpp"
@@ -32,6 +33,11 @@ struct SnakeRequest {
 
 /// Slack (rad) on the joint limits: rounding of angles recomputed from joint positions.
 constexpr double kLimitSlack = 1e-12;
+
+/// The angle (rad, counter-clockwise in (xi, eta)) from direction `from` to direction `to`.
+inline double signed_angle(const Vec2& from, const Vec2& to) {
+  return std::atan2(from.x() * to.y() - from.y() * to.x(), from.dot(to));
+}
 
 /// Joint `joint`'s angle (rad, positive = flexion = counter-clockwise in (xi, eta)) when link
 /// `joint` points along `dir`: relative to link joint - 1 of `chain`, or to the palm normal.
