@@ -392,6 +392,48 @@ bool Planner::close_step(int m, Chain& chain) const {
   return false;
 }
 
+double Planner::free_along_p(const Pose& palm, double palm_gap, double sigma) {
+  const int M = hand_.fingers(), N = hand_.links();
+  const double s = params_.step, delta = params_.contact_tolerance, level = 0.5 * delta, r = hand_.link_radius();
+  const double cap = s + delta;
+  // Samples no farther apart than a quarter of max(r, s) (as translation_free); from the last
+  // clear sample a part may still move its gap there minus the level.
+  const double h = std::max(r, s) / 4.0;
+  auto along = [&](double g0, const auto& gap_at) {
+    if (g0 - level >= sigma) return;
+    const int S = std::max(1, static_cast<int>(std::ceil(sigma / h - 1e-9)));
+    double t0 = 0.0, g = g0;
+    for (int i = 1; i <= S; ++i) {
+      const double t = sigma * static_cast<double>(i) / S;
+      const double gt = gap_at(t);
+      if (gt < level) break;
+      t0 = t;
+      g = gt;
+    }
+    sigma = std::min(sigma, t0 + std::max(0.0, g - level));
+  };
+  const Vec3 p = palm.linear().col(2);
+  along(palm_gap, [&](double t) {
+    Pose q = palm;
+    q.translation() += t * p;
+    return sensing_->palm(q, hand_.palm_radius(), hand_.palm_thickness(), cap);
+  });
+  const Vec2 up(0.0, 1.0);
+  for (int m = 0; m < M && sigma > 0.0; ++m) {
+    const Chain& c = chains_[m];
+    if (states_[m] == TipState::kFrozen) {
+      for (int n = 0; n <= N && sigma > 0.0; ++n) {
+        const Vec2 a = n < N ? c[n] : c[0], b = n < N ? c[n + 1] : c[0];
+        along(frozen_gap(m, n, cap), [&](double t) { return link_gap(m, a + t * up, b + t * up, cap); });
+      }
+    } else {
+      const Vec2 rm = root2d(m, eta_);
+      along(link_gap(m, rm, rm, cap), [&](double t) { return link_gap(m, rm + t * up, rm + t * up, cap); });
+    }
+  }
+  return sigma;
+}
+
 bool Planner::approach() {
   const int M = hand_.fingers(), N = hand_.links();
   const double s = params_.step, level = 0.5 * params_.contact_tolerance;
@@ -551,7 +593,13 @@ void Planner::phase2_iteration() {
           free = std::min(free, link_gap(m, rm, rm, cap));
         }
       }
-      sigma = std::min(sigma, std::max(0.0, free - level));
+      if (hug && free - level < sigma) {
+        // Hug rule H4: each part may move its free distance along p, not only its gap (a part
+        // beside O, moving nearly parallel to its surface, would otherwise crawl).
+        sigma = free_along_p(palm, palm_gap, sigma);
+      } else {
+        sigma = std::min(sigma, std::max(0.0, free - level));
+      }
       for (int m = 0; m < M && sigma > 0.0; ++m)
         if (states_[m] == TipState::kDone) sigma = translation_free(m, old[m], sigma);
       // Steps below a hundredth of delta are rounding, not motion (they would crawl forever).
@@ -647,7 +695,7 @@ void Planner::phase2_iteration() {
       rest = true;
     }
     if (!rest) continue;
-    if (hug && palm_touched_ && !closed_[m]) {
+    if (hug && !closed_[m]) {
       // Hug rule: before it is DONE, a finger closes the joints beyond its distal-most touching
       // link until they touch too (close-until-contact, clinging), once.
       closing_[m] = 1;

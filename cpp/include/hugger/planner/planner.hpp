@@ -117,6 +117,9 @@ class Planner {
   /// Hug rule: one close-until-contact step of finger m (every joint distal to the proximal-most
   /// touching link flexes). Returns false when it cannot flex any more.
   bool close_step(int m, Chain& chain) const;
+  /// Hug rule H4: sigma clipped to the distance the palm, the FROZEN fingers and the roots may
+  /// translate along p staying clear of O (sampled; at least their gaps allow).
+  double free_along_p(const Pose& palm, double palm_gap, double sigma);
   bool fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const;
   double link_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
   /// A lower bound of the gap of FROZEN finger m's link n (n == N: its root, as a sphere), exact
