@@ -139,13 +139,7 @@ class Hand:
             lengths = np.full((m, n), float(lengths))
         if lengths.shape != (m, n):
             raise ValueError(f"link_length must be a scalar or a (fingers, links) = ({m}, {n}) array, got shape {lengths.shape}")
-        radius = _size("link_radius", link_radius, allow_zero=True)
-        palm_r, palm_t = _size("palm_radius", palm_radius), _size("palm_thickness", palm_thickness)
-        self._check_lengths(lengths, palm_r, palm_t)
-        self._core = _core.HandModel(m, n, lengths, radius, palm_r, palm_t)
-        message = implausible_size("the hand", max(2.0 * palm_r, float(lengths.sum(axis=1).max())))
-        if message:
-            warnings.warn(message, UserWarning, stacklevel=2)
+        self._build(lengths, _size("link_radius", link_radius, allow_zero=True), palm_radius, palm_thickness)
 
     @classmethod
     def from_layout(cls, roots: Any, directions: Any, link_lengths: Any, rest: Any = None, limits: Any = None,
@@ -217,18 +211,16 @@ class Hand:
         if palm_radius is None:
             palm_radius = max(1e-3, float(np.hypot(r[:, 0], r[:, 1]).max()) + radius)
         hand = cls.__new__(cls)
-        palm_r, palm_t = _size("palm_radius", palm_radius), _size("palm_thickness", palm_thickness)
-        cls._check_lengths(lengths, palm_r, palm_t)
-        hand._core = _core.HandModel(m, n, lengths, radius, palm_r, palm_t, roots=r, directions=d, rest=q,
-                                     lower=lo, upper=hi)
+        hand._build(lengths, radius, palm_radius, palm_thickness, roots=r, directions=d, rest=q, lower=lo, upper=hi)
         hand.name = None if name is None else str(name)
-        message = implausible_size("the hand", max(2.0 * palm_r, float(lengths.sum(axis=1).max())))
-        if message:
-            warnings.warn(message, UserWarning, stacklevel=2)
         return hand
 
-    @staticmethod
-    def _check_lengths(lengths: np.ndarray, palm_r: float, palm_t: float) -> None:
+    def _build(self, lengths: np.ndarray, radius: float, palm_radius: Any, palm_thickness: Any,
+               **layout: np.ndarray) -> None:
+        """The one path of ``__init__`` and :meth:`from_layout` once counts and arrays are checked:
+        checks the palm and the link lengths, builds the engine's hand (a general layout when
+        ``layout`` is given) and warns, at their caller, of an implausible size."""
+        palm_r, palm_t = _size("palm_radius", palm_radius), _size("palm_thickness", palm_thickness)
         if not np.all(np.isfinite(lengths)) or not np.all(lengths > 0):
             bad = float(lengths[~(np.isfinite(lengths) & (lengths > 0))][0])
             raise ValueError(f"link_length must be a positive finite number, got {bad!r}")
@@ -238,6 +230,11 @@ class Hand:
                                  f"resolves (its tolerances are absolute, about 1e-7 m)")
         if lengths.max() > MAX_LENGTH:
             raise ValueError(f"link_length = {lengths.max():g} m is larger than {MAX_LENGTH:g} m: sizes are in metres")
+        m, n = lengths.shape
+        self._core = _core.HandModel(m, n, lengths, radius, palm_r, palm_t, **layout)
+        message = implausible_size("the hand", max(2.0 * palm_r, float(lengths.sum(axis=1).max())))
+        if message:
+            warnings.warn(message, UserWarning, stacklevel=3)
 
     @property
     def fingers(self) -> int:
