@@ -1,4 +1,5 @@
-"""Rotation helpers shared by the MJCF writer and the viewer (numpy only)."""
+"""Rotation helpers shared by the MJCF writer, the viewer, the robot-file import and export and
+the baseline (numpy only)."""
 from __future__ import annotations
 
 import math
@@ -25,3 +26,12 @@ def quaternion_wxyz(rot: np.ndarray) -> np.ndarray:
         q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
     quat = np.array(q)
     return cast(np.ndarray, quat / np.linalg.norm(quat))
+
+
+def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
+    """The rotation matrix (3, 3) turning by ``angle`` (rad) about ``axis`` (any length but zero),
+    by Rodrigues' formula."""
+    a = np.asarray(axis, dtype=np.float64)
+    a = a / np.linalg.norm(a)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return cast(np.ndarray, np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k))

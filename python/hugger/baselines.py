@@ -36,7 +36,7 @@ from typing import Any, Callable, cast
 import numpy as np
 
 from . import physics, scenarios
-from ._rotation import quaternion_wxyz
+from ._rotation import axis_angle, quaternion_wxyz
 from ._types import CONTACT, DONE
 from .hand import Hand
 from .trajectory import Trajectory
@@ -49,12 +49,6 @@ def _mujoco() -> Any:
     except ImportError as exc:
         raise ImportError("the close-until-contact baseline needs MuJoCo: pip install 'hugger[physics]'") from exc
     return mujoco
-
-
-def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
-    a = axis / np.linalg.norm(axis)
-    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    return cast(np.ndarray, np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k))
 
 
 class _Scene:
@@ -171,12 +165,12 @@ def plan_baseline(hand: Hand, obj: Object, target: Any, palm_pose: Any, step: fl
         r0 = pose[:3, :3].copy()
         for i in range(1, count + 1):
             p = pose.copy()
-            p[:3, :3] = _rotation(axis, alpha * i / count) @ r0
+            p[:3, :3] = axis_angle(axis, alpha * i / count) @ r0
             if scene.hand_gap(p, angles) <= 0:
                 raise ValueError("the hand would hit the object while turning to face the target: start farther away")
             emit(p, angles, state, 1)
         pose = poses[-1].copy()
-        pose[:3, :3] = _rotation(axis, alpha) @ r0
+        pose[:3, :3] = axis_angle(axis, alpha) @ r0
         poses[-1] = pose.copy()
 
     # Phase 2a: approach along p-hat until a touch, landed within delta by bisection.

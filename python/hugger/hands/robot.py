@@ -18,6 +18,7 @@ from typing import Any, Callable, cast
 
 import numpy as np
 
+from .._rotation import axis_angle
 from ..hand import Hand
 
 #: Planarity tolerance: metres for points off the finger plane, and sine of the angle for axes.
@@ -188,12 +189,8 @@ def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_
     def motion(j: Any, value: float) -> np.ndarray:
         origin = np.eye(4) if j.origin is None else np.asarray(j.origin, dtype=np.float64)
         if j.type in ("revolute", "continuous") and value != 0.0:
-            axis = np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0], dtype=np.float64)
-            axis = axis / np.linalg.norm(axis)
-            c, s = math.cos(value), math.sin(value)
-            k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
             rot = np.eye(4)
-            rot[:3, :3] = np.eye(3) + s * k + (1 - c) * (k @ k)
+            rot[:3, :3] = axis_angle(np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0]), value)
             return origin @ rot
         return origin
 
@@ -322,9 +319,7 @@ def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
         s, c = np.linalg.norm(v), float(d[2])
         if s < 1e-15:
             return np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
-        k = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]]) / s
-        ang = math.atan2(s, c)
-        return cast(np.ndarray, np.eye(3) + math.sin(ang) * k + (1 - math.cos(ang)) * (k @ k))
+        return axis_angle(v, math.atan2(s, c))
 
     links = [U.Link(name="palm", collisions=[U.Collision(name="palm", origin=tf([0, 0, -g.palm_thickness / 2]),
                                                          geometry=U.Geometry(cylinder=U.Cylinder(
