@@ -17,6 +17,7 @@ from typing import Any, Callable, cast
 
 import numpy as np
 
+from .._checks import positive
 from .._core import Sensing, Touch
 
 _UP = np.array([0.0, 0.0, 1.0])
@@ -27,13 +28,6 @@ def _vector(name: str, value: Any) -> np.ndarray:
     if v.shape != (3,) or not np.all(np.isfinite(v)):
         raise ValueError(f"{name} must be a finite 3-vector, got {value!r}")
     return v
-
-
-def _radius(name: str, value: Any) -> float:
-    r = float(value)
-    if not math.isfinite(r) or r <= 0:
-        raise ValueError(f"{name} must be a positive finite number (m), got {value!r}")
-    return r
 
 
 def _nearest_on_segment(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -124,7 +118,7 @@ class SphereSkin(SpheresSkin):
     writes step by step)."""
 
     def __init__(self, radius: float = 0.04, center: Any = (0.0, 0.0, 0.0)) -> None:
-        super().__init__(np.asarray(_vector("center", center))[None], [_radius("radius", radius)])
+        super().__init__(np.asarray(_vector("center", center))[None], [positive("radius", radius)])
         self.radius, self.center = float(self.radii[0]), self.centers[0]
 
     def mesh(self, subdivisions: int = 6) -> Any:
