@@ -12,7 +12,7 @@ def positive(name: str, value: Any, allow_zero: bool = False) -> float:
     otherwise a ValueError naming ``name``."""
     try:
         x = float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name} must be a number, got {value!r}") from None
     if not math.isfinite(x) or x < 0 or (x == 0 and not allow_zero):
         kind = "non-negative" if allow_zero else "positive"

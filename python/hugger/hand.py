@@ -9,6 +9,7 @@ from typing import Any, Callable
 import numpy as np
 
 from . import _core
+from ._checks import positive
 
 from ._types import MAX_FINGERS, MAX_LINKS  # noqa: F401  (hugger.hand.MAX_FINGERS as before)
 
@@ -38,12 +39,7 @@ def _count(name: str, value: Any) -> int:
 def _size(name: str, value: Any, allow_zero: bool = False) -> float:
     if isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{name} must be a number, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError, OverflowError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
-    if not np.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
-        raise ValueError(f"{name} must be a {'non-negative' if allow_zero else 'positive'} finite number, got {value!r}")
+    v = positive(name, value, allow_zero)
     if v > MAX_LENGTH:
         raise ValueError(f"{name} = {v:g} m is larger than {MAX_LENGTH:g} m: sizes are in metres")
     return v
