@@ -60,19 +60,10 @@ class _Scene:
 
         self.mj = mujoco
         m, n = hand.fingers, hand.links
-        zero = np.zeros((1, m, n))
-        traj0 = Trajectory(hand_json=hand.to_json(), params_json="{}", object_vertices=obj.vertices,
-                                  object_faces=obj.faces, target=np.asarray(target, dtype=np.float64),
-                                  palm_pose=pose[None], joints=hand.forward(pose, zero[0])[None], angles=zero,
-                                  tip_state=np.zeros((1, m), dtype=np.int8), phase=np.zeros(1, dtype=np.int8),
-                                  status="start")
-        xml = physics.export_mjcf(traj0, decompose=decompose, cache_dir=cache_dir)
-        self.model = mujoco.MjModel.from_xml_string(xml)
-        self.data = mujoco.MjData(self.model)
-        mujoco.mj_resetDataKeyframe(self.model, self.data, 0)
-        body: Callable[[str], int] = lambda name: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, name)  # noqa: E731
-        geom: Callable[[str], int] = lambda name: mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, name)  # noqa: E731
-        obj_body = body("object")
+        stub = physics._stub_trajectory(hand, obj, target, pose)
+        self.model, self.data = physics.load_model(stub, k=0, decompose=decompose, cache_dir=cache_dir)
+        ident: Callable[[Any, str], int] = lambda kind, name: mujoco.mj_name2id(self.model, kind, name)  # noqa: E731
+        obj_body = ident(mujoco.mjtObj.mjOBJ_BODY, "object")
         hand_geoms = self.model.geom_bodyid != obj_body
         # hand-hand pairs collide here too (parent-child pairs stay filtered by MuJoCo)
         self.model.geom_contype[hand_geoms] = 3
@@ -82,13 +73,11 @@ class _Scene:
         self.model.body_conaffinity[hand_bodies] = 3
         self.model.geom_margin[:] = margin
         self.margin = margin
-        self.link_geoms = np.array([[geom(f"f{i}_l{j}") for j in range(n)] for i in range(m)])
-        self.palm_geom = geom("palm")
-        self.hinge_qpos = np.array([[self.model.jnt_qposadr[mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT,
-                                                                                  f"f{i}_j{j}")] for j in range(n)]
-                                    for i in range(m)])
-        self.upper = self.model.jnt_range[[[mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, f"f{i}_j{j}")
-                                            for j in range(n)] for i in range(m)], 1]
+        self.link_geoms = np.array([[ident(mujoco.mjtObj.mjOBJ_GEOM, f"f{i}_l{j}") for j in range(n)] for i in range(m)])
+        self.palm_geom = ident(mujoco.mjtObj.mjOBJ_GEOM, "palm")
+        hinges = np.array([[ident(mujoco.mjtObj.mjOBJ_JOINT, f"f{i}_j{j}") for j in range(n)] for i in range(m)])
+        self.hinge_qpos = self.model.jnt_qposadr[hinges]
+        self.upper = self.model.jnt_range[hinges, 1]
         self.queries = 0
 
     def gaps(self, pose: np.ndarray, angles: np.ndarray) -> np.ndarray:

@@ -17,7 +17,6 @@ Needs the ``physics`` extra (``pip install 'hugger[physics]'``).
 """
 from __future__ import annotations
 
-import json
 import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
@@ -30,7 +29,6 @@ from . import physics as _ph
 from ._rotation import quaternion_wxyz
 from ._types import CONTACT_DISTANCE
 from .planner import Planner
-from .trajectory import Trajectory
 from .world import Object
 
 #: Simulated time per planner configuration (s): the control period of the loop.
@@ -47,16 +45,6 @@ FAR = 1.0
 OBJECT_DAMPING = (2.0, 2e-3)
 
 
-def _stub_trajectory(hand: Any, obj: Any, target: np.ndarray, pose: np.ndarray) -> Trajectory:
-    """A one-configuration trajectory (C_init) from which physics builds the MJCF model."""
-    m, n = hand.fingers, hand.links
-    joints = hand.forward(pose, np.zeros((m, n)))[None]
-    return Trajectory(hand_json=hand.to_json(), params_json=json.dumps({}), object_vertices=obj.vertices,
-                      object_faces=obj.faces, target=np.asarray(target, dtype=np.float64), palm_pose=pose[None],
-                      joints=joints, angles=np.zeros((1, m, n)), tip_state=np.zeros((1, m), dtype=np.int8),
-                      phase=np.zeros(1, dtype=np.int8), status="running")
-
-
 class Simulation:
     """The MuJoCo scene of ``hand`` and ``obj`` (a :class:`hugger.Object`, its true pose), the palm
     at ``palm_pose``. ``latency`` (control periods) delays the object pose the skin reads."""
@@ -66,7 +54,7 @@ class Simulation:
         mujoco = _ph._mujoco()
         self.mujoco, self.hand, self.obj = mujoco, hand, obj
         pose = np.asarray(palm_pose, dtype=np.float64)
-        stub = _stub_trajectory(hand, obj, obj.vertices.mean(axis=0), pose)
+        stub = _ph._stub_trajectory(hand, obj, obj.vertices.mean(axis=0), pose)
         xml, info = _ph._build_mjcf(stub, 0, float(mass), float(mu), bool(decompose), None, 0.0)
         root = ET.fromstring(xml.split("-->", 1)[1])
         world = cast(ET.Element, root.find("worldbody"))

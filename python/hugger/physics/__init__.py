@@ -83,7 +83,7 @@ from .mjcf import IMPRATIO as IMPRATIO, JOINT0_RANGE as JOINT0_RANGE, JOINT_RANG
 from .mjcf import LINK_DENSITY as LINK_DENSITY, ROLLING_FRICTION as ROLLING_FRICTION, SOLIMP as SOLIMP
 from .mjcf import SOLREF as SOLREF, SQUEEZE as SQUEEZE, TIMESTEP as TIMESTEP
 from .mjcf import TORSIONAL_FRICTION as TORSIONAL_FRICTION, ZERO_RADIUS_SUBSTITUTE as ZERO_RADIUS_SUBSTITUTE
-from .mjcf import _build_mjcf as _build_mjcf
+from .mjcf import _build_mjcf as _build_mjcf, _stub_trajectory as _stub_trajectory
 from .mjcf import export_mjcf, finger_frames, joint_ranges, load_model
 
 

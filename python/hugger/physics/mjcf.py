@@ -190,6 +190,17 @@ def export_mjcf(traj: Any, path: str | os.PathLike[str] | None = None, k: int = 
     return xml
 
 
+def _stub_trajectory(hand: Any, obj: Any, target: Any, pose: np.ndarray) -> Trajectory:
+    """A one-configuration trajectory (C_init: ``hand`` at palm ``pose``, fingers straight, beside
+    ``obj``) from which the MJCF model of a scene is built before there is a plan."""
+    m, n = hand.fingers, hand.links
+    joints = hand.forward(pose, np.zeros((m, n)))[None]
+    return Trajectory(hand_json=hand.to_json(), params_json="{}", object_vertices=obj.vertices,
+                      object_faces=obj.faces, target=np.asarray(target, dtype=np.float64), palm_pose=pose[None],
+                      joints=joints, angles=np.zeros((1, m, n)), tip_state=np.zeros((1, m), dtype=np.int8),
+                      phase=np.zeros(1, dtype=np.int8), status="start")
+
+
 def load_model(traj: Any, k: int = -1, **kwargs: Any) -> tuple[Any, Any]:
     """``(mujoco.MjModel, mujoco.MjData)`` of :func:`export_mjcf`, data reset to the ``grasp``
     keyframe (configuration k) and forward kinematics done."""
