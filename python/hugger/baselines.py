@@ -51,6 +51,11 @@ def _mujoco() -> Any:
     return mujoco
 
 
+#: Collision answers a scene keeps, the newest, so that a configuration asked again is not queried
+#: again (a bisection's landing point, a finger's start after the one before it moved).
+_KEPT_QUERIES = 64
+
+
 class _Scene:
     """The MuJoCo model of hand + object used as a collision checker."""
 
@@ -78,10 +83,15 @@ class _Scene:
         hinges = np.array([[ident(mujoco.mjtObj.mjOBJ_JOINT, f"f{i}_j{j}") for j in range(n)] for i in range(m)])
         self.hinge_qpos = self.model.jnt_qposadr[hinges]
         self.upper = self.model.jnt_range[hinges, 1]
-        self.queries = 0
+        self.queries = 0  # collision queries MuJoCo ran (a configuration asked again is answered from _kept)
+        self._kept: dict[tuple[bytes, bytes], np.ndarray] = {}
 
     def gaps(self, pose: np.ndarray, angles: np.ndarray) -> np.ndarray:
-        """Gap (m) of every geom to anything it may touch (capped at the margin)."""
+        """Gap (m) of every geom to anything it may touch (capped at the margin); read-only."""
+        key = (pose.tobytes(), angles.tobytes())
+        kept = self._kept.get(key)
+        if kept is not None:
+            return kept
         mj, d = self.mj, self.data
         d.mocap_pos[0] = pose[:3, 3]
         d.mocap_quat[0] = quaternion_wxyz(pose[:3, :3])
@@ -96,6 +106,10 @@ class _Scene:
             dist = np.asarray(c.dist[:nc])
             np.minimum.at(out, np.asarray(c.geom1[:nc]), dist)
             np.minimum.at(out, np.asarray(c.geom2[:nc]), dist)
+        out.flags.writeable = False
+        self._kept[key] = out
+        if len(self._kept) > _KEPT_QUERIES:
+            del self._kept[next(iter(self._kept))]  # the oldest
         return out
 
     def hand_gap(self, pose: np.ndarray, angles: np.ndarray) -> float:
