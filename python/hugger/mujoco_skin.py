@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
-from typing import Any, Callable, cast
+from typing import Any, Callable, Iterable, cast
 
 import numpy as np
 
@@ -237,6 +237,20 @@ def _push_force(palm_pose: np.ndarray, newtons: float) -> np.ndarray:
     return float(newtons) * np.asarray(palm_pose[:3, 0], dtype=np.float64)  # across the approach
 
 
+def _drive(sim: Simulation, configurations: Iterable[tuple[np.ndarray, np.ndarray, np.ndarray]], push: float,
+           push_duration: float) -> None:
+    """Play (palm pose, angles, tip states) in ``sim``, a control period each, pushing the object
+    with ``push`` N for ``push_duration`` s when the first finger touches. ``configurations`` is
+    read one at a time, after the step before it: a planner in the loop senses what it did."""
+    pushed = push == 0.0
+    for palm_pose, angles, tip_state in configurations:
+        sim.command(palm_pose, angles)
+        if not pushed and np.any(tip_state != 0):
+            pushed = True
+            sim.advance(push_duration, _push_force(palm_pose, push))
+        sim.advance(CONTROL_PERIOD)
+
+
 def _finish(sim: Simulation, traj: Any, mode: str, start_centre: np.ndarray) -> LoopResult:
     """Settle, record the object where the simulation has it, and run the hold test from there."""
     import dataclasses
@@ -263,14 +277,7 @@ def simulate(hand: Any, obj: Any, target: Any, palm_pose: Any, offset: Any = (0.
     told = np.asarray(target, dtype=np.float64) + np.asarray(offset, dtype=np.float64)
     params.setdefault("contact_tolerance", CONTACT_TOLERANCE)
     planner = Planner(hand, MujocoSkin(sim), told, pose, max_iterations=max_iterations, record_object=obj, **params)
-    pushed = push == 0.0
-    for c in planner:
-        sim.command(c.palm_pose, c.angles)
-        force = None
-        if not pushed and np.any(c.tip_state != 0):
-            pushed, force = True, _push_force(c.palm_pose, push)
-            sim.advance(push_duration, force)
-        sim.advance(CONTROL_PERIOD)
+    _drive(sim, ((c.palm_pose, c.angles, c.tip_state) for c in planner), push, push_duration)
     return _finish(sim, planner.trajectory(), "closed", start_centre)
 
 
@@ -287,13 +294,7 @@ def replay(hand: Any, obj: Any, target: Any, palm_pose: Any, offset: Any = (0.0,
                    **params).plan()
     sim = Simulation(hand, obj, pose)
     start_centre = sim.data.xpos[sim.body].copy()
-    pushed = push == 0.0
-    for k in range(len(traj)):
-        sim.command(traj.palm_pose[k], traj.angles[k])
-        if not pushed and np.any(traj.tip_state[k] != 0):
-            pushed = True
-            sim.advance(push_duration, _push_force(traj.palm_pose[k], push))
-        sim.advance(CONTROL_PERIOD)
+    _drive(sim, zip(traj.palm_pose, traj.angles, traj.tip_state), push, push_duration)
     import dataclasses
 
     traj = dataclasses.replace(traj, object_vertices=obj.vertices, object_faces=obj.faces)
