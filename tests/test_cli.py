@@ -245,7 +245,7 @@ def test_every_output_is_written_atomically(sphere_plan, tmp_path, capsys, monke
             fh.write(b"\x89PNG half")
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(viz, "overview", half_written)
+    monkeypatch.setitem(viz.FIGURES, "sheet", (half_written, viz.FIGURES["sheet"][1]))  # what render draws
     code, _, err = run(["render", sphere_plan, "--out", tmp_path / "grasp.png"], capsys)
     assert code == 130 and "interrupted" in err
     assert list(tmp_path.iterdir()) == []

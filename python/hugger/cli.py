@@ -29,7 +29,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, NoReturn, Sequence, TextIO
+from typing import TYPE_CHECKING, Any, NoReturn, Sequence, TextIO
 
 from ._files import atomic_path, write_atomic
 from ._progress import Progress
@@ -329,14 +329,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
     traj.save(out / "plan.npz")
     summary = {"object": "curvy", "hand": repr(hand), **_report(traj, elapsed, case.obj)}
     written = ["plan.npz"]
-    figures: tuple[tuple[str, Callable[..., Any]], ...] = (("fig4.png", viz.fig4), ("fig5.png", viz.fig5),
-                                                           ("tipstate.png", viz.tipstate_plot))
-    with Progress("drawing figures", total=3) as p:
-        for i, (name, draw) in enumerate(figures, start=1):
-            with atomic_path(out / name) as tmp:
-                draw(traj, tmp)
+    figures = ("fig4", "fig5", "tipstate")
+    with Progress("drawing figures", total=len(figures)) as p:
+        for i, figure in enumerate(figures, start=1):
+            with atomic_path(out / f"{figure}.png") as tmp:
+                viz.render(traj, tmp, figure=figure)
             p.update(i)
-    written += ["fig4.png", "fig5.png", "tipstate.png"]
+    written += [f"{figure}.png" for figure in figures]
     movies = ["animation.gif"]
     if viz.ffmpeg_path() is not None:
         movies.append("animation.mp4")
@@ -358,21 +357,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 # --- render: figures and animations ---------------------------------------------------------------
 
-#: ``hugger render --figure``: what each draws and the suffixes it writes.
-FIGURES = {"sheet": "Fig. 4's panels and Fig. 5's two views on one sheet", "fig4": "the paper's Fig. 4",
-           "fig5": "the paper's Fig. 5", "tipstate": "TipState and links in contact over the plan",
-           "animation": "the whole plan as a GIF or MP4"}
-
-
 def cmd_render(args: argparse.Namespace) -> int:
     from . import viz
 
     out = _out_path(args.out, viz.RENDER_SUFFIXES)
-    movie = out.suffix.lower() in (".gif", ".mp4")
-    figure = args.figure or ("animation" if movie else "sheet")
-    if (figure == "animation") != movie:
-        want = ".gif or .mp4" if figure == "animation" else ".png, .pdf or .svg"
-        raise UsageError(f"--figure {figure} writes {want}, got {out.name!r}")
+    try:
+        figure = viz.pick_figure(out, args.figure)
+    except ValueError as exc:  # "figure F writes ...": the figure does not write that extension
+        raise UsageError(f"--{exc}") from None
     if figure != "animation":
         for option, value in (("--fps", args.fps), ("--frames", args.frames), ("--view", args.view)):
             if value is not None:
@@ -383,22 +375,12 @@ def cmd_render(args: argparse.Namespace) -> int:
     if args.frames is not None and args.frames < 1:
         raise UsageError(f"--frames must be at least 1, got {args.frames}")
     traj = _load(args.file)
-    kwargs: dict[str, Any] = {}
-    if args.dpi is not None:
-        kwargs["dpi"] = args.dpi
+    options = (("dpi", args.dpi), ("fps", args.fps), ("max_frames", args.frames), ("view", args.view))
+    kwargs: dict[str, Any] = {key: value for key, value in options if value is not None}
+    if figure == "animation":
+        kwargs["hold"] = 1.0
     with Progress(f"rendering {out.name}", total=1) as p, atomic_path(out) as tmp:
-        if figure == "animation":
-            for key, value in (("fps", args.fps), ("max_frames", args.frames), ("view", args.view)):
-                if value is not None:
-                    kwargs[key] = value
-            viz.animate(traj, tmp, progress=p.update,
-                        hold=1.0, **kwargs)
-        else:
-            draws: dict[str, Callable[..., Any]] = {"sheet": viz.overview, "fig4": viz.fig4, "fig5": viz.fig5,
-                                                    "tipstate": viz.tipstate_plot}
-            draw = draws[figure]
-            draw(traj, tmp, **kwargs)
-            p.update(1)
+        viz.render(traj, tmp, figure=figure, progress=p.update, **kwargs)
     print(f"wrote {out}")
     return EXIT_OK
 
@@ -666,6 +648,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--version", action="version", version=f"hugger {VERSION}")
     sub = ap.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
+    from .viz import FIGURES
 
     p = sub.add_parser("plan", help="plan a grasp of a built-in object or a mesh file")
     p.add_argument("object", help="a built-in object name (see 'hugger objects') or a mesh file (STL, OBJ, PLY, OFF, GLB)")
@@ -693,7 +676,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("file", help="trajectory file (.npz)")
     p.add_argument("--out", required=True, help="output path (.png .pdf .svg .gif .mp4), in an existing directory")
     p.add_argument("--figure", choices=tuple(FIGURES),
-                   help="what to draw: " + "; ".join(f"{k}: {v}" for k, v in FIGURES.items())
+                   help="what to draw: " + "; ".join(f"{k}: {what}" for k, (_, what) in FIGURES.items())
                         + " (default: sheet for .png/.pdf/.svg, animation for .gif/.mp4)")
     p.add_argument("--dpi", type=float, help="resolution, dots per inch (default 100 sheet and animation, 120 others)")
     p.add_argument("--fps", type=float, help="animation: frames per second (default 30)")

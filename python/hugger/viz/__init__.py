@@ -28,7 +28,7 @@ Configuration indices ``k`` count from 0 (C_init) to K-1, as in the trajectory f
 
 The parts: :mod:`~hugger.viz.backend` (matplotlib, ffmpeg and argument checks),
 :mod:`~hugger.viz.scene` (drawing one configuration), :mod:`~hugger.viz.figures` (Fig. 4, Fig. 5, the
-overview sheet, the TipState plot, :func:`render`) and :mod:`~hugger.viz.animation` (GIF and MP4);
+overview sheet, the TipState plot, :data:`FIGURES` and :func:`render`) and :mod:`~hugger.viz.animation` (GIF and MP4);
 every name is available here, as ``hugger.viz.<name>``.
 """
 from __future__ import annotations
@@ -46,7 +46,7 @@ from .figures import FIG4_SIZE as FIG4_SIZE, FIG5_SIZE as FIG5_SIZE, OVERVIEW_SI
 from .figures import TIPSTATE_SIZE as TIPSTATE_SIZE, _contact_caption as _contact_caption
 from .figures import _fig4_axes as _fig4_axes, _fig4_panels as _fig4_panels, _fig5_axes as _fig5_axes
 from .figures import _first_contact as _first_contact, _headline as _headline, _still as _still
-from .figures import fig4, fig5, overview, render, tipstate_plot
+from .figures import FIGURES, fig4, fig5, overview, pick_figure, render, tipstate_plot
 from .scene import STATE_COLORS, _ALONG_NORMAL as _ALONG_NORMAL, _Box as _Box, _CONTACT_COLOR as _CONTACT_COLOR
 from .scene import _OBJECT_ALPHA as _OBJECT_ALPHA, _OBJECT_RGB as _OBJECT_RGB, _OBLIQUE as _OBLIQUE
 from .scene import _PALM_RGB as _PALM_RGB, _SIDE as _SIDE, _SPHERE_NORMALS as _SPHERE_NORMALS
@@ -57,5 +57,6 @@ from .scene import _palm_polys as _palm_polys, _phase_name as _phase_name, _rgb 
 from .scene import _setup_axes as _setup_axes, _shade as _shade, _subsample as _subsample, _tube as _tube
 from .scene import _unit_sphere as _unit_sphere, draw_configuration
 
-__all__ = ["CONTACT_DISTANCE", "RENDER_SUFFIXES", "STATE_COLORS", "animate", "draw_configuration", "export_scene",
-           "ffmpeg_path", "fig4", "fig5", "overview", "render", "require", "tipstate_plot", "view"]
+__all__ = ["CONTACT_DISTANCE", "FIGURES", "RENDER_SUFFIXES", "STATE_COLORS", "animate", "draw_configuration",
+           "export_scene", "ffmpeg_path", "fig4", "fig5", "overview", "pick_figure", "render", "require", "tipstate_plot",
+           "view"]

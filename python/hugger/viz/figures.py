@@ -1,5 +1,6 @@
 """The still figures: the paper's Fig. 4 and Fig. 5, the overview sheet, the TipState plot, and
-:func:`render`, which picks a figure or the animation by the file's extension."""
+:func:`render`, which draws one of them or the animation (:data:`FIGURES`), by name or by the file's
+extension."""
 from __future__ import annotations
 
 import os
@@ -12,7 +13,7 @@ from .._checks import positive
 from .._types import CONTACT_DISTANCE
 from ..trajectory import Trajectory
 from .animation import animate
-from .backend import (_MOVIE_EXTENSIONS, _STILL_EXTENSIONS, RENDER_SUFFIXES, _check_faces, _check_still, _check_traj,
+from .backend import (_MOVIE_EXTENSIONS, RENDER_SUFFIXES, _check_faces, _check_still, _check_traj,
                       _pyplot, _save, _suffix)
 from .scene import STATE_COLORS, _STATE_NAMES, _Scene, _legend, _phase_name, _subsample, draw_configuration
 
@@ -246,9 +247,38 @@ def tipstate_plot(traj: Trajectory, path: str | os.PathLike[str] | None = None, 
 
 # --- dispatch ------------------------------------------------------------------------------------------
 
-def render(traj: Trajectory, path: str | os.PathLike[str], *, progress: Callable[[int, int], Any] | None = None,
-           **kwargs: Any) -> Path:
-    """Write a picture of the plan, chosen by the extension of ``path`` (case-insensitive):
+#: What :func:`render` draws, by name (``hugger render --figure``): the drawing function, and what it shows.
+FIGURES: dict[str, tuple[Callable[..., Any], str]] = {
+    "sheet": (overview, "Fig. 4's panels and Fig. 5's two views on one sheet"),
+    "fig4": (fig4, "the paper's Fig. 4"),
+    "fig5": (fig5, "the paper's Fig. 5"),
+    "tipstate": (tipstate_plot, "TipState and links in contact over the plan"),
+    "animation": (animate, "the whole plan as a GIF or MP4"),
+}
+
+
+def pick_figure(path: Any, figure: str | None = None) -> str:
+    """The name in :data:`FIGURES` that :func:`render` draws into ``path``: ``figure``, or by default
+    ``sheet`` for a still (.png, .pdf, .svg) and ``animation`` for a movie (.gif, .mp4).
+    ``ValueError`` for an extension not in :data:`RENDER_SUFFIXES`, an unknown figure, or a figure
+    that does not write that extension (the animation is a movie, every other figure a still)."""
+    ext = _suffix(path)
+    if ext not in RENDER_SUFFIXES:
+        raise ValueError(f"cannot render to {Path(os.fspath(path)).name!r}: use one of {', '.join(RENDER_SUFFIXES)}")
+    movie = ext in _MOVIE_EXTENSIONS
+    name = figure if figure is not None else "animation" if movie else "sheet"
+    if name not in FIGURES:
+        raise ValueError(f"figure must be one of {', '.join(FIGURES)}, got {figure!r}")
+    if (name == "animation") != movie:
+        want = ".gif or .mp4" if name == "animation" else ".png, .pdf or .svg"
+        raise ValueError(f"figure {name} writes {want}, got {Path(os.fspath(path)).name!r}")
+    return name
+
+
+def render(traj: Trajectory, path: str | os.PathLike[str], *, figure: str | None = None,
+           progress: Callable[[int, int], Any] | None = None, **kwargs: Any) -> Path:
+    """Write a picture of the plan: ``figure``, a name in :data:`FIGURES`, or by default one chosen
+    by the extension of ``path`` (case-insensitive):
 
     * ``.png``, ``.pdf``, ``.svg``: :func:`overview`, one sheet with Fig. 4's panels and Fig. 5's
       two views of the final grasp;
@@ -256,17 +286,17 @@ def render(traj: Trajectory, path: str | os.PathLike[str], *, progress: Callable
 
     ``progress(i, n)`` is passed to :func:`animate` (called once, (1, 1), for a still picture).
     Extra keyword arguments go to that function. Returns the path written. ``ValueError`` for
-    any other extension (:data:`RENDER_SUFFIXES` lists those accepted)."""
+    any other extension (:data:`RENDER_SUFFIXES` lists those accepted) or a figure that does not
+    write it (see :func:`pick_figure`)."""
     traj = _check_traj(traj)
-    ext = _suffix(path)
     if progress is not None and not callable(progress):
         raise ValueError("progress must be callable as progress(i, n)")
-    if ext in _STILL_EXTENSIONS:
-        overview(traj, path, **kwargs)
+    name = pick_figure(path, figure)
+    draw = FIGURES[name][0]
+    if name == "animation":
+        draw(traj, path, progress=progress, **kwargs)
+    else:
+        draw(traj, path, **kwargs)
         if progress is not None:
             progress(1, 1)
-    elif ext in _MOVIE_EXTENSIONS:
-        animate(traj, path, progress=progress, **kwargs)
-    else:
-        raise ValueError(f"cannot render to {Path(os.fspath(path)).name!r}: use one of {', '.join(RENDER_SUFFIXES)}")
     return Path(os.fspath(path))
