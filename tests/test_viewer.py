@@ -313,7 +313,7 @@ def test_view_command_serves_until_interrupted(plans, monkeypatch, capsys):
         seen.append(v.server.scene.get_handle_by_name("/plan0/links/f4_l4") is not None)
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(cli, "_serve", wait)
+    monkeypatch.setattr(viewer, "_serve", wait)
     code = cli.main(["view", str(plans[0]), "--no-browser", "--port", "0"])
     out, _ = capsys.readouterr()
     assert code == 0 and "serving 1 plan at http://localhost:" in out and seen == [True]

@@ -39,7 +39,6 @@ if TYPE_CHECKING:
     from .hand import Hand
     from .scenarios import Case
     from .trajectory import Trajectory
-    from .viewer import Viewer
     from .world import Object
 
 EXIT_OK, EXIT_INTERNAL, EXIT_BAD_INPUT = 0, 1, 2
@@ -530,25 +529,11 @@ def cmd_view(args: argparse.Namespace) -> int:
     viewer._viser()  # the extra, before loading anything
     trajs = [_load(f) for f in args.files]
     labels = [f"{os.path.basename(f)}: {t.status}, {len(t)} configurations" for f, t in zip(args.files, trajs)]
-    v = viewer.Viewer(trajs, host=args.host, port=args.port, fps=args.fps or 20.0, labels=labels)
+    v = viewer.view(trajs, host=args.host, port=args.port, fps=args.fps or 20.0, labels=labels,
+                    open_browser=not args.no_browser, block=False)
     print(f"hugger: serving {len(trajs)} plan{'s' if len(trajs) > 1 else ''} at {v.url} (Ctrl-C stops)", flush=True)
-    if not args.no_browser:
-        import webbrowser
-
-        webbrowser.open(v.url)
-    try:
-        _serve(v)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        v.close()
+    v.serve()
     return EXIT_OK
-
-
-def _serve(v: Viewer) -> None:
-    """Serve until interrupted (Ctrl-C)."""
-    while True:
-        time.sleep(0.5)
 
 
 def cmd_export_scene(args: argparse.Namespace) -> int:

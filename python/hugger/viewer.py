@@ -372,6 +372,21 @@ class Viewer:
     def __exit__(self, *exc: Any) -> None:
         self.close()
 
+    def serve(self) -> None:
+        """Serve until interrupted (Ctrl-C), then stop (:meth:`close`)."""
+        try:
+            _serve(self)
+        except KeyboardInterrupt:
+            pass
+        finally:
+            self.close()
+
+
+def _serve(viewer: Viewer) -> None:
+    """Wait while ``viewer`` serves (its server and player run in threads of their own)."""
+    while True:
+        time.sleep(0.5)
+
 
 def view(trajs: Any, *, port: int = 8080, host: str = "127.0.0.1", open_browser: bool = True, block: bool = True,
          fps: float = 20.0, labels: Sequence[str] | None = None) -> Viewer:
@@ -379,21 +394,14 @@ def view(trajs: Any, *, port: int = 8080, host: str = "127.0.0.1", open_browser:
     file paths are read) at ``http://host:port`` (``port=0``: any free port, see ``Viewer.url``).
     ``open_browser`` opens it in the default web browser. ``block``: serve until interrupted
     (Ctrl-C), then stop and return the stopped :class:`Viewer`; otherwise return the running
-    viewer at once (stop it with ``close()``)."""
+    viewer at once (stop it with ``close()``, or serve on with :meth:`Viewer.serve`)."""
     viewer = Viewer(trajs, host=host, port=port, fps=fps, labels=labels)
     if open_browser:
         import webbrowser
 
         webbrowser.open(viewer.url)
-    if not block:
-        return viewer
-    try:
-        while True:
-            time.sleep(0.5)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        viewer.close()
+    if block:
+        viewer.serve()
     return viewer
 
 
