@@ -28,7 +28,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from . import analysis
+from . import _palette, analysis
+from ._palette import rgb255
 from ._files import write_atomic
 from ._rotation import quaternion_wxyz
 from .trajectory import Trajectory
@@ -36,11 +37,12 @@ from .trajectory import Trajectory
 __all__ = ["Viewer", "capsule_mesh", "export_scene", "palm_mesh", "scene_nodes", "view"]
 
 VIEW_EXTRA = "pip install 'hugger[view]'"
-#: RGB (0..255) of the TipStates FROZEN, CONTACT, DONE (the colours of :data:`hugger.viz.STATE_COLORS`).
-STATE_RGB = ((0x3B, 0x6F, 0xB6), (0xE8, 0x84, 0x2C), (0x2E, 0x9E, 0x4F))
-OBJECT_RGB = (209, 191, 168)
-PALM_RGB = (128, 128, 140)
-CONTACT_RGB = (214, 39, 40)
+#: RGB (0..255) of the TipStates FROZEN, CONTACT, DONE, the object, the palm and the contacts: the
+#: colours of the figures (:mod:`hugger._palette`).
+STATE_RGB = tuple(rgb255(c) for c in _palette.STATE_COLORS)
+OBJECT_RGB = rgb255(_palette.OBJECT_RGB)
+PALM_RGB = rgb255(_palette.PALM_RGB)
+CONTACT_RGB = rgb255(_palette.CONTACT_COLOR)
 TARGET_RGB = (20, 20, 20)
 #: Opacity of the object when "transparent object" is on.
 OBJECT_OPACITY = 0.45

@@ -8,18 +8,18 @@ from typing import Any, Sequence, cast
 
 import numpy as np
 
-from .. import analysis
+from .. import _palette, analysis
 from ..trajectory import Trajectory
 from ..world import Object
 from .backend import _check_faces, _check_traj, _pyplot
 
 #: Colours of the TipStates FROZEN, CONTACT, DONE.
-STATE_COLORS = ("#3b6fb6", "#e8842c", "#2e9e4f")
+STATE_COLORS = _palette.STATE_COLORS
 _STATE_NAMES = ("FROZEN", "CONTACT", "DONE")
-_OBJECT_RGB = np.array([0.82, 0.75, 0.66])
+_OBJECT_RGB = np.array(_palette.OBJECT_RGB)
 _OBJECT_ALPHA = 0.5
-_PALM_RGB = np.array([0.50, 0.50, 0.55])
-_CONTACT_COLOR = "#d62728"
+_PALM_RGB = np.array(_palette.PALM_RGB)
+_CONTACT_COLOR = _palette.CONTACT_COLOR
 
 
 # --- geometry of the drawing --------------------------------------------------------------------
