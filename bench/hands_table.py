@@ -67,10 +67,8 @@ def main(argv: list[str] | None = None) -> int:
             case = scenarios.default_case(obj_name, hand)
             for rules in args.rules.split(","):
                 traj = hugger.Planner(hand, case.obj, case.target, case.palm_pose, rules=rules).plan()
-                path = tmp / "p.npz"
-                traj.save(path)
                 a = analysis.analyze(traj)
-                fails, _ = th.full_check(checker, path, rest_nonzero)
+                fails, _ = th.full_check(checker, traj, tmp / "p.npz", rest_nonzero)
                 kinds = sorted({_short(f) for f in fails})
                 verdict = "pass" if not fails else "FAIL (" + "; ".join(kinds) + ")"
                 t = tally.setdefault(rules, [0, 0])

@@ -96,6 +96,26 @@ def check_file(checker, path: Path, every: int = 1, motion: bool = False,
     return rep.ok(), rep.failures, rep.figures
 
 
+def assert_checked(checker, path: Path, every: int = 1, motion: bool = False, swept_every: int = 1,
+                   samples: int | None = None, context=None) -> dict:
+    """Run the independent checker on the trajectory file ``path`` (see :func:`check_file`) and
+    assert that it passes, its failures (after ``context``, when given) the message. ``samples``:
+    check about that many configurations, every (K // samples)-th, instead of every ``every``-th.
+    Returns the checker's figures."""
+    if samples is not None:
+        with np.load(path) as z:
+            every = max(1, len(z["angles"]) // samples)
+    ok, failures, figures = check_file(checker, path, every, motion, swept_every)
+    assert ok, failures if context is None else (context, failures)
+    return figures
+
+
+def save_and_check(checker, traj: hugger.Trajectory, path: Path, **kwargs) -> dict:
+    """Save ``traj`` to ``path``, then :func:`assert_checked` the file (same keywords)."""
+    traj.save(path)
+    return assert_checked(checker, path, **kwargs)
+
+
 def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """Minimal Wavefront OBJ reader (v and f lines; polygons fanned into triangles)."""
     verts, faces = [], []

@@ -51,10 +51,7 @@ def test_results_in_input_order_and_identical_to_sequential(cases, sequential, t
 
 def test_plans_pass_the_checker(cases, checker, tmp_path):
     for i, t in enumerate(hugger.plan_many(cases[:2], threads=2)):
-        path = tmp_path / f"plan{i}.npz"
-        t.save(path)
-        ok, failures, _ = helpers.check_file(checker, path, every=max(1, len(t) // 30))
-        assert ok, failures
+        helpers.save_and_check(checker, t, tmp_path / f"plan{i}.npz", samples=30)
 
 
 def test_case_forms_and_shared_hand(cases, sequential, hand):

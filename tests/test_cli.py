@@ -14,7 +14,7 @@ import hugger
 from hugger import cli, objects
 from hugger._progress import Progress
 
-from helpers import OBJECTS_DIR, SHARED_MISSING, check_file, ycb_paths
+from helpers import OBJECTS_DIR, SHARED_MISSING, assert_checked, ycb_paths
 
 RUN = [sys.executable, "-m", "hugger"]
 
@@ -51,8 +51,7 @@ def test_plan_every_builtin_with_defaults(name, tmp_path, capsys, checker):
     assert report["status"] == "done"
     traj = hugger.Trajectory.load(out)
     assert len(traj) == report["configurations"]
-    ok, failures, _ = check_file(checker, out, every=max(1, len(traj) // 40))
-    assert ok, failures
+    assert_checked(checker, out, samples=40)
 
 
 @pytest.mark.skipif(not OBJECTS_DIR.is_dir(), reason=SHARED_MISSING)
@@ -63,8 +62,7 @@ def test_plan_every_shared_mesh_with_defaults(path, tmp_path, capsys, checker):
     assert code == 0, err
     report = json.loads(text)
     assert report["status"] == "done", report
-    ok, failures, _ = check_file(checker, out, every=max(1, report["configurations"] // 25))
-    assert ok, failures
+    assert_checked(checker, out, samples=25)
 
 
 def test_plan_prints_a_table_and_honours_options(tmp_path, capsys):
@@ -460,8 +458,7 @@ def test_plan_timeout_gives_a_partial_plan(tmp_path, capsys, checker):
     code, text, err = run(["plan", "curvy", "--out", out, "--json", "--timeout", "1e-6"], capsys)
     assert code == 0 and json.loads(text)["status"] == "timeout"
     assert "status 'timeout'" in err
-    ok, failures, _ = check_file(checker, out)
-    assert ok, failures
+    assert_checked(checker, out)
     code, _, err = run(["plan", "curvy", "--out", out, "--timeout", "-1"], capsys)
     assert code == 2 and "timeout" in err
 

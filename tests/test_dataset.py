@@ -17,7 +17,7 @@ import hugger
 from hugger import dataset
 from hugger.cli import main
 
-from helpers import check_file
+from helpers import save_and_check
 
 OBJECTS = ["box", "torus", "cylinder"]
 
@@ -115,10 +115,7 @@ def test_loader_and_every_saved_grasp_passes_the_checker(reference, tmp_path, ch
         assert g.best == (g.index == int(z["best"]))
         traj = ds.trajectory(i)  # re-planned from the stored start, checked against the stored grasp
         assert np.array_equal(traj.angles[-1], g.angles)
-        path = tmp_path / f"g{i}.npz"
-        traj.save(path)
-        ok, failures, _ = check_file(checker, path)
-        assert ok, (i, failures)
+        save_and_check(checker, traj, tmp_path / f"g{i}.npz", context=i)
     with pytest.raises(IndexError):
         ds[len(ds)]
 

@@ -19,13 +19,14 @@ from helpers import check_file
 REST_RULE = "is FROZEN but not extended"  # the checker's rule for rest = 0; see docs/hands.md
 
 
-def full_check(checker, path: Path, rest_nonzero: bool) -> tuple[list[str], dict]:
-    """Every check of the independent checker: structure, kinematics (limits included),
-    algorithm, collision and motion (DONE angles, Phase 2 joint moves of at most 4 steps, swept
-    collision on every step), as its command line runs them by default. Returns the failures
-    that count: the checker does not read rest_angles yet, so for a hand with non-zero rest
-    angles its "FROZEN but not extended" rule is set aside (our own assert_plan_properties
-    asserts that FROZEN fingers stay at rest)."""
+def full_check(checker, traj: hugger.Trajectory, path: Path, rest_nonzero: bool) -> tuple[list[str], dict]:
+    """Save ``traj`` to ``path`` and run every check of the independent checker on it: structure,
+    kinematics (limits included), algorithm, collision and motion (DONE angles, Phase 2 joint moves
+    of at most 4 steps, swept collision on every step), as its command line runs them by default.
+    Returns the failures that count: the checker does not read rest_angles yet, so for a hand with
+    non-zero rest angles its "FROZEN but not extended" rule is set aside (our own
+    assert_plan_properties asserts that FROZEN fingers stay at rest)."""
+    traj.save(path)
     _, failures, figures = check_file(checker, path, motion=True)
     assert not any(f.startswith("structure:") for f in failures), failures
     return [f for f in failures if not (rest_nonzero and REST_RULE in f)], figures
@@ -104,9 +105,7 @@ def _run(seeds, checker, tmp_path):
         assert_plan_properties(hand, traj)
         statuses[traj.status] = statuses.get(traj.status, 0) + 1
         if checker is not None:
-            path = tmp_path / f"p{seed}.npz"
-            traj.save(path)
-            fails, _ = full_check(checker, path, bool(np.any(hand.rest_angles != 0)))
+            fails, _ = full_check(checker, traj, tmp_path / f"p{seed}.npz", bool(np.any(hand.rest_angles != 0)))
             assert not fails, (seed, fails)
     return statuses
 
@@ -164,10 +163,8 @@ def test_presets_plan_and_round_trip(name, checker, tmp_path):
     traj = hugger.Planner(hand, case.obj, case.target, case.palm_pose).plan()
     assert traj.status == "done"
     assert_plan_properties(hand, traj)
-    path = tmp_path / "p.npz"
-    traj.save(path)
     if name != "paper_5x5":  # the rim hand's plan is checked by the planner's own tests
-        fails, _ = full_check(checker, path, bool(np.any(hand.rest_angles != 0)))
+        fails, _ = full_check(checker, traj, tmp_path / "p.npz", bool(np.any(hand.rest_angles != 0)))
         assert not fails
     for ext, write, read in ((".urdf", hands.to_urdf, hands.from_urdf), (".xml", hands.to_mjcf, hands.from_mjcf)):
         f = tmp_path / f"hand{ext}"
@@ -245,9 +242,7 @@ def test_urdf_with_fixed_spread_joints_imports_and_plans(tmp_path, checker):
         case = hugger.scenarios.default_case(name, hand)
         traj = hugger.Planner(hand, case.obj, case.target, case.palm_pose).plan()
         assert_plan_properties(hand, traj)
-        path = tmp_path / f"{name}.npz"
-        traj.save(path)
-        fails, _ = full_check(checker, path, False)
+        fails, _ = full_check(checker, traj, tmp_path / f"{name}.npz", False)
         assert not fails, fails
     # a spread held away from 0 turns the finger's plane about the palm normal
     turned = hugger.Hand.from_urdf(f, fixed_joints={**fixed, "f0_spread": 0.2})

@@ -20,10 +20,7 @@ RULES = ["paper", "hug"]
 
 def checked(traj: hugger.Trajectory, checker, tmp_path, swept_every: int = 1) -> dict:
     """Save, run the checker with its motion check, assert it holds; the checker's figures."""
-    path = tmp_path / "plan.npz"
-    traj.save(path)
-    ok, failures, figures = helpers.check_file(checker, path, motion=True, swept_every=swept_every)
-    assert ok, failures
+    figures = helpers.save_and_check(checker, traj, tmp_path / "plan.npz", motion=True, swept_every=swept_every)
     assert traj.status != "max_iterations"
     return figures
 

@@ -294,10 +294,7 @@ def test_baseline_is_a_valid_trajectory(baseline_sphere, checker, tmp_path):
     assert traj.status == "done"
     assert np.all(traj.tip_state[-1] == hugger.DONE)
     assert traj.phase[0] == 0 and np.all(traj.phase[1:] == 2)
-    path = tmp_path / "baseline.npz"
-    traj.save(path)
-    ok, failures, figures = helpers.check_file(checker, path, every=4)
-    assert ok, failures
+    helpers.save_and_check(checker, traj, tmp_path / "baseline.npz", every=4)
     # it stopped on a touch: every finger ends within the contact tolerance of the object
     gaps = traj.link_gaps(-1)
     assert np.all(gaps.min(axis=1) <= traj.params["contact_tolerance"] + 1e-6)
@@ -319,10 +316,7 @@ def test_baseline_turns_to_face_the_target_first(hand, checker, tmp_path):
     start = hugger.look_at([0.0, 0.0, 0.2], [0.05, 0.0, 0.0])  # not facing T
     traj = baselines.plan_baseline(hand, obj, [0, 0, 0], start, step=0.002)
     assert np.sum(traj.phase == 1) > 0
-    path = tmp_path / "turn.npz"
-    traj.save(path)
-    ok, failures, _ = helpers.check_file(checker, path, every=8)
-    assert ok, failures
+    helpers.save_and_check(checker, traj, tmp_path / "turn.npz", every=8)
 
 
 def test_baseline_rejects_bad_starts(hand):

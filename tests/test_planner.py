@@ -263,10 +263,8 @@ def test_objects_far_from_the_hands_size_end_done(hand, request, tmp_path, make,
     s = traj.summary()
     assert s["status"] == "done" and s["phase2_iterations"] < traj.params["max_iterations"] // 10
     assert s["fingers_done"] == 5 and s["palm_contact"] == palm
-    traj.save(tmp_path / "plan.npz")
     checker = request.getfixturevalue("checker")  # skips here when ../shared is absent
-    ok, failures, _ = helpers.check_file(checker, tmp_path / "plan.npz", every=10)
-    assert ok, failures
+    helpers.save_and_check(checker, traj, tmp_path / "plan.npz", every=10)
 
 
 # --- timeouts: Planner.plan(timeout=...) and hugger.plan(..., timeout=...) --------------------
@@ -322,10 +320,8 @@ def test_timeout_stops_with_a_valid_partial_trajectory(hand, sphere, checker, tm
     assert planner.plan().status == "timeout" and len(planner.trajectory()) == k
     assert planner.step() is None
     path = tmp_path / "partial.npz"
-    part.save(path)
+    helpers.save_and_check(checker, part, path, samples=40)
     assert hugger.Trajectory.load(path).status == "timeout"
-    ok, failures, _ = helpers.check_file(checker, path, every=max(1, k // 40))
-    assert ok, failures
 
 
 def test_timeout_through_hugger_plan(hand, sphere):

@@ -116,7 +116,7 @@ def test_search_rejects_bad_input(hand):
 def test_cli_plan_approaches(tmp_path, capsys, checker):
     from hugger.cli import main
 
-    from helpers import check_file
+    from helpers import assert_checked
 
     out = tmp_path / "p.npz"
     assert main(["plan", "box", "--approaches", "6", "--threads", "2", "--out", str(out), "--json"]) == 0
@@ -124,8 +124,7 @@ def test_cli_plan_approaches(tmp_path, capsys, checker):
     s = report["search"]
     assert s["approaches"] == 6 and len(s["candidates"]) == 6 and 0 <= s["best"] < 6
     assert report["links_in_contact"] == s["candidates"][s["best"]]["links_in_contact"]
-    ok, failures, _ = check_file(checker, out)
-    assert ok, failures
+    assert_checked(checker, out)
     assert main(["plan", "box", "--approaches", "3", "--turn", "10", "--out", str(out)]) == 2
     assert "--approaches" in capsys.readouterr().err
 

@@ -11,7 +11,7 @@ import pytest
 
 import hugger
 from hugger import skins
-from helpers import SHARED_MISSING, CHECKER, check_file, random_rotation
+from helpers import SHARED_MISSING, CHECKER, check_file, random_rotation, save_and_check
 
 #: Long runs (minutes): with HUGGER_SLOW=1 (bench/skins_agreement.py prints the same figures).
 LONG = pytest.mark.skipif(not os.environ.get("HUGGER_SLOW"), reason="long run: set HUGGER_SLOW=1")
@@ -373,6 +373,4 @@ def test_sensor_model_plans_are_collision_free(hand, checker, tmp_path, kw):
     obj = hugger.objects.sphere(0.04)
     traj = hugger.Planner(hand, skins.SensorModel(obj, seed=3, **kw), [0, 0, 0], start(), record_object=obj).plan()
     assert traj.status in ("done", "max_iterations")
-    traj.save(tmp_path / "s.npz")
-    ok, failures, _ = check_file(checker, tmp_path / "s.npz", every=2, motion=True, swept_every=2)
-    assert ok, failures
+    save_and_check(checker, traj, tmp_path / "s.npz", every=2, motion=True, swept_every=2)

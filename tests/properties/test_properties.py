@@ -79,10 +79,7 @@ def test_random_case(seed, rules, checker, tmp_path):
     traj = planner.plan()
     assert traj.status == "done", (kind, hand, planner.stats)
     assert_design_properties(traj, hand)
-    path = tmp_path / "plan.npz"
-    traj.save(path)
-    ok, failures, figures = helpers.check_file(checker, path, every=max(1, len(traj) // 40), motion=True)
-    assert ok, failures
+    helpers.save_and_check(checker, traj, tmp_path / "plan.npz", samples=40, motion=True)
 
 
 MESHES = helpers.ycb_paths()
@@ -106,7 +103,5 @@ def test_real_mesh(path, rules, checker, tmp_path):
     traj = planner.plan()
     assert traj.status == "done", planner.stats
     assert_design_properties(traj, hand)
-    traj.save(tmp_path / "plan.npz")
-    ok, failures, figures = helpers.check_file(checker, tmp_path / "plan.npz", every=max(1, len(traj) // 30), motion=True)
-    assert ok, failures
+    helpers.save_and_check(checker, traj, tmp_path / "plan.npz", samples=30, motion=True)
     assert json.loads(traj.stats_json)["phase2_iterations"] > 0
