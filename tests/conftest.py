@@ -41,3 +41,16 @@ def fine_sphere():
     import hugger
 
     return hugger.objects.sphere(radius=0.04, subdivisions=4)
+
+
+@pytest.fixture(scope="session")
+def sphere_plan(hand, sphere):
+    """The paper's hand around ``sphere`` from 20 cm above (helpers.start()), done: palm and many
+    links touch, a cage."""
+    return helpers.sphere_grasp(hand, sphere)
+
+
+@pytest.fixture(scope="session")
+def fine_sphere_plan(hand, fine_sphere):
+    """The same grasp of ``fine_sphere``: the reference plan of the analysis tests."""
+    return helpers.sphere_grasp(hand, fine_sphere)

@@ -116,6 +116,14 @@ def save_and_check(checker, traj: hugger.Trajectory, path: Path, **kwargs) -> di
     return assert_checked(checker, path, **kwargs)
 
 
+def sphere_grasp(hand: hugger.Hand, obj: hugger.Object) -> hugger.Trajectory:
+    """``hand``'s plan around ``obj`` (a sphere about the origin) from :func:`start`, T at the
+    origin; asserted ``done``."""
+    traj = hugger.plan(hand, obj, [0.0, 0.0, 0.0], start())
+    assert traj.status == "done"
+    return traj
+
+
 def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """Minimal Wavefront OBJ reader (v and f lines; polygons fanned into triangles)."""
     verts, faces = [], []

@@ -21,17 +21,15 @@ DIST = 1e-3  # contact distance (m) used throughout, as in Trajectory.summary()
 # --- fixtures and helpers ----------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def sphere_plan(hand):
-    """The reference plan: the 5x5 hand around the 4 cm sphere, approaching from +z."""
-    obj = hugger.objects.sphere(radius=0.04)
-    traj = hugger.plan(hand, obj, [0.0, 0.0, 0.0], hugger.look_at([0.0, 0.0, 0.2], [0.0, 0.0, 0.0]))
-    assert traj.status == "done"
-    return traj, obj
+def reference_plan(fine_sphere_plan, fine_sphere):
+    """The reference plan (conftest's fine_sphere_plan: the 5x5 hand around the 4 cm sphere,
+    approaching from +z) and its object."""
+    return fine_sphere_plan, fine_sphere
 
 
 @pytest.fixture(scope="module")
-def sphere_contacts(sphere_plan):
-    traj, obj = sphere_plan
+def sphere_contacts(reference_plan):
+    traj, obj = reference_plan
     return A.contacts(traj, -1, DIST, obj)
 
 
@@ -266,8 +264,8 @@ def test_scaling_object_and_torque_scale_leaves_quality_unchanged():
 
 # --- contacts ---------------------------------------------------------------------------------
 
-def test_contacts_of_real_plan_lie_on_surface_and_on_their_link(sphere_plan, sphere_contacts, hand):
-    traj, obj = sphere_plan
+def test_contacts_of_real_plan_lie_on_surface_and_on_their_link(reference_plan, sphere_contacts, hand):
+    traj, obj = reference_plan
     c = sphere_contacts
     r = hand.link_radius
     assert len(c) > 0 and c.points.shape == (len(c), 3)
@@ -293,8 +291,8 @@ def test_contacts_of_real_plan_lie_on_surface_and_on_their_link(sphere_plan, sph
 
 
 @pytest.mark.parametrize("distance", [DIST, 2.5e-3])
-def test_contacts_agree_with_trajectory_summary(sphere_plan, distance):
-    traj, obj = sphere_plan
+def test_contacts_agree_with_trajectory_summary(reference_plan, distance):
+    traj, obj = reference_plan
     c = A.contacts(traj, -1, distance, obj)
     s = traj.summary(contact_distance=distance)
     assert c.links_in_contact == s["links_in_contact"]
@@ -411,8 +409,8 @@ def test_wrap_angle_of_a_finger_from_pole_to_equator_is_90_degrees():
     assert A.wrap_angle(traj)[0] == w[0]
 
 
-def test_wrap_angles_of_real_plan(sphere_plan):
-    traj, obj = sphere_plan
+def test_wrap_angles_of_real_plan(reference_plan):
+    traj, obj = reference_plan
     w = A.wrap_angle(traj, obj=obj)
     per = A.contacts(traj, obj=obj).per_finger()
     assert w.shape == (5,)
@@ -422,8 +420,8 @@ def test_wrap_angles_of_real_plan(sphere_plan):
 
 # --- analyze ----------------------------------------------------------------------------------
 
-def test_analyze_real_plan(sphere_plan):
-    traj, _ = sphere_plan
+def test_analyze_real_plan(reference_plan):
+    traj, _ = reference_plan
     r = A.analyze(traj)
     assert set(r) == {"contacts", "links_in_contact", "links", "palm_contact", "per_finger_contacts",
                       "wrap_angle_deg", "force_closure", "epsilon", "volume", "mu", "torque_scale_m"}
@@ -439,11 +437,11 @@ def test_analyze_real_plan(sphere_plan):
     assert A.analyze(traj) == r  # deterministic
 
 
-def test_analyze_frictionless_real_plan_is_weak(sphere_plan):
+def test_analyze_frictionless_real_plan_is_weak(reference_plan):
     # Without friction a true sphere grasp could not resist torques about its centre. The mesh is
     # faceted: triangle normals miss the centre by a few degrees, leaving only small torques, so the
     # frictionless epsilon is a small fraction of the mu = 0.5 one.
-    traj, _ = sphere_plan
+    traj, _ = reference_plan
     r0, r = A.analyze(traj, mu=0.0), A.analyze(traj, mu=0.5)
     assert r0["mu"] == 0.0 and r0["contacts"] == r["contacts"]
     assert r0["epsilon"] < 0.1 * r["epsilon"]
@@ -452,8 +450,8 @@ def test_analyze_frictionless_real_plan_is_weak(sphere_plan):
 
 # --- input checks and the optional extra -----------------------------------------------------
 
-def test_bad_input_raises_clear_errors(sphere_plan, sphere_contacts):
-    traj, obj = sphere_plan
+def test_bad_input_raises_clear_errors(reference_plan, sphere_contacts):
+    traj, obj = reference_plan
     c = sphere_contacts
     origin = np.zeros(3)
     for kwargs, match in [({"mu": -0.1}, "mu"), ({"mu": float("nan")}, "mu"), ({"cone_edges": 2}, "cone_edges"),
@@ -489,8 +487,8 @@ def test_bad_input_raises_clear_errors(sphere_plan, sphere_contacts):
         A.Contacts(np.zeros((2, 2)), np.zeros((2, 2)), np.zeros(2), np.zeros(2), np.zeros(2))
 
 
-def test_analysis_needs_no_scipy(monkeypatch, sphere_plan, sphere_contacts):
-    traj, obj = sphere_plan
+def test_analysis_needs_no_scipy(monkeypatch, reference_plan, sphere_contacts):
+    traj, obj = reference_plan
     real_import = builtins.__import__
 
     def no_scipy(name, *args, **kwargs):

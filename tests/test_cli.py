@@ -26,7 +26,7 @@ def run(args, capsys):
 
 
 @pytest.fixture(scope="module")
-def sphere_plan(tmp_path_factory):
+def sphere_file(tmp_path_factory):
     path = tmp_path_factory.mktemp("cli") / "sphere.npz"
     assert cli.main(["plan", "sphere", "--out", str(path)]) == 0
     return path
@@ -182,12 +182,12 @@ def test_bad_arguments_exit_2_with_one_line(args, message, capsys, tmp_path, mon
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
 
 
-def test_info_reports_the_file(sphere_plan, capsys):
-    code, out, _ = run(["info", sphere_plan, "--json"], capsys)
+def test_info_reports_the_file(sphere_file, capsys):
+    code, out, _ = run(["info", sphere_file, "--json"], capsys)
     assert code == 0
     info = json.loads(out)
     assert info["status"] == "done" and info["palm_contact"] is True and info["links_in_contact"] >= 15
-    traj = hugger.Trajectory.load(sphere_plan)
+    traj = hugger.Trajectory.load(sphere_file)
     h = info["hand"]  # structured, not prose
     assert h["fingers"] == 5 and h["links"] == 5 and h["link_radius"] == 0.004 and h["palm_radius"] == 0.03
     assert np.array_equal(h["link_lengths"], traj.hand["link_lengths"])
@@ -199,7 +199,7 @@ def test_info_reports_the_file(sphere_plan, capsys):
     assert info["params"] == traj.params and info["planner_epsilon_m"] == traj.params["epsilon"]
     assert "ferrari_canny_epsilon" in info and "epsilon" not in info  # the two epsilons, named apart
     assert info["provenance"]["hugger_version"] == hugger.__version__
-    code, out, _ = run(["info", sphere_plan], capsys)
+    code, out, _ = run(["info", sphere_file], capsys)
     assert code == 0 and "links_in_contact" in out and "ferrari_canny_epsilon" in out
 
 
@@ -223,17 +223,17 @@ def test_plan_records_provenance(tmp_path, capsys):
     assert prov["object"] == str(tmp_path / "ball.stl") and prov["object_source"] == "file"
 
 
-def test_plan_report_names_the_two_epsilons_apart(sphere_plan, capsys):
+def test_plan_report_names_the_two_epsilons_apart(sphere_file, capsys):
     with pytest.raises(SystemExit):
         cli.main(["plan", "--help"])
     out = " ".join(capsys.readouterr().out.split())
     assert "overextension threshold" in out and "tip-to-surface" not in out
-    code, out, _ = run(["plan", "sphere", "--out", sphere_plan.parent / "again.npz", "--json"], capsys)
+    code, out, _ = run(["plan", "sphere", "--out", sphere_file.parent / "again.npz", "--json"], capsys)
     report = json.loads(out)
     assert "epsilon" not in report and report["ferrari_canny_epsilon"] > 0
 
 
-def test_every_output_is_written_atomically(sphere_plan, tmp_path, capsys, monkeypatch):
+def test_every_output_is_written_atomically(sphere_file, tmp_path, capsys, monkeypatch):
     # a writer that fails half way leaves no file under the final name, and no temporary file
     pytest.importorskip("matplotlib")
     from hugger import viz
@@ -244,11 +244,11 @@ def test_every_output_is_written_atomically(sphere_plan, tmp_path, capsys, monke
         raise KeyboardInterrupt
 
     monkeypatch.setitem(viz.FIGURES, "sheet", (half_written, viz.FIGURES["sheet"][1]))  # what render draws
-    code, _, err = run(["render", sphere_plan, "--out", tmp_path / "grasp.png"], capsys)
+    code, _, err = run(["render", sphere_file, "--out", tmp_path / "grasp.png"], capsys)
     assert code == 130 and "interrupted" in err
     assert list(tmp_path.iterdir()) == []
     # the trajectory file too
-    traj = hugger.Trajectory.load(sphere_plan)
+    traj = hugger.Trajectory.load(sphere_file)
 
     def broken(*a, **k):
         raise OSError("disk full")
@@ -272,25 +272,25 @@ def test_corrupt_trajectory_file_exit_2(tmp_path, capsys):
     assert code == 2 and "cannot read trajectory file" in err
 
 
-def test_render_png_and_bad_extension(sphere_plan, tmp_path, capsys):
+def test_render_png_and_bad_extension(sphere_file, tmp_path, capsys):
     pytest.importorskip("matplotlib")
     png = tmp_path / "grasp.png"
-    code, out, err = run(["render", sphere_plan, "--out", png], capsys)
+    code, out, err = run(["render", sphere_file, "--out", png], capsys)
     assert code == 0, err
     assert png.stat().st_size > 10_000
-    code, _, err = run(["render", sphere_plan, "--out", tmp_path / "grasp.txt"], capsys)
+    code, _, err = run(["render", sphere_file, "--out", tmp_path / "grasp.txt"], capsys)
     assert code == 2 and ".png" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["grasp.png"]  # no temporary file left
 
 
-def test_render_options(sphere_plan, tmp_path, capsys):
+def test_render_options(sphere_file, tmp_path, capsys):
     pytest.importorskip("matplotlib")
     from PIL import Image
 
     sizes = {}
     for figure in ("fig4", "fig5", "tipstate", "sheet"):
         out = tmp_path / f"{figure}.png"
-        code, _, err = run(["render", sphere_plan, "--out", out, "--figure", figure, "--dpi", "50"], capsys)
+        code, _, err = run(["render", sphere_file, "--out", out, "--figure", figure, "--dpi", "50"], capsys)
         assert code == 0, err
         with Image.open(out) as im:
             sizes[figure] = im.size
@@ -302,7 +302,7 @@ def test_render_options(sphere_plan, tmp_path, capsys):
     assert sizes["tipstate"] == (round(viz.TIPSTATE_SIZE[0] * 50), round(viz.TIPSTATE_SIZE[1] * 50))
     assert sizes["sheet"] == (round(viz.OVERVIEW_SIZE[0] * 50), round(viz.OVERVIEW_SIZE[1] * 50))
     gif = tmp_path / "a.gif"
-    code, _, err = run(["render", sphere_plan, "--out", gif, "--frames", "7", "--fps", "5", "--view", "side",
+    code, _, err = run(["render", sphere_file, "--out", gif, "--frames", "7", "--fps", "5", "--view", "side",
                         "--dpi", "40"], capsys)
     assert code == 0, err
     with Image.open(gif) as im:
@@ -313,11 +313,11 @@ def test_render_options(sphere_plan, tmp_path, capsys):
         assert held >= 1000 - 10
 
 
-def test_vector_output_stays_small(sphere_plan, tmp_path, capsys):
+def test_vector_output_stays_small(sphere_file, tmp_path, capsys):
     pytest.importorskip("matplotlib")
     for suffix in (".pdf", ".svg"):
         out = tmp_path / f"sheet{suffix}"
-        code, _, err = run(["render", sphere_plan, "--out", out], capsys)
+        code, _, err = run(["render", sphere_file, "--out", out], capsys)
         assert code == 0, err
         assert out.stat().st_size < 1_500_000, (suffix, out.stat().st_size)  # the object surface is rasterised
 
@@ -335,9 +335,9 @@ def test_internal_error_exits_1_with_a_report(monkeypatch, capsys):
     ("trimesh", ["plan", "{tmp}/ball.stl", "--out", "{tmp}/x.npz"], "hugger[mesh]"),
     ("mujoco", ["validate", "{plan}"], "hugger[physics]"),
 ])
-def test_missing_optional_dependency_names_the_extra(module, command, extra, sphere_plan, tmp_path):
+def test_missing_optional_dependency_names_the_extra(module, command, extra, sphere_file, tmp_path):
     (tmp_path / "ball.stl").write_bytes(b"")
-    args = [a.format(plan=sphere_plan, tmp=tmp_path) for a in command]
+    args = [a.format(plan=sphere_file, tmp=tmp_path) for a in command]
     code = (f"import sys; sys.modules[{module!r}] = None\n"
             f"from hugger.cli import main; sys.exit(main({args!r}))")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
@@ -401,23 +401,23 @@ def test_demo_writes_figures_animation_and_summary(tmp_path, capsys):
     assert os.path.basename(str(out)) in text
 
 
-def test_export_mjcf_and_validate(sphere_plan, tmp_path, capsys):
+def test_export_mjcf_and_validate(sphere_file, tmp_path, capsys):
     mujoco = pytest.importorskip("mujoco", reason="needs the physics extra")
     xml = tmp_path / "hand.xml"
-    code, out, err = run(["export-mjcf", sphere_plan, "--out", xml], capsys)
+    code, out, err = run(["export-mjcf", sphere_file, "--out", xml], capsys)
     assert code == 0, err
     model = mujoco.MjModel.from_xml_path(str(xml))
     assert model.njnt == 25 + 1  # 5 x 5 hinges and the object's free joint
-    code, out, err = run(["validate", sphere_plan, "--json"], capsys)
+    code, out, err = run(["validate", sphere_file, "--json"], capsys)
     assert code == 0, err  # held: exit 0
     result = json.loads(out)
     assert result["held"] is True and set(result["directions"]) == {"+x", "-x", "+y", "-y", "+z", "-z"}
     assert "settings" in result
-    code, out, _ = run(["validate", sphere_plan], capsys)
+    code, out, _ = run(["validate", sphere_file], capsys)
     assert code == 0 and "verdict: held" in out
 
 
-def test_validate_reports_a_diverged_direction(sphere_plan, capsys, monkeypatch):
+def test_validate_reports_a_diverged_direction(sphere_file, capsys, monkeypatch):
     # physics.validate reports None figures for a direction whose simulation diverged; the text
     # report must say so rather than fail on them
     from hugger import physics
@@ -425,12 +425,12 @@ def test_validate_reports_a_diverged_direction(sphere_plan, capsys, monkeypatch)
     held = {"displacement_m": 0.001, "rotation_deg": 0.5, "held": True}
     lost = {"displacement_m": None, "rotation_deg": None, "held": False, "diverged": True}
     monkeypatch.setattr(physics, "validate", lambda traj: {"held": False, "directions": {"+x": held, "-x": lost}})
-    code, out, err = run(["validate", sphere_plan], capsys)
+    code, out, err = run(["validate", sphere_file], capsys)
     assert code == 1, err  # not held: exit 1
     assert "-x  the simulation diverged: LOST" in out and "+x  moved" in out and "verdict: not held" in out
 
 
-def test_validate_exit_status_and_lost_objects(sphere_plan, capsys, monkeypatch):
+def test_validate_exit_status_and_lost_objects(sphere_file, capsys, monkeypatch):
     from hugger import physics
 
     held = {"displacement_m": 0.001, "rotation_deg": 0.5, "held": True}
@@ -440,12 +440,12 @@ def test_validate_exit_status_and_lost_objects(sphere_plan, capsys, monkeypatch)
                "not held": {"held": False, "directions": {"+x": held, "-x": slipped, "+z": flew}}}
     for verdict, result in results.items():
         monkeypatch.setattr(physics, "validate", lambda traj, r=result: r)
-        code, out, err = run(["validate", sphere_plan], capsys)
+        code, out, err = run(["validate", sphere_file], capsys)
         assert code == (0 if verdict == "held" else 1), err
         assert f"verdict: {verdict}" in out
-        code, out, _ = run(["validate", sphere_plan, "--json"], capsys)
+        code, out, _ = run(["validate", sphere_file, "--json"], capsys)
         assert code == (0 if verdict == "held" else 1) and json.loads(out)["held"] is (verdict == "held")
-    code, out, _ = run(["validate", sphere_plan], capsys)
+    code, out, _ = run(["validate", sphere_file], capsys)
     assert "-x  moved   70.00 mm" in out and "LOST" in out
     assert "+z  lost (moved more than 200 mm)" in out and "186891" not in out
     with pytest.raises(SystemExit):
@@ -463,13 +463,13 @@ def test_plan_timeout_gives_a_partial_plan(tmp_path, capsys, checker):
     assert code == 2 and "timeout" in err
 
 
-def test_render_draws_palm_contacts_only_where_the_palm_does_not_hide_them(sphere_plan):
+def test_render_draws_palm_contacts_only_where_the_palm_does_not_hide_them(sphere_file):
     pytest.importorskip("matplotlib")
     import matplotlib.pyplot as plt
 
     from hugger import analysis, viz
 
-    traj = hugger.Trajectory.load(sphere_plan)
+    traj = hugger.Trajectory.load(sphere_file)
     c = analysis.contacts(traj, -1)
     palm, links = int(np.sum(c.finger < 0)), int(np.sum(c.finger >= 0))
     assert palm > 0 and links > 0
@@ -502,8 +502,8 @@ def test_fig4_keeps_one_scale_across_panels(tmp_path, capsys):
         plt.close(fig)
 
 
-def test_files_without_provenance_still_load(sphere_plan, tmp_path, capsys):
-    with np.load(sphere_plan, allow_pickle=False) as data:
+def test_files_without_provenance_still_load(sphere_file, tmp_path, capsys):
+    with np.load(sphere_file, allow_pickle=False) as data:
         arrays = {k: data[k] for k in data.files if k != "provenance_json"}  # as written before it existed
     old = tmp_path / "old.npz"
     np.savez_compressed(old, **arrays)
@@ -512,7 +512,7 @@ def test_files_without_provenance_still_load(sphere_plan, tmp_path, capsys):
     code, out, _ = run(["info", old, "--json"], capsys)
     info = json.loads(out)
     assert code == 0 and info["provenance"] == {} and info["object"]["name"] is None
-    assert info["object"]["sha256"] == hugger.Trajectory.load(sphere_plan).object_sha256()
+    assert info["object"]["sha256"] == hugger.Trajectory.load(sphere_file).object_sha256()
     code, out, _ = run(["info", old], capsys)
     assert code == 0 and "(not recorded)" in out
     # an API user adds their own fields; saving fills in the version and the object's hash

@@ -33,15 +33,6 @@ def _bench_module(name: str):
 
 
 @pytest.fixture(scope="module")
-def sphere_plan(hand) -> hugger.Trajectory:
-    """Hugger's grasp of a 4 cm sphere from 20 cm above: palm and many links touch, a cage."""
-    obj = hugger.objects.sphere(0.04, subdivisions=3)
-    traj = hugger.plan(hand, obj, [0, 0, 0], hugger.look_at([0, 0, 0.2], [0, 0, 0]))
-    assert traj.status == "done"
-    return traj
-
-
-@pytest.fixture(scope="module")
 def cache(tmp_path_factory) -> Path:
     return tmp_path_factory.mktemp("coacd-cache")
 
