@@ -124,6 +124,17 @@ def sphere_grasp(hand: hugger.Hand, obj: hugger.Object) -> hugger.Trajectory:
     return traj
 
 
+#: The arrays of a plan's motion, and every array of a trajectory file.
+MOTION = ("palm_pose", "joints", "angles", "tip_state")
+FILE_ARRAYS = MOTION + ("phase", "object_vertices", "object_faces", "target")
+
+
+def same(a: hugger.Trajectory, b: hugger.Trajectory, arrays=MOTION, fields=("status",)) -> bool:
+    """True when ``a`` and ``b`` hold the same ``arrays`` bit for bit and equal ``fields``."""
+    return (all(np.array_equal(getattr(a, n), getattr(b, n)) for n in arrays)
+            and all(getattr(a, f) == getattr(b, f) for f in fields))
+
+
 def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """Minimal Wavefront OBJ reader (v and f lines; polygons fanned into triangles)."""
     verts, faces = [], []

@@ -9,6 +9,7 @@ import pytest
 
 import helpers
 import hugger
+from helpers import same
 
 
 @pytest.fixture(scope="module")
@@ -27,11 +28,6 @@ def cases(hand):
             out.append({"hand": hand, "obj": obj, "target": [0.0, 0.0, 0.0],
                         "palm_pose": hugger.look_at(0.17 * np.asarray(d), [0, 0, 0])})
     return out
-
-
-def same(a: hugger.Trajectory, b: hugger.Trajectory) -> bool:
-    return (a.status == b.status and np.array_equal(a.joints, b.joints) and np.array_equal(a.palm_pose, b.palm_pose)
-            and np.array_equal(a.tip_state, b.tip_state) and np.array_equal(a.angles, b.angles))
 
 
 @pytest.fixture(scope="module")

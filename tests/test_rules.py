@@ -40,9 +40,7 @@ def test_plans_are_bit_identical(rules):
     kind, hand, obj, target, pose = hug_metrics.random_case(3)
     a = hugger.Planner(hand, obj, target, pose, rules=rules).plan()
     b = hugger.Planner(hand, obj, target, pose, rules=rules).plan()
-    assert a.status == b.status
-    assert np.array_equal(a.joints, b.joints) and np.array_equal(a.angles, b.angles)
-    assert np.array_equal(a.palm_pose, b.palm_pose) and np.array_equal(a.tip_state, b.tip_state)
+    assert helpers.same(a, b)  # status, palm poses, joints, angles and TipStates
 
 
 def test_fitting_cases_fit():

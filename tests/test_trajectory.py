@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import hugger
-from helpers import start
+from helpers import FILE_ARRAYS, same, start
 
 
 # --- trajectory file -----------------------------------------------------------------------
@@ -60,9 +60,8 @@ def saved(tmp_path_factory, hand, sphere):
 
 
 def _same(a: hugger.Trajectory, b: hugger.Trajectory) -> bool:
-    names = ("palm_pose", "joints", "angles", "tip_state", "phase", "object_vertices", "object_faces", "target")
-    return (all(np.array_equal(getattr(a, n), getattr(b, n)) for n in names)
-            and (a.hand_json, a.params_json, a.status) == (b.hand_json, b.params_json, b.status))
+    """Every array, the hand, the parameters and the status, bit for bit."""
+    return same(a, b, FILE_ARRAYS, ("hand_json", "params_json", "status"))
 
 
 def _write(tmp_path, arrays, compressed=True):
