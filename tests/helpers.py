@@ -1,4 +1,5 @@
-"""Shared helpers of the test suite: random scenarios and the independent checker."""
+"""Shared helpers of the test suite: random scenarios, the independent checker, plans and their
+comparison, mesh files."""
 from __future__ import annotations
 
 import importlib.util
@@ -7,6 +8,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import hugger
 
@@ -133,6 +135,15 @@ def same(a: hugger.Trajectory, b: hugger.Trajectory, arrays=MOTION, fields=("sta
     """True when ``a`` and ``b`` hold the same ``arrays`` bit for bit and equal ``fields``."""
     return (all(np.array_equal(getattr(a, n), getattr(b, n)) for n in arrays)
             and all(getattr(a, f) == getattr(b, f) for f in fields))
+
+
+def write_ball(path: Path, radius: float = 0.04, subdivisions: int = 2) -> Path:
+    """An icosphere of ``radius`` (in the file's units) written to the mesh file ``path`` (STL,
+    OBJ, ...: by its suffix) by trimesh, one vertex list as given; skips where trimesh is absent."""
+    trimesh = pytest.importorskip("trimesh")
+    v, f = hugger.objects.icosphere(subdivisions)
+    trimesh.Trimesh(radius * v, f, process=False).export(path)
+    return Path(path)
 
 
 def read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:

@@ -14,7 +14,7 @@ import hugger
 from hugger import cli, objects
 from hugger._progress import Progress
 
-from helpers import OBJECTS_DIR, SHARED_MISSING, assert_checked, ycb_paths
+from helpers import OBJECTS_DIR, SHARED_MISSING, assert_checked, write_ball, ycb_paths
 
 RUN = [sys.executable, "-m", "hugger"]
 
@@ -79,10 +79,7 @@ def test_plan_prints_a_table_and_honours_options(tmp_path, capsys):
 
 
 def test_plan_mesh_file_with_scale(tmp_path, capsys):
-    trimesh = pytest.importorskip("trimesh")
-    v, f = objects.icosphere(3)
-    mesh = tmp_path / "ball_mm.stl"
-    trimesh.Trimesh(40.0 * v, f, process=False).export(mesh)  # a 4 cm ball in millimetres
+    mesh = write_ball(tmp_path / "ball_mm.stl", 40.0, subdivisions=3)  # a 4 cm ball in millimetres
     code, _, err = run(["plan", mesh, "--out", tmp_path / "a.npz"], capsys)
     # an implausible size (millimetres read as metres) is refused before planning, unless --force
     assert code == 2 and err.startswith("hugger: error: ") and "millimetres" in err and "--force" in err
@@ -94,10 +91,7 @@ def test_plan_mesh_file_with_scale(tmp_path, capsys):
 
 
 def test_plan_implausible_size_with_force(tmp_path, capsys):
-    trimesh = pytest.importorskip("trimesh")
-    v, f = objects.icosphere(2)
-    mesh = tmp_path / "speck.stl"
-    trimesh.Trimesh(4e-4 * v, f, process=False).export(mesh)  # a 0.8 mm speck: too small for a hand
+    mesh = write_ball(tmp_path / "speck.stl", 4e-4)  # a 0.8 mm speck: too small for a hand
     code, _, err = run(["plan", mesh, "--out", tmp_path / "a.npz"], capsys)
     assert code == 2 and "implausibly small" in err
     code, text, err = run(["plan", mesh, "--out", tmp_path / "a.npz", "--force", "--json",
@@ -116,19 +110,13 @@ def test_scale_is_refused_for_a_builtin(tmp_path, capsys):
 
 
 def test_stl_load_reports_no_merged_vertices(tmp_path):
-    trimesh = pytest.importorskip("trimesh")
-    v, f = objects.icosphere(2)
-    mesh = tmp_path / "ball.stl"
-    trimesh.Trimesh(0.04 * v, f, process=False).export(mesh)  # STL: three vertices of its own per face
+    mesh = write_ball(tmp_path / "ball.stl")  # STL: three vertices of its own per face
     obj, repairs = objects.load_mesh(mesh)
-    assert repairs == [] and len(obj.vertices) == len(v)  # merged, and not called a repair
+    assert repairs == [] and len(obj.vertices) == len(objects.icosphere(2)[0])  # merged, and not called a repair
 
 
 def test_mesh_files_are_read_once_per_process(tmp_path, monkeypatch):
-    trimesh = pytest.importorskip("trimesh")
-    v, f = objects.icosphere(2)
-    mesh = tmp_path / "ball.stl"
-    trimesh.Trimesh(0.04 * v, f, process=False).export(mesh)
+    mesh = write_ball(tmp_path / "ball.stl")
     reads = []
     real = objects.load_mesh
     monkeypatch.setattr(objects, "load_mesh", lambda *a, **k: (reads.append(a), real(*a, **k))[1])
@@ -215,9 +203,7 @@ def test_plan_records_provenance(tmp_path, capsys):
     assert prov["hugger_version"] == hugger.__version__
     assert prov["object_sha256"] == traj.object_sha256() and len(prov["object_sha256"]) == 64
     # a mesh file is recorded by its absolute path
-    trimesh = pytest.importorskip("trimesh")
-    v, f = objects.icosphere(2)
-    trimesh.Trimesh(0.04 * v, f, process=False).export(tmp_path / "ball.stl")
+    write_ball(tmp_path / "ball.stl")
     assert run(["plan", tmp_path / "ball.stl", "--out", out], capsys)[0] == 0
     prov = hugger.Trajectory.load(out).provenance
     assert prov["object"] == str(tmp_path / "ball.stl") and prov["object_source"] == "file"
