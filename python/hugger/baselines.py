@@ -43,14 +43,6 @@ from .trajectory import Trajectory
 from .world import Object
 
 
-def _mujoco() -> Any:
-    try:
-        import mujoco
-    except ImportError as exc:
-        raise ImportError("the close-until-contact baseline needs MuJoCo: pip install 'hugger[physics]'") from exc
-    return mujoco
-
-
 #: Collision answers a scene keeps, the newest, so that a configuration asked again is not queried
 #: again (a bisection's landing point, a finger's start after the one before it moved).
 _KEPT_QUERIES = 64
@@ -61,7 +53,7 @@ class _Scene:
 
     def __init__(self, hand: Hand, obj: Object, target: np.ndarray, pose: np.ndarray, margin: float,
                  decompose: bool, cache_dir: Any) -> None:
-        mujoco = _mujoco()
+        mujoco = physics._mujoco("the close-until-contact baseline")
 
         self.mj = mujoco
         m, n = hand.fingers, hand.links
@@ -115,6 +107,23 @@ class _Scene:
     def hand_gap(self, pose: np.ndarray, angles: np.ndarray) -> float:
         g = self.gaps(pose, angles)
         return float(min(g[self.link_geoms].min(), g[self.palm_geom]))
+
+
+def _land(gap: Callable[[float], float], end: float, delta: float) -> tuple[float, bool]:
+    """Land a move of ``end`` (a distance or a fraction of a step) that touches: bisection for an
+    ``a`` in [0, end] whose ``gap(a)`` lies in [0, delta]. Returns ``(a, True)`` when one is found
+    in 60 halvings, else the largest ``a`` tried that stayed farther than delta, and False."""
+    lo, hi = 0.0, end
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        g = gap(mid)
+        if g > delta:
+            lo = mid
+        elif g >= 0:
+            return mid, True
+        else:
+            hi = mid
+    return lo, False
 
 
 def plan_baseline(hand: Hand, obj: Object, target: Any, palm_pose: Any, step: float | None = None,
@@ -188,19 +197,9 @@ def plan_baseline(hand: Hand, obj: Object, target: Any, palm_pose: Any, step: fl
         if scene.hand_gap(moved(s), angles) > delta:
             pose = moved(s)
         else:
-            lo, hi, a = 0.0, s, None
-            for _ in range(60):
-                mid = 0.5 * (lo + hi)
-                g = scene.hand_gap(moved(mid), angles)
-                if g > delta:
-                    lo = mid
-                elif g >= 0:
-                    a = mid
-                    break
-                else:
-                    hi = mid
-            pose = moved(a if a is not None else lo)
-            touched = a is not None or scene.hand_gap(pose, angles) <= delta
+            a, landed = _land(lambda t: scene.hand_gap(moved(t), angles), s, delta)
+            pose = moved(a)
+            touched = landed or scene.hand_gap(pose, angles) <= delta
         iterations += 1
         emit(pose, angles, state, 2)
         if touched:
@@ -252,18 +251,9 @@ def plan_baseline(hand: Hand, obj: Object, target: Any, palm_pose: Any, step: fl
                     if g_full[link_geoms[m, first:]].min() > delta:
                         angles = proposal(m, 1.0)
                         break
-                    lo, hi, found = 0.0, 1.0, None
-                    for _ in range(60):
-                        mid = 0.5 * (lo + hi)
-                        g = scene.gaps(pose, proposal(m, mid))[link_geoms[m, first:]].min()
-                        if g > delta:
-                            lo = mid
-                        elif g >= 0:
-                            found = mid
-                            break
-                        else:
-                            hi = mid
-                    angles = proposal(m, found if found is not None else lo)
+                    found, _ = _land(lambda t: float(scene.gaps(pose, proposal(m, t))[link_geoms[m, first:]].min()),
+                                     1.0, delta)
+                    angles = proposal(m, found)
                     stop_touching(m, scene.gaps(pose, angles))
                     break
         active &= angles < scene.upper - 1e-12  # joints at their flexion limit stop

@@ -10,11 +10,12 @@ import numpy as np
 from ..trajectory import Trajectory
 
 
-def _mujoco() -> Any:
+def _mujoco(user: str = "the physics check") -> Any:
+    """The mujoco module; ``ImportError`` saying that ``user`` needs it, and how to install it, when missing."""
     try:
         import mujoco
     except ImportError as exc:
-        raise ImportError("the physics check needs MuJoCo: pip install 'hugger[physics]'") from exc
+        raise ImportError(f"{user} needs MuJoCo: pip install 'hugger[physics]'") from exc
     return mujoco
 
 
