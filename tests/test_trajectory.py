@@ -70,6 +70,16 @@ def _write(tmp_path, arrays, compressed=True):
     return path
 
 
+def _write_raw(path, arrays, key, raw: bytes):
+    """An .npz of ``arrays`` whose member ``key`` is the bytes ``raw`` instead (a forged .npy)."""
+    with zipfile.ZipFile(path, "w") as zf:
+        for name, value in arrays.items():
+            member = io.BytesIO()
+            np.lib.format.write_array(member, value)
+            zf.writestr(f"{name}.npy", raw if name == key else member.getvalue())
+    return path
+
+
 def test_truncated_files_are_refused_at_every_offset(saved, tmp_path):
     traj, path, _ = saved
     data = path.read_bytes()
@@ -180,12 +190,7 @@ def test_a_header_declaring_a_huge_array_is_refused_without_allocating(saved, tm
     np.lib.format.write_array_header_1_0(bomb, {"descr": "<f8", "fortran_order": False,
                                                 "shape": (10 ** 11, *joints.shape[1:])})
     bomb.write(joints.tobytes())
-    path = tmp_path / "bomb.npz"
-    with zipfile.ZipFile(path, "w") as zf:
-        for key, value in arrays.items():
-            member = io.BytesIO()
-            np.lib.format.write_array(member, value)
-            zf.writestr(f"{key}.npy", bomb.getvalue() if key == "joints" else member.getvalue())
+    path = _write_raw(tmp_path / "bomb.npz", arrays, "joints", bomb.getvalue())
     tracemalloc.start()
     try:
         with pytest.raises(ValueError, match="declares"):
@@ -202,12 +207,7 @@ def test_a_damaged_npy_header_is_a_value_error(saved, tmp_path):
     text = "{'descr': '<i8', 'fortran_order': False, 'shape': (320der': Fas, }"
     text += " " * (117 - len(text)) + "\n"
     header = b"\x93NUMPY\x01\x00" + len(text).to_bytes(2, "little") + text.encode("latin1")
-    path = tmp_path / "header.npz"
-    with zipfile.ZipFile(path, "w") as zf:
-        for key, value in arrays.items():
-            member = io.BytesIO()
-            np.lib.format.write_array(member, value)
-            zf.writestr(f"{key}.npy", header + bytes(8 * 960) if key == "object_faces" else member.getvalue())
+    path = _write_raw(tmp_path / "header.npz", arrays, "object_faces", header + bytes(8 * 960))
     with pytest.raises(ValueError, match="cannot read"):
         hugger.Trajectory.load(path)
 
