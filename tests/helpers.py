@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import hugger
+from hugger import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared"
@@ -96,6 +97,13 @@ def check_file(checker, path: Path, every: int = 1, motion: bool = False,
         if motion:
             checker.check_motion(d, rep, checker.LIN_TOL, tol, mq, cache, 4.0, swept_every)
     return rep.ok(), rep.failures, rep.figures
+
+
+def run_cli(args, capsys) -> tuple[int, str, str]:
+    """``hugger ARGS`` in this process (paths and numbers as strings): (exit code, stdout, stderr)."""
+    code = cli.main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return code, out, err
 
 
 def assert_checked(checker, path: Path, every: int = 1, motion: bool = False, swept_every: int = 1,

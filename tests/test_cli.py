@@ -15,14 +15,9 @@ from hugger import cli, objects
 from hugger._progress import Progress
 
 from helpers import OBJECTS_DIR, SHARED_MISSING, assert_checked, write_ball, ycb_paths
+from helpers import run_cli as run
 
 RUN = [sys.executable, "-m", "hugger"]
-
-
-def run(args, capsys):
-    code = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture(scope="module")

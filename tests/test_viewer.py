@@ -20,6 +20,8 @@ import hugger
 from hugger._rotation import quaternion_wxyz
 from hugger import cli, viewer
 
+from helpers import run_cli
+
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 CHROMEDRIVER = shutil.which("chromedriver")
 
@@ -82,17 +84,11 @@ def test_link_frames_put_each_capsule_on_its_link(plans):
 
 # --- glTF export ----------------------------------------------------------------------------------
 
-def _export(args, capsys):
-    code = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
 def test_export_scene_final_grasp_loads_in_trimesh(plans, tmp_path, capsys):
     trimesh = pytest.importorskip("trimesh")
     traj = hugger.Trajectory.load(plans[0])
     out = tmp_path / "grasp.glb"
-    code, text, err = _export(["export-scene", plans[0], "--out", out], capsys)
+    code, text, err = run_cli(["export-scene", plans[0], "--out", out], capsys)
     assert code == 0, err
     scene = trimesh.load(out)
     contacts = len(hugger.analysis.contacts(traj, -1))
@@ -116,7 +112,7 @@ def test_export_scene_all_frames(plans, tmp_path, capsys):
     trimesh = pytest.importorskip("trimesh")
     traj = hugger.Trajectory.load(plans[1])  # 3 x 4 hand, with a Phase 1
     out = tmp_path / "all.glb"
-    code, _, err = _export(["export-scene", plans[1], "--out", out, "--all"], capsys)
+    code, _, err = run_cli(["export-scene", plans[1], "--out", out, "--all"], capsys)
     assert code == 0, err
     scene = trimesh.load(out)
     with_contacts = sum(len(hugger.analysis.contacts(traj, k)) > 0 for k in range(len(traj)))
