@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import importlib.util
 import math
+import subprocess
+import sys
 import warnings
 from pathlib import Path
 
@@ -104,6 +106,16 @@ def run_cli(args, capsys) -> tuple[int, str, str]:
     code = cli.main([str(a) for a in args])
     out, err = capsys.readouterr()
     return code, out, err
+
+
+def assert_names_the_extra(module: str, args, extra: str) -> None:
+    """``hugger ARGS`` in a new process in which ``module`` cannot be imported: exit status 2 and an
+    error naming ``extra`` (``hugger[...]``), no traceback."""
+    code = (f"import sys; sys.modules[{module!r}] = None\n"
+            f"from hugger.cli import main; sys.exit(main({[str(a) for a in args]!r}))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2, r.stderr
+    assert extra in r.stderr and "Traceback" not in r.stderr
 
 
 def assert_checked(checker, path: Path, every: int = 1, motion: bool = False, swept_every: int = 1,

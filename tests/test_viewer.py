@@ -20,7 +20,7 @@ import hugger
 from hugger._rotation import quaternion_wxyz
 from hugger import cli, viewer
 
-from helpers import run_cli
+from helpers import assert_names_the_extra, run_cli
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 CHROMEDRIVER = shutil.which("chromedriver")
@@ -123,18 +123,11 @@ def test_export_scene_all_frames(plans, tmp_path, capsys):
 
 
 def test_export_scene_without_trimesh_names_the_extra(plans, tmp_path):
-    code = (f"import sys; sys.modules['trimesh'] = None\n"
-            f"from hugger.cli import main; sys.exit(main(['export-scene', {str(plans[0])!r}, '--out', "
-            f"{str(tmp_path / 'x.glb')!r}]))")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
-    assert r.returncode == 2 and "hugger[view]" in r.stderr and "Traceback" not in r.stderr
+    assert_names_the_extra("trimesh", ["export-scene", plans[0], "--out", tmp_path / "x.glb"], "hugger[view]")
 
 
 def test_view_without_viser_names_the_extra(plans):
-    code = (f"import sys; sys.modules['viser'] = None\n"
-            f"from hugger.cli import main; sys.exit(main(['view', {str(plans[0])!r}, '--no-browser']))")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
-    assert r.returncode == 2 and "hugger[view]" in r.stderr and "Traceback" not in r.stderr
+    assert_names_the_extra("viser", ["view", plans[0], "--no-browser"], "hugger[view]")
 
 
 # --- the viewer, server side ------------------------------------------------------------------------
