@@ -22,9 +22,9 @@ HERE = Path(__file__).resolve()
 
 # --- planner ------------------------------------------------------------------------------
 
-def test_stream_equals_plan(hand, fine_sphere):
+def test_stream_equals_plan(hand, fine_sphere, fine_sphere_plan):
     streamed = list(hugger.Planner(hand, fine_sphere, [0, 0, 0], start()))
-    traj = hugger.Planner(hand, fine_sphere, [0, 0, 0], start()).plan()
+    traj = fine_sphere_plan
     assert len(streamed) == len(traj)
     for k in (0, len(traj) // 2, len(traj) - 1):
         np.testing.assert_array_equal(streamed[k].joints, traj.joints[k])
@@ -288,8 +288,8 @@ def test_core_refuses_bad_timeouts_too(hand, sphere):
             p._core.plan(bad)
 
 
-def test_generous_timeout_changes_nothing(hand, sphere):
-    a = hugger.Planner(hand, sphere, [0, 0, 0], START).plan()
+def test_generous_timeout_changes_nothing(hand, sphere, sphere_plan):
+    a = sphere_plan  # planned without a timeout
     b = hugger.Planner(hand, sphere, [0, 0, 0], START).plan(timeout=600)
     c = hugger.plan(hand, sphere, [0, 0, 0], START, timeout=600.0)
     assert a.status == b.status == c.status == "done"

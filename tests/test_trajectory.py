@@ -15,11 +15,11 @@ from helpers import FILE_ARRAYS, same, start
 
 # --- trajectory file -----------------------------------------------------------------------
 
-def test_save_load_round_trip(hand, fine_sphere, tmp_path):
-    traj = hugger.Planner(hand, fine_sphere, [0, 0, 0], start()).plan()
+def test_save_load_round_trip(hand, fine_sphere_plan, tmp_path):
+    traj = fine_sphere_plan
     traj.save(tmp_path / "plan.npz")
     back = hugger.Trajectory.load(tmp_path / "plan.npz")
-    for name in ("palm_pose", "joints", "angles", "tip_state", "phase", "object_vertices", "object_faces", "target"):
+    for name in FILE_ARRAYS:
         np.testing.assert_array_equal(getattr(back, name), getattr(traj, name))
     assert back.status == "done" and back.hand == hand.to_dict() and back.params == traj.params
     with np.load(tmp_path / "plan.npz", allow_pickle=False) as z:
