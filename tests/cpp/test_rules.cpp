@@ -78,6 +78,29 @@ TEST(Rules, TipOnAFaceFacingThePalm) {
   EXPECT_LT(end_height[1], 0.02 + 0.001) << "hug: the fingers yield and the palm lands on the face";
 }
 
+// Hug rule H4: a FROZEN finger sliding past a sphere's flank, 0.2 mm from it, does not hold the
+// palm to its gap. Two opposite fingers whose roots lie just outside the sphere's silhouette pass
+// beside it while the palm comes down onto its top: the paper's rules clip every palm step to
+// the fingers' gap (0.15 mm of the 1.5 mm step), the hug rules to the free distance along p.
+TEST(Rules, PalmStepIsTheFreeDistanceAlongP) {
+  const double rho = 0.03, r = 0.004;
+  const HandModel hand = HandModel::uniform(2, 3, 0.03, r, rho + r + 2e-4, 0.01);
+  auto world = test::sphere_world(rho, 4);
+  long to_palm[2] = {0, 0};
+  for (Rules rules : {Rules::kPaper, Rules::kHug}) {
+    PlannerParams params;
+    params.rules = rules;
+    Planner p(hand, world, Vec3::Zero(), test::facing_down(0.2), params);
+    EXPECT_NE(p.plan(), Status::kMaxIterations);
+    expect_motion_rules(p);
+    EXPECT_GE(p.stats().palm_contact_iteration, 0) << to_string(rules) << ": the palm lands on the sphere";
+    to_palm[static_cast<int>(rules)] = p.stats().palm_contact_iteration;
+  }
+  // the fingers pass the flank for about 6 cm (the sphere's height and more): 40 steps of s
+  EXPECT_GT(to_palm[0], 150) << "paper: the palm crawls at the fingers' gap";
+  EXPECT_LT(to_palm[1], 80) << "hug: the palm moves its free distance along p";
+}
+
 // A DONE finger keeps its joint angles while the palm still advances: the 5 x 5 hand on an
 // ellipsoid of 10 x 8 x 6 cm from above, where some fingers are DONE before the palm lands.
 TEST(Rules, DoneFingerAtRestWhileThePalmAdvances) {
