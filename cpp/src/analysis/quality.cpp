@@ -15,26 +15,23 @@ extern "C" {
 #include <libqhull_r/qhull_ra.h>
 }
 
+#include "hugger/check.hpp"
+
 namespace hugger::analysis {
 namespace {
 
 void check_inputs(const PointsN3& points, const PointsN3& normals, const Vec3& center, const QualityRequest& r) {
-  if (points.rows() != normals.rows())
-    throw std::invalid_argument("points and normals must both be (C, 3), got " + std::to_string(points.rows()) +
-                                " and " + std::to_string(normals.rows()) + " rows");
-  if (!points.allFinite() || !normals.allFinite() || !center.allFinite())
-    throw std::invalid_argument("contact points, normals and the centre must be finite");
-  if (!(r.mu >= 0) || !std::isfinite(r.mu))
-    throw std::invalid_argument("mu must be finite and >= 0, got " + std::to_string(r.mu));
-  if (r.cone_edges < 3 || r.cone_edges > 64)
-    throw std::invalid_argument("cone_edges must be 3 .. 64, got " + std::to_string(r.cone_edges));
-  if (!(r.torque_scale > 0) || !std::isfinite(r.torque_scale))
-    throw std::invalid_argument("torque_scale must be finite and > 0, got " + std::to_string(r.torque_scale));
-  if (!(r.closure_tolerance >= 0))
-    throw std::invalid_argument("closure_tolerance must be >= 0, got " + std::to_string(r.closure_tolerance));
+  HUGGER_CHECK_ARGUMENT(points.rows() == normals.rows(), "points and normals must both be (C, 3), got "
+                                                             << points.rows() << " and " << normals.rows() << " rows");
+  HUGGER_CHECK_ARGUMENT(points.allFinite() && normals.allFinite() && center.allFinite(),
+                        "contact points, normals and the centre must be finite");
+  HUGGER_CHECK_ARGUMENT(r.mu >= 0 && std::isfinite(r.mu), "mu must be finite and >= 0, got " << r.mu);
+  HUGGER_CHECK_ARGUMENT(r.cone_edges >= 3 && r.cone_edges <= 64, "cone_edges must be 3 .. 64, got " << r.cone_edges);
+  HUGGER_CHECK_ARGUMENT(r.torque_scale > 0 && std::isfinite(r.torque_scale),
+                        "torque_scale must be finite and > 0, got " << r.torque_scale);
+  HUGGER_CHECK_ARGUMENT(r.closure_tolerance >= 0, "closure_tolerance must be >= 0, got " << r.closure_tolerance);
   for (Eigen::Index i = 0; i < normals.rows(); ++i)
-    if (!(normals.row(i).norm() > 1e-12))
-      throw std::invalid_argument("normal " + std::to_string(i) + " is zero");
+    HUGGER_CHECK_ARGUMENT(normals.row(i).norm() > 1e-12, "normal " << i << " is zero");
 }
 
 FILE* quiet_stream() {
@@ -122,8 +119,7 @@ bool run_qhull(const MatrixX& w, bool want_volume, double* min_depth, double* vo
 }  // namespace
 
 bool wrench_hull(const MatrixX& wrenches, double* min_depth, double* volume) {
-  if (wrenches.cols() != 6)
-    throw std::invalid_argument("wrenches must be (n, 6), got " + std::to_string(wrenches.cols()) + " columns");
+  HUGGER_CHECK_ARGUMENT(wrenches.cols() == 6, "wrenches must be (n, 6), got " << wrenches.cols() << " columns");
   return run_qhull(wrenches, true, min_depth, volume);
 }
 

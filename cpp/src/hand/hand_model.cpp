@@ -1,34 +1,21 @@
 #include "hugger/hand/hand_model.hpp"
 
-#include "hugger/geometry/distance.hpp"
-
 #include <algorithm>
 #include <cmath>
-#include <sstream>
-#include <stdexcept>
+
+#include "hugger/check.hpp"
+#include "hugger/geometry/distance.hpp"
 
 namespace hugger {
 
 namespace {
 void check_positive(const char* name, double value) {
-  if (!(value > 0.0) || !std::isfinite(value)) {
-    std::ostringstream os;
-    os << name << " must be a positive finite number, got " << value;
-    throw std::invalid_argument(os.str());
-  }
-}
-std::string fmt(double x) {
-  std::ostringstream os;
-  os << x;
-  return os.str();
+  HUGGER_CHECK_ARGUMENT(value > 0.0 && std::isfinite(value), name << " must be a positive finite number, got " << value);
 }
 
+/// An optional layout matrix: empty (the default), or rows x cols.
 void check_layout_shape(const MatrixX& a, int rows, int cols, const char* name) {
-  if (a.size() != 0 && (a.rows() != rows || a.cols() != cols)) {
-    std::ostringstream os;
-    os << name << " must be a (" << rows << ", " << cols << ") array, got (" << a.rows() << ", " << a.cols() << ")";
-    throw std::invalid_argument(os.str());
-  }
+  if (a.size() != 0) HUGGER_CHECK_ARGUMENT_SHAPE(a, rows, cols, name);
 }
 
 /// Tolerance (m, or relative for unit vectors) on z = 0 and on a root's distance from the palm
@@ -57,20 +44,19 @@ HandModel::HandModel(int fingers, int links, const MatrixX& link_lengths, double
                                  : Vec3(palm_radius * std::cos(phi), palm_radius * std::sin(phi), 0.0);
     Vec3 d = layout.directions.size() ? Vec3(layout.directions.row(m).transpose())
                                       : Vec3(std::cos(phi), std::sin(phi), 0.0);
-    const std::string f = "finger " + std::to_string(m);
-    if (!r.allFinite()) throw std::invalid_argument("the root of " + f + " holds non-finite numbers");
-    if (std::abs(r.z()) > kLayoutTolerance)
-      throw std::invalid_argument("the root of " + f + " must lie on the palm's front face (z = 0 in the palm frame), got z = " +
-                                  fmt(r.z()) + " m");
+    HUGGER_CHECK_ARGUMENT(r.allFinite(), "the root of finger " << m << " holds non-finite numbers");
+    HUGGER_CHECK_ARGUMENT(std::abs(r.z()) <= kLayoutTolerance,
+                          "the root of finger " << m << " must lie on the palm's front face (z = 0 in the palm frame), got z = "
+                                                << r.z() << " m");
     const double rho = std::hypot(r.x(), r.y());
-    if (rho > palm_radius + kLayoutTolerance)
-      throw std::invalid_argument("the root of " + f + " is " + fmt(rho) + " m from the palm centre: off the palm (palm_radius " +
-                                  fmt(palm_radius) + " m)");
-    if (!d.allFinite()) throw std::invalid_argument("the direction of " + f + " holds non-finite numbers");
+    HUGGER_CHECK_ARGUMENT(rho <= palm_radius + kLayoutTolerance,
+                          "the root of finger " << m << " is " << rho << " m from the palm centre: off the palm (palm_radius "
+                                                << palm_radius << " m)");
+    HUGGER_CHECK_ARGUMENT(d.allFinite(), "the direction of finger " << m << " holds non-finite numbers");
     const double dl = std::hypot(d.x(), d.y());
-    if (!(dl > 1e-12) || std::abs(d.z()) > kLayoutTolerance * std::max(1.0, d.norm()))
-      throw std::invalid_argument("the direction of " + f + " must be a non-zero vector in the palm plane (z = 0), got (" +
-                                  fmt(d.x()) + ", " + fmt(d.y()) + ", " + fmt(d.z()) + ")");
+    HUGGER_CHECK_ARGUMENT(dl > 1e-12 && std::abs(d.z()) <= kLayoutTolerance * std::max(1.0, d.norm()),
+                          "the direction of finger " << m << " must be a non-zero vector in the palm plane (z = 0), got ("
+                                                     << d.x() << ", " << d.y() << ", " << d.z() << ")");
     r.z() = 0.0;
     d = Vec3(d.x() / dl, d.y() / dl, 0.0);
     roots_.row(m) = r.transpose();
@@ -84,14 +70,13 @@ HandModel::HandModel(int fingers, int links, const MatrixX& link_lengths, double
     for (int n = 0; n < N; ++n) {
       const std::string j = "joint " + std::to_string(n) + " of finger " + std::to_string(m);
       const double lo = lower_(m, n), hi = upper_(m, n), q = rest_(m, n);
-      if (std::isnan(lo) || std::isnan(hi) || !(lo <= hi) || lo == kInf || hi == -kInf)
-        throw std::invalid_argument("the limits of " + j + " must be lower <= upper (rad, +-inf: unlimited), got [" +
-                                    fmt(lo) + ", " + fmt(hi) + "]");
-      if (!std::isfinite(q) || std::abs(q) > kPi)
-        throw std::invalid_argument("the rest angle of " + j + " must be a finite angle in [-pi, pi] rad, got " + fmt(q));
-      if (q < lo || q > hi)
-        throw std::invalid_argument("the rest angle of " + j + " (" + fmt(q) + " rad) is outside its limits [" + fmt(lo) +
-                                    ", " + fmt(hi) + "]");
+      HUGGER_CHECK_ARGUMENT(lo <= hi && lo != kInf && hi != -kInf,  // false for NaN
+                            "the limits of " << j << " must be lower <= upper (rad, +-inf: unlimited), got [" << lo << ", "
+                                             << hi << "]");
+      HUGGER_CHECK_ARGUMENT(std::isfinite(q) && std::abs(q) <= kPi,
+                            "the rest angle of " << j << " must be a finite angle in [-pi, pi] rad, got " << q);
+      HUGGER_CHECK_ARGUMENT(q >= lo && q <= hi,
+                            "the rest angle of " << j << " (" << q << " rad) is outside its limits [" << lo << ", " << hi << "]");
       if (std::isfinite(lo) || std::isfinite(hi)) has_limits_ = true;
     }
   // At rest: no joint behind the palm's front plane, no finger through another or itself.
@@ -100,9 +85,8 @@ HandModel::HandModel(int fingers, int links, const MatrixX& link_lengths, double
     const std::vector<Vec2> c = rest_chain(m);
     const Vec3 o = roots_.row(m).transpose() - root2d(m).x() * direction_palm(m);
     for (int n = 0; n <= N; ++n) {
-      if (c[n].y() < -1e-12)
-        throw std::invalid_argument("at rest, joint " + std::to_string(n) + " of finger " + std::to_string(m) + " lies " +
-                                    fmt(-c[n].y()) + " m behind the palm's front plane: the rest angles bend it too far");
+      HUGGER_CHECK_ARGUMENT(c[n].y() >= -1e-12, "at rest, joint " << n << " of finger " << m << " lies " << -c[n].y()
+                                                                  << " m behind the palm's front plane: the rest angles bend it too far");
       rest3[m].push_back(o + c[n].x() * direction_palm(m) + c[n].y() * Vec3::UnitZ());
     }
   }
@@ -110,14 +94,12 @@ HandModel::HandModel(int fingers, int links, const MatrixX& link_lengths, double
   for (int m = 0; m < M; ++m)
     for (int k = m; k < M; ++k)
       for (int a = 0; a < N; ++a)
-        for (int b = (k == m ? a + 2 : 0); b < N; ++b)
-          if (segment_segment_squared(rest3[m][a], rest3[m][a + 1], rest3[k][b], rest3[k][b + 1]) < sep2) {
-            std::ostringstream os;
-            os << "at rest, link " << a << " of finger " << m << " and link " << b << " of finger " << k << " are "
-               << std::sqrt(segment_segment_squared(rest3[m][a], rest3[m][a + 1], rest3[k][b], rest3[k][b + 1]))
-               << " m apart (axis to axis), less than " << sep << ": the fingers intersect";
-            throw std::invalid_argument(os.str());
-          }
+        for (int b = (k == m ? a + 2 : 0); b < N; ++b) {
+          const double d2 = segment_segment_squared(rest3[m][a], rest3[m][a + 1], rest3[k][b], rest3[k][b + 1]);
+          HUGGER_CHECK_ARGUMENT(d2 >= sep2, "at rest, link " << a << " of finger " << m << " and link " << b << " of finger "
+                                                             << k << " are " << std::sqrt(d2) << " m apart (axis to axis), less than "
+                                                             << sep << ": the fingers intersect");
+        }
 }
 
 HandModel::HandModel(int fingers, int links, const MatrixX& link_lengths, double link_radius, double palm_radius,
@@ -132,47 +114,32 @@ HandModel::HandModel(int fingers, int links, const MatrixX& link_lengths, double
       link_radius_(link_radius),
       palm_radius_(palm_radius),
       palm_thickness_(palm_thickness) {
-  if (fingers < 1 || fingers > 64)
-    throw std::invalid_argument("fingers must be between 1 and 64, got " + std::to_string(fingers));
-  if (links < 1 || links > 256)
-    throw std::invalid_argument("links must be between 1 and 256, got " + std::to_string(links));
-  if (lengths_.rows() != fingers || lengths_.cols() != links) {
-    std::ostringstream os;
-    os << "link_length must be a scalar or a (fingers, links) = (" << fingers << ", " << links
-       << ") array, got (" << lengths_.rows() << ", " << lengths_.cols() << ")";
-    throw std::invalid_argument(os.str());
-  }
+  HUGGER_CHECK_ARGUMENT(fingers >= 1 && fingers <= kMaxFingers,
+                        "fingers must be between 1 and " << kMaxFingers << ", got " << fingers);
+  HUGGER_CHECK_ARGUMENT(links >= 1 && links <= kMaxLinks, "links must be between 1 and " << kMaxLinks << ", got " << links);
+  HUGGER_CHECK_ARGUMENT(lengths_.rows() == fingers && lengths_.cols() == links,
+                        "link_length must be a scalar or a (fingers, links) = (" << fingers << ", " << links
+                                                                                 << ") array, got (" << lengths_.rows()
+                                                                                 << ", " << lengths_.cols() << ")");
   for (int m = 0; m < fingers; ++m)
     for (int n = 0; n < links; ++n) check_positive("link_length", lengths_(m, n));
-  if (!(link_radius >= 0.0) || !std::isfinite(link_radius)) {
-    std::ostringstream os;
-    os << "link_radius must be a finite number >= 0, got " << link_radius;
-    throw std::invalid_argument(os.str());
-  }
+  HUGGER_CHECK_ARGUMENT(link_radius >= 0.0 && std::isfinite(link_radius),
+                        "link_radius must be a finite number >= 0, got " << link_radius);
   if (links >= 3)
     for (int m = 0; m < fingers; ++m)
       for (int n = 0; n < links; ++n)
-        if (lengths_(m, n) <= 2.0 * link_radius) {
-          std::ostringstream os;
-          os << "link_length (" << lengths_(m, n) << ") must exceed twice link_radius (" << link_radius
-             << "), or the links of a straight finger overlap";
-          throw std::invalid_argument(os.str());
-        }
+        HUGGER_CHECK_ARGUMENT(lengths_(m, n) > 2.0 * link_radius,
+                              "link_length (" << lengths_(m, n) << ") must exceed twice link_radius (" << link_radius
+                                              << "), or the links of a straight finger overlap");
   check_positive("palm_radius", palm_radius);
   check_positive("palm_thickness", palm_thickness);
-  if (link_radius >= palm_radius) {
-    std::ostringstream os;
-    os << "link_radius (" << link_radius << ") must be smaller than palm_radius (" << palm_radius << ")";
-    throw std::invalid_argument(os.str());
-  }
+  HUGGER_CHECK_ARGUMENT(link_radius < palm_radius,
+                        "link_radius (" << link_radius << ") must be smaller than palm_radius (" << palm_radius << ")");
   if (rim && fingers > 1) {
     const double gap = 2.0 * palm_radius * std::sin(kPi / fingers);
-    if (gap <= 2.0 * link_radius) {
-      std::ostringstream os;
-      os << "the " << fingers << " finger roots are " << gap << " m apart on a palm of radius " << palm_radius
-         << ": too close for links of radius " << link_radius;
-      throw std::invalid_argument(os.str());
-    }
+    HUGGER_CHECK_ARGUMENT(gap > 2.0 * link_radius, "the " << fingers << " finger roots are " << gap
+                                                          << " m apart on a palm of radius " << palm_radius
+                                                          << ": too close for links of radius " << link_radius);
   }
   for (int m = 0; m < fingers; ++m) finger_angles_.push_back(2.0 * kPi * m / fingers);
   rest_ = MatrixX::Zero(fingers, links);
@@ -256,8 +223,7 @@ void HandModel::planar_angles(const std::vector<Vec2>& joints, double* angles) {
 }
 
 std::vector<Vec3> HandModel::forward(const Pose& palm, const MatrixX& angles) const {
-  if (angles.rows() != fingers_ || angles.cols() != links_)
-    throw std::invalid_argument("angles must be (fingers, links)");
+  HUGGER_CHECK_ARGUMENT_SHAPE(angles, fingers_, links_, "angles");
   std::vector<Vec3> out;
   out.reserve(fingers_ * (links_ + 1));
   for (int m = 0; m < fingers_; ++m) {
@@ -269,8 +235,8 @@ std::vector<Vec3> HandModel::forward(const Pose& palm, const MatrixX& angles) co
 }
 
 MatrixX HandModel::angles_from_joints(const Pose& palm, const std::vector<Vec3>& joints) const {
-  if (static_cast<int>(joints.size()) != fingers_ * (links_ + 1))
-    throw std::invalid_argument("joints must hold fingers * (links + 1) points");
+  HUGGER_CHECK_ARGUMENT_SIZE(joints.size(), static_cast<std::size_t>(fingers_) * (links_ + 1), "joints",
+                             "points (fingers * (links + 1))");
   MatrixX angles(fingers_, links_);
   for (int m = 0; m < fingers_; ++m) {
     const FingerPlane pl = plane(palm, m);

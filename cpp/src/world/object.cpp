@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <sstream>
-#include <stdexcept>
 #include <unordered_map>
+
+#include "hugger/check.hpp"
 
 namespace hugger {
 
@@ -14,8 +14,6 @@ namespace {
 std::uint64_t edge_key(std::int64_t a, std::int64_t b) {
   return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint64_t>(b);
 }
-
-[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument(what); }
 
 }  // namespace
 
@@ -26,23 +24,19 @@ std::atomic<std::uint64_t> next_serial{1};
 Object::Object(const PointsN3& vertices, const FacesN3& faces)
     : vertices_(vertices), faces_(faces), serial_(next_serial.fetch_add(1)) {
   const std::int64_t nv = vertices_.rows(), nf = faces_.rows();
-  if (nv == 0 || nf == 0) fail("object mesh is empty: it needs vertices (V,3) and faces (F,3), got V=" +
-                               std::to_string(nv) + ", F=" + std::to_string(nf));
-  if (nv >= (std::int64_t(1) << 31)) fail("object mesh has too many vertices");
+  HUGGER_CHECK_ARGUMENT(nv != 0 && nf != 0, "object mesh is empty: it needs vertices (V,3) and faces (F,3), got V="
+                                                 << nv << ", F=" << nf);
+  HUGGER_CHECK_ARGUMENT(nv < (std::int64_t(1) << 31), "object mesh has too many vertices");
   for (std::int64_t i = 0; i < nv; ++i)
-    if (!vertices_.row(i).allFinite()) {
-      std::ostringstream os;
-      os << "object vertex " << i << " is not finite (" << vertices_(i, 0) << ", " << vertices_(i, 1) << ", "
-         << vertices_(i, 2) << ")";
-      fail(os.str());
-    }
+    HUGGER_CHECK_ARGUMENT(vertices_.row(i).allFinite(), "object vertex " << i << " is not finite (" << vertices_(i, 0)
+                                                                         << ", " << vertices_(i, 1) << ", "
+                                                                         << vertices_(i, 2) << ")");
   for (std::int64_t f = 0; f < nf; ++f) {
     for (int k = 0; k < 3; ++k)
-      if (faces_(f, k) < 0 || faces_(f, k) >= nv)
-        fail("object face " + std::to_string(f) + " indexes vertex " + std::to_string(faces_(f, k)) +
-             ", outside 0.." + std::to_string(nv - 1));
-    if (faces_(f, 0) == faces_(f, 1) || faces_(f, 1) == faces_(f, 2) || faces_(f, 2) == faces_(f, 0))
-      fail("object face " + std::to_string(f) + " repeats a vertex (degenerate triangle)");
+      HUGGER_CHECK_ARGUMENT(faces_(f, k) >= 0 && faces_(f, k) < nv,
+                            "object face " << f << " indexes vertex " << faces_(f, k) << ", outside 0.." << nv - 1);
+    HUGGER_CHECK_ARGUMENT(faces_(f, 0) != faces_(f, 1) && faces_(f, 1) != faces_(f, 2) && faces_(f, 2) != faces_(f, 0),
+                          "object face " << f << " repeats a vertex (degenerate triangle)");
   }
   // Closed and consistently oriented: every directed edge once, and its reverse once. The
   // directed edges leaving each vertex, sorted by their other end (compressed rows: linear in
@@ -65,12 +59,10 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
     const auto first = out.begin() + row[a], last = out.begin() + row[a + 1];
     std::sort(first, last, by_end);
     for (auto it = first; it + 1 < last; ++it)
-      if (it->to == (it + 1)->to) {
-        std::ostringstream os;
-        os << "object mesh is not consistently oriented or not manifold: edge (" << a << ", " << it->to
-           << ") is used in the same direction by faces " << it->face << " and " << (it + 1)->face;
-        fail(os.str());
-      }
+      HUGGER_CHECK_ARGUMENT(it->to != (it + 1)->to,
+                            "object mesh is not consistently oriented or not manifold: edge ("
+                                << a << ", " << it->to << ") is used in the same direction by faces " << it->face
+                                << " and " << (it + 1)->face);
   }
   // The face across directed edge (a, b): the one holding (b, a); -1 when there is none.
   const auto across = [&](std::int64_t a, std::int64_t b) -> std::int64_t {
@@ -100,21 +92,13 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
     for (int k = 0; k < 3; ++k) {
       const std::int64_t a = faces_(f, k), b = faces_(f, (k + 1) % 3);
       const std::int64_t g = across(a, b);
-      if (g < 0) {
-        std::ostringstream os;
-        os << "object mesh is not closed: edge (" << a << ", " << b << ") of face " << f
-           << " has no neighbouring face (a hole or a boundary)";
-        fail(os.str());
-      }
+      HUGGER_CHECK_ARGUMENT(g >= 0, "object mesh is not closed: edge (" << a << ", " << b << ") of face " << f
+                                                                       << " has no neighbouring face (a hole or a boundary)");
       edge_normals_[f][k] = face_normals_[f] + face_normals_[g];
       neighbors_[f][k] = g;
     }
-  if (!(volume_ > 0.0)) {
-    std::ostringstream os;
-    os << "object mesh encloses a non-positive volume (" << volume_
-       << " m^3): its faces point inward (reverse the winding) or it is flat";
-    fail(os.str());
-  }
+  HUGGER_CHECK_ARGUMENT(volume_ > 0.0, "object mesh encloses a non-positive volume ("
+                                           << volume_ << " m^3): its faces point inward (reverse the winding) or it is flat");
   vertex_normals_.assign(nv, Vec3::Zero());
   for (std::int64_t f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) {

@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "hugger/check.hpp"
+
 namespace hugger {
 
 namespace {
@@ -123,11 +125,11 @@ struct Query {
 
 PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane& plane, double radius, double flatten)
     : object_(std::move(object)), plane_(plane), radius_(radius), flatten_(flatten) {
-  if (!object_) throw std::invalid_argument("PlaneRegion needs an object");
-  if (!(radius >= 0.0) || !std::isfinite(radius))
-    throw std::invalid_argument("PlaneRegion: the link radius must be finite and >= 0, got " + std::to_string(radius));
-  if (!(flatten > 0.0) || !std::isfinite(flatten))
-    throw std::invalid_argument("PlaneRegion: the flattening tolerance must be positive, got " + std::to_string(flatten));
+  HUGGER_CHECK_ARGUMENT(object_, "PlaneRegion needs an object");
+  HUGGER_CHECK_ARGUMENT(radius >= 0.0 && std::isfinite(radius),
+                        "PlaneRegion: the link radius must be finite and >= 0, got " << radius);
+  HUGGER_CHECK_ARGUMENT(flatten > 0.0 && std::isfinite(flatten),
+                        "PlaneRegion: the flattening tolerance must be positive, got " << flatten);
   build_pieces();
   build_bvh();
   mark_crossings();
@@ -669,9 +671,8 @@ struct SectionSkin::Entry {
 
 SectionSkin::SectionSkin(std::shared_ptr<const Object> object, double flatten)
     : object_(object), mesh_(object), flatten_(flatten) {
-  if (!(flatten > 0.0) || !std::isfinite(flatten))
-    throw std::invalid_argument("SectionSkin: the flattening tolerance must be a positive number of metres, got " +
-                                std::to_string(flatten));
+  HUGGER_CHECK_ARGUMENT(flatten > 0.0 && std::isfinite(flatten),
+                        "SectionSkin: the flattening tolerance must be a positive number of metres, got " << flatten);
 }
 
 SectionSkin::~SectionSkin() = default;

@@ -4,12 +4,13 @@
 #include <fcl/narrowphase/detail/gjk_solver_libccd.h>
 
 #include <cmath>
-#include <stdexcept>
+
+#include "hugger/check.hpp"
 
 namespace hugger {
 
 SimulatedWorld::SimulatedWorld(std::shared_ptr<const Object> object) : object_(std::move(object)) {
-  if (!object_) throw std::invalid_argument("SimulatedWorld needs an object");
+  HUGGER_CHECK_ARGUMENT(object_, "SimulatedWorld needs an object");
 }
 
 Touch SimulatedWorld::capsule(const Vec3& a, const Vec3& b, double radius, double cap) const {

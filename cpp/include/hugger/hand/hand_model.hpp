@@ -8,6 +8,12 @@
 
 namespace hugger {
 
+/// Largest number of fingers M and of links per finger N. The planner checks every pair of
+/// fingers each iteration (O(M^2 N^2)), so a hand with more would be unusably slow. The one
+/// owner of the limits: Python reads them as hugger._core.MAX_FINGERS and MAX_LINKS.
+constexpr int kMaxFingers = 64;
+constexpr int kMaxLinks = 256;
+
 /// A finger plane: origin, the radial unit vector u (xi axis) and the palm normal p (eta axis).
 /// In-plane coordinates (xi, eta) map to origin + xi * u + eta * p.
 struct FingerPlane {
@@ -32,8 +38,8 @@ struct HandLayout {
 /// Immutable description of the hand. Sizes in metres.
 class HandModel {
  public:
-  /// Throws std::invalid_argument for non-positive counts or sizes, negative radius,
-  /// or a `link_lengths` matrix that is not fingers x links.
+  /// Throws std::invalid_argument for counts outside 1..kMaxFingers and 1..kMaxLinks,
+  /// non-positive sizes, negative radius, or a `link_lengths` matrix that is not fingers x links.
   HandModel(int fingers, int links, const MatrixX& link_lengths, double link_radius, double palm_radius,
             double palm_thickness);
   /// A general layout (roots, directions, rest angles, joint limits). Throws
