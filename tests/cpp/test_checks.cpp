@@ -1,4 +1,5 @@
-// The argument checks: the macros' messages.
+// The argument checks: the macros' messages, and the rules owned by one function each (poses,
+// plane frames, planner parameters, timeouts, what a skin answers).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -6,11 +7,16 @@
 #include <string>
 
 #include "hugger/check.hpp"
+#include "hugger/geometry/frame.hpp"
 #include "hugger/hand/hand_model.hpp"
+#include "hugger/planner/planner.hpp"
+#include "hugger/sensing/sensing.hpp"
 
 using namespace hugger;
 
 namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 /// The message f throws as std::invalid_argument ("" when it does not throw).
 template <class F>
@@ -37,10 +43,75 @@ TEST(Checks, MacrosThrowOneLineMessagesWithTheValues) {
   EXPECT_EQ(message_of([&] { HUGGER_CHECK_ARGUMENT_SHAPE(m, 2, 3, "angles"); }), "");
 }
 
+TEST(Checks, PoseRuleSaysWhatIsWrong) {
+  Eigen::Matrix4d pose = Eigen::Matrix4d::Identity();
+  EXPECT_EQ(message_of([&] { check_pose(pose); }), "");
+  pose(1, 3) = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(message_of([&] { check_pose(pose, "T"); }), "T holds non-finite numbers");
+  pose = Eigen::Matrix4d::Identity();
+  pose(3, 0) = 0.1;
+  EXPECT_EQ(message_of([&] { check_pose(pose); }),
+            "palm_pose must be a homogeneous transform with last row (0, 0, 0, 1), got (0.1, 0, 0, 1)");
+  pose = Eigen::Matrix4d::Identity();
+  pose(2, 2) = -1.0;
+  EXPECT_NE(message_of([&] { check_pose(pose); }).find("reflects (det < 0)"), std::string::npos);
+  pose(2, 2) = 1.001;
+  EXPECT_NE(message_of([&] { check_pose(pose); }).find("scales or shears: |R^T R - I| = 0.002, det R = 1.001"),
+            std::string::npos);
+  pose(2, 2) = 1.0 + 0.4 * kRigidTolerance;  // within the tolerance
+  EXPECT_EQ(message_of([&] { check_pose(pose); }), "");
+}
+
+TEST(Checks, PlaneFrames) {
+  EXPECT_EQ(message_of([] { check_plane_frame(Vec3::Zero(), Vec3::UnitX(), Vec3::UnitY()); }), "");
+  EXPECT_EQ(message_of([] { check_plane_frame(Vec3::Zero(), Vec3::UnitX(), Vec3::UnitX()); }),
+            "u and v must be orthonormal");
+  EXPECT_EQ(message_of([] { check_plane_frame(Vec3(kNaN, 0, 0), Vec3::UnitX(), Vec3::UnitY()); }),
+            "origin must be finite");
+}
+
+TEST(Checks, PlannerParametersAndTimeouts) {
+  PlannerParams p;
+  EXPECT_EQ(message_of([&] { check_params(p); }), "");  // NaN: the defaults
+  p.step = -1e-3;
+  EXPECT_EQ(message_of([&] { check_params(p); }), "step must be a positive finite number, got -0.001");
+  p = PlannerParams();
+  p.epsilon = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(message_of([&] { check_params(p); }), "epsilon must be a positive finite number, got inf");
+  p = PlannerParams();
+  p.max_iterations = 0;
+  EXPECT_EQ(message_of([&] { check_params(p); }), "max_iterations must be between 1 and 1000000000, got 0");
+  p.max_iterations = kMaxIterations + 1;
+  EXPECT_NE(message_of([&] { check_params(p); }), "");
+  p.max_iterations = kMaxIterations;
+  EXPECT_EQ(message_of([&] { check_params(p); }), "");
+  EXPECT_EQ(check_timeout(0.5), 0.5);
+  for (double bad : {0.0, -1.0, kNaN, std::numeric_limits<double>::infinity()})
+    EXPECT_THROW(check_timeout(bad), std::invalid_argument) << bad;
+}
+
 TEST(Checks, HandCountsAreBoundedByTheConstants) {
   EXPECT_NO_THROW(HandModel::uniform(kMaxFingers, 2, 0.02, 0.0, 0.03, 0.01));
   EXPECT_EQ(message_of([] { HandModel::uniform(kMaxFingers + 1, 2, 0.02, 0.0, 0.03, 0.01); }),
             "fingers must be between 1 and 64, got 65");
   EXPECT_EQ(message_of([] { HandModel::uniform(2, kMaxLinks + 1, 0.02, 0.0, 0.03, 0.01); }),
             "links must be between 1 and 256, got 257");
+}
+
+TEST(Checks, WhatCrossesTheSensingInterface) {
+  EXPECT_EQ(message_of([] { check_capsule_query(Vec3::Zero(), Vec3::UnitX(), 0.0, kInf); }), "");
+  EXPECT_EQ(message_of([] { check_capsule_query(Vec3(kNaN, 0, 0), Vec3::UnitX(), 0.0, kInf); }),
+            "a and b must be finite");
+  EXPECT_EQ(message_of([] { check_palm_query(0.03, -0.01, 0.0); }),
+            "thickness must be a finite number >= 0 (m), got -0.01");
+  EXPECT_EQ(message_of([] { check_palm_query(0.03, 0.01, kNaN); }), "cap must be a number (m) or inf, got nan");
+  EXPECT_EQ(message_of([] { check_gap(kNaN, "Sensing.palm returned"); }),
+            "Sensing.palm returned a gap of nan; expected a number (m) or +-inf");
+  Touch t;
+  t.gap = -kInf;  // inside, depth not measured: a valid answer
+  t.normal = Vec3(0.0, 3.0, 4.0);
+  EXPECT_TRUE(check_touch(t, "Sensing.capsule returned").normal.isApprox(Vec3(0.0, 0.6, 0.8)));
+  t.normal = Vec3::Zero();
+  EXPECT_EQ(message_of([&] { check_touch(t, "Sensing.capsule returned"); }),
+            "Sensing.capsule returned non-finite points or a zero or non-finite normal");
 }

@@ -6,8 +6,10 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "hugger/check.hpp"
 #include "hugger/geometry/bvh.hpp"
 #include "hugger/geometry/distance.hpp"
+#include "hugger/geometry/frame.hpp"
 #include "hugger/planner/snake.hpp"
 
 namespace hugger {
@@ -54,45 +56,39 @@ std::string fmt(double x) {
   return os.str();
 }
 
-double resolve(double value, double fallback, const char* name) {
-  if (std::isnan(value)) return fallback;
-  if (!std::isfinite(value) || value <= 0.0) invalid(std::string(name) + " must be a positive finite number, got " + fmt(value));
-  return value;
-}
+/// A parameter checked by check_params: its value, or `fallback` for NaN (the default).
+double resolve(double value, double fallback) { return std::isnan(value) ? fallback : value; }
 
 }  // namespace
 
 Planner::Planner(HandModel hand, std::shared_ptr<const Sensing> sensing, const Vec3& target, const Pose& palm_pose,
                  PlannerParams params)
     : hand_(std::move(hand)), sensing_(std::move(sensing)), target_(target), params_(params) {
-  if (!sensing_) invalid("the planner needs a sensing interface");
-  if (!target_.allFinite()) invalid("target must be a finite 3-vector");
+  HUGGER_CHECK_ARGUMENT(sensing_, "the planner needs a sensing interface");
+  HUGGER_CHECK_ARGUMENT(target_.allFinite(), "target must be a finite 3-vector, got (" << target_.x() << ", "
+                                                                                      << target_.y() << ", " << target_.z() << ")");
+  check_params(params);
   double shortest = kInf;
   for (int m = 0; m < hand_.fingers(); ++m)
     for (int n = 0; n < hand_.links(); ++n) shortest = std::min(shortest, hand_.link_length(m, n));
-  params_.step = resolve(params.step, shortest / 20.0, "step");
-  if (params_.step > shortest)
-    invalid("step (" + fmt(params_.step) + " m) must not exceed the shortest link (" + fmt(shortest) + " m)");
-  params_.contact_tolerance = resolve(params.contact_tolerance, 1e-4, "contact_tolerance");
-  if (params_.contact_tolerance >= params_.step)
-    invalid("contact_tolerance (" + fmt(params_.contact_tolerance) + " m) must be smaller than step (" +
-            fmt(params_.step) + " m)");
-  params_.epsilon = resolve(params.epsilon, params_.step / 10.0, "epsilon");
-  if (params_.epsilon > params_.step)
-    invalid("epsilon (" + fmt(params_.epsilon) + " m) must not exceed step (" + fmt(params_.step) + " m)");
-  if (params_.max_iterations < 1) invalid("max_iterations must be at least 1, got " + std::to_string(params_.max_iterations));
+  params_.step = resolve(params.step, shortest / 20.0);
+  HUGGER_CHECK_ARGUMENT(params_.step <= shortest, "step (" << params_.step << " m) must not exceed the shortest link ("
+                                                           << shortest << " m)");
+  params_.contact_tolerance = resolve(params.contact_tolerance, 1e-4);
+  HUGGER_CHECK_ARGUMENT(params_.contact_tolerance < params_.step, "contact_tolerance (" << params_.contact_tolerance
+                                                                                        << " m) must be smaller than step ("
+                                                                                        << params_.step << " m)");
+  params_.epsilon = resolve(params.epsilon, params_.step / 10.0);
+  HUGGER_CHECK_ARGUMENT(params_.epsilon <= params_.step,
+                        "epsilon (" << params_.epsilon << " m) must not exceed step (" << params_.step << " m)");
 
-  const Mat3 R = palm_pose.linear();
-  const double orth = (R.transpose() * R - Mat3::Identity()).cwiseAbs().maxCoeff();
-  if (!palm_pose.matrix().allFinite() || !(orth <= kRigidTolerance) ||
-      !(std::abs(R.determinant() - 1.0) <= kRigidTolerance))
-    invalid("palm_pose must be a rigid transform (orthonormal rotation with determinant +1); orthonormality error " +
-            fmt(orth));
+  check_pose(palm_pose.matrix(), "palm_pose");
   // Re-orthonormalise so that every emitted pose is rigid to machine precision.
+  const Mat3 R = palm_pose.linear();
   Pose start = Pose::Identity();
   start.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
   start.translation() = palm_pose.translation();
-  if ((target_ - start.translation()).norm() <= 1e-9) invalid("target coincides with the palm origin P_o");
+  HUGGER_CHECK_ARGUMENT((target_ - start.translation()).norm() > 1e-9, "target coincides with the palm origin P_o");
   plan_phase1(start);
 }
 
@@ -756,7 +752,7 @@ bool Planner::advance() {
 }
 
 Status Planner::plan(double timeout) {
-  if (!(timeout > 0.0)) invalid("timeout must be a positive number of seconds (or infinite), got " + fmt(timeout));
+  if (timeout != kInf) check_timeout(timeout);  // kInf: no limit
   using Clock = std::chrono::steady_clock;
   // Past ~292 years (or infinite) the duration would overflow; such a timeout is no timeout.
   const bool bounded = timeout < 9.0e9;

@@ -3,7 +3,45 @@
 #include <algorithm>
 #include <cmath>
 
+#include "hugger/check.hpp"
+
 namespace hugger {
+
+namespace {
+
+void check_size(double x, const char* name) {
+  HUGGER_CHECK_ARGUMENT(std::isfinite(x) && x >= 0.0, name << " must be a finite number >= 0 (m), got " << x);
+}
+
+void check_cap(double cap) { HUGGER_CHECK_ARGUMENT(!std::isnan(cap), "cap must be a number (m) or inf, got nan"); }
+
+}  // namespace
+
+void check_capsule_query(const Vec3& a, const Vec3& b, double radius, double cap) {
+  HUGGER_CHECK_ARGUMENT(a.allFinite() && b.allFinite(), "a and b must be finite");
+  check_size(radius, "radius");
+  check_cap(cap);
+}
+
+void check_palm_query(double radius, double thickness, double cap) {
+  check_size(radius, "radius");
+  check_size(thickness, "thickness");
+  check_cap(cap);
+}
+
+double check_gap(double gap, const char* source) {
+  HUGGER_CHECK_ARGUMENT(!std::isnan(gap), source << " a gap of nan; expected a number (m) or +-inf");
+  return gap;
+}
+
+Touch check_touch(Touch touch, const char* source) {
+  check_gap(touch.gap, source);
+  HUGGER_CHECK_ARGUMENT(touch.on_hand.allFinite() && touch.on_object.allFinite() && touch.normal.allFinite() &&
+                            touch.normal.norm() > 0.0,
+                        source << " non-finite points or a zero or non-finite normal");
+  touch.normal.normalize();
+  return touch;
+}
 
 namespace {
 

@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "hugger/check.hpp"
+#include "hugger/geometry/frame.hpp"
 
 namespace hugger {
 
@@ -192,6 +193,7 @@ bool Object::capsule_clear(const Vec3& a, const Vec3& b, double radius, bool a_o
 }
 
 Section Object::section(const Vec3& origin, const Vec3& u, const Vec3& v) const {
+  check_plane_frame(origin, u, v);
   const Vec3 n = u.cross(v);
   const std::int64_t nv = vertices_.rows();
   std::vector<double> d(nv);

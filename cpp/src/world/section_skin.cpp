@@ -6,6 +6,7 @@
 #include <string>
 
 #include "hugger/check.hpp"
+#include "hugger/geometry/frame.hpp"
 
 namespace hugger {
 
@@ -126,6 +127,7 @@ struct Query {
 PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane& plane, double radius, double flatten)
     : object_(std::move(object)), plane_(plane), radius_(radius), flatten_(flatten) {
   HUGGER_CHECK_ARGUMENT(object_, "PlaneRegion needs an object");
+  check_plane_frame(plane.origin, plane.u, plane.p);
   HUGGER_CHECK_ARGUMENT(radius >= 0.0 && std::isfinite(radius),
                         "PlaneRegion: the link radius must be finite and >= 0, got " << radius);
   HUGGER_CHECK_ARGUMENT(flatten > 0.0 && std::isfinite(flatten),

@@ -32,14 +32,25 @@ std::string to_string(Rules r);
 /// "paper" or "hug"; throws std::invalid_argument for any other name.
 Rules rules_from_string(const std::string& name);
 
+/// Largest max_iterations accepted (a plan that long would take hours).
+constexpr long kMaxIterations = 1000000000;
+
 /// Planner parameters. NaN selects the documented default; any other value must be positive.
 struct PlannerParams {
   double step = std::numeric_limits<double>::quiet_NaN();   ///< fingertip step s (m); default: shortest link / 20
   double epsilon = std::numeric_limits<double>::quiet_NaN();  ///< overextension threshold (m); default: step / 10
   double contact_tolerance = std::numeric_limits<double>::quiet_NaN();  ///< sensing distance delta (m); default 1e-4
-  long max_iterations = 20000;     ///< bound on Phase 2 iterations
+  long max_iterations = 20000;     ///< bound on Phase 2 iterations, 1 .. kMaxIterations
   Rules rules = Rules::kHug;       ///< the rule set of Phase 2
 };
+
+/// Throws std::invalid_argument for a parameter no plan can use: a step, epsilon or
+/// contact_tolerance that is neither NaN (the default) nor positive and finite, or max_iterations
+/// outside 1 .. kMaxIterations. (How they relate to each other and to the hand, the Planner checks.)
+void check_params(const PlannerParams& params);
+/// A wall-clock limit for Planner::plan given by a caller: positive and finite seconds (plan
+/// itself takes kInf for no limit). Throws std::invalid_argument otherwise; returns `seconds`.
+double check_timeout(double seconds);
 
 /// One hand configuration (docs/model.md).
 struct Configuration {

@@ -104,4 +104,19 @@ class Sensing {
   virtual RotateResult rotate_until_free(const RotateRequest& req) const;
 };
 
+// The checks of what crosses the interface from outside the engine (a Python caller's query, a
+// Python skin's answer); the planner's own queries are valid by construction and go unchecked.
+// Each throws std::invalid_argument.
+
+/// A capsule query: a and b finite, radius finite and >= 0, cap a number (m) or +inf.
+void check_capsule_query(const Vec3& a, const Vec3& b, double radius, double cap);
+/// A palm query: radius and thickness finite and >= 0, cap a number (m) or +inf.
+void check_palm_query(double radius, double thickness, double cap);
+/// A gap that is a number (m) or +-inf, not NaN; `source` says where it came from ("Sensing.palm
+/// returned"). Returns the gap.
+double check_gap(double gap, const char* source);
+/// A skin's answer to a capsule query: a gap (check_gap), finite points and a finite non-zero
+/// normal. Returns it with the normal normalised.
+Touch check_touch(Touch touch, const char* source);
+
 }  // namespace hugger

@@ -47,7 +47,8 @@ class Object {
   /// surface (touching counts as clear only at exactly `radius`) nor lies inside O.
   /// `a_outside`: a is known to lie outside O, and the inside test is skipped.
   bool capsule_clear(const Vec3& a, const Vec3& b, double radius, bool a_outside = false) const;
-  /// The planar section of O in the plane through `origin` spanned by orthonormal u, v.
+  /// The planar section of O in the plane through `origin` spanned by orthonormal u, v
+  /// (std::invalid_argument otherwise).
   Section section(const Vec3& origin, const Vec3& u, const Vec3& v) const;
   /// The BVH over O's triangles (world frame), for custom queries.
   const TriangleBvh& bvh() const { return bvh_; }
