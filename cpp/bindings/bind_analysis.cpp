@@ -6,17 +6,6 @@ namespace py = pybind11;
 using namespace hugger;
 using namespace hugger::py_helpers;
 
-namespace {
-
-PointsN3 to_points(const ArrayD& a, const char* name) {
-  check_shape(a, {-1, 3}, name);
-  PointsN3 p(a.shape(0), 3);
-  std::copy(a.data(), a.data() + a.size(), p.data());
-  return p;
-}
-
-}  // namespace
-
 void bind_analysis(py::module_& m) {
   py::class_<analysis::QualityResult>(m, "QualityResult", "Grasp-wrench-space figures of a set of contacts.")
       .def_readonly("force_closure", &analysis::QualityResult::force_closure,
@@ -35,11 +24,8 @@ void bind_analysis(py::module_& m) {
       "grasp_quality",
       [](const ArrayD& points, const ArrayD& normals, const ArrayD& center, double mu, int cone_edges,
          double torque_scale, bool volume) {
-        const PointsN3 p = to_points(points, "points");
-        const PointsN3 n = to_points(normals, "normals");
-        if (n.rows() != p.rows())
-          throw py::value_error("normals must have shape (" + std::to_string(p.rows()) + ", 3), got (" +
-                                std::to_string(n.rows()) + ", 3)");
+        const PointsN3 p = to_rows<PointsN3>(points, "points");
+        const PointsN3 n = to_rows<PointsN3>(normals, "normals");
         const Vec3 c = to_vec3(center, "center");
         analysis::QualityRequest req;
         req.mu = mu;

@@ -11,71 +11,65 @@ namespace py = pybind11;
 using namespace hugger;
 using namespace hugger::py_helpers;
 
+namespace {
+
+using Points2 = Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>;
+
+Points2 rows_of(const std::vector<Vec2>& points) {
+  Points2 out(static_cast<Eigen::Index>(points.size()), 2);
+  for (std::size_t i = 0; i < points.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
+  return out;
+}
+
+}  // namespace
+
 void bind_world(py::module_& m) {
   py::class_<Object, std::shared_ptr<Object>>(m, "Object", "A closed, consistently oriented triangle mesh O.")
-      .def(py::init([](const ArrayD& vertices, const py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>& faces) {
-             check_shape(vertices, {-1, 3}, "vertices");
-             check_shape(faces, {-1, 3}, "faces");
-             PointsN3 v(vertices.shape(0), 3);
-             std::copy(vertices.data(), vertices.data() + vertices.size(), v.data());
-             FacesN3 f(faces.shape(0), 3);
-             std::copy(faces.data(), faces.data() + faces.size(), f.data());
+      .def(py::init([](const ArrayD& vertices, const ArrayI& faces) {
+             const PointsN3 v = to_rows<PointsN3>(vertices, "vertices");
+             const FacesN3 f = to_rows<FacesN3>(faces, "faces");
              py::gil_scoped_release release;
              return std::make_shared<Object>(v, f);
            }),
            py::arg("vertices"), py::arg("faces"))
       .def_property_readonly("volume", &Object::volume, "Enclosed volume (m^3).")
       .def_property_readonly("bounds", [](const Object& o) {
-        py::array_t<double> out({2, 3});
-        auto r = out.mutable_unchecked<2>();
-        for (int k = 0; k < 3; ++k) r(0, k) = o.bounds().lo[k], r(1, k) = o.bounds().hi[k];
+        PointsN3 out(2, 3);
+        out << o.bounds().lo.transpose(), o.bounds().hi.transpose();
         return out;
       }, "Axis-aligned bounds (2, 3): min and max corners.")
       .def(
           "inside",
           [](const Object& o, const ArrayD& points) {
-            check_shape(points, {-1, 3}, "points");
-            py::array_t<bool> out(points.shape(0));
-            auto r = points.unchecked<2>();
-            auto w = out.mutable_unchecked<1>();
-            for (py::ssize_t i = 0; i < points.shape(0); ++i) w(i) = o.inside(Vec3(r(i, 0), r(i, 1), r(i, 2)));
+            const PointsN3 p = to_rows<PointsN3>(points, "points");
+            Eigen::Array<bool, Eigen::Dynamic, 1> out(p.rows());
+            for (Eigen::Index i = 0; i < p.rows(); ++i) out(i) = o.inside(p.row(i).transpose());
             return out;
           },
           py::arg("points"), "True for each point (n, 3) strictly inside O.")
       .def(
           "signed_distance",
           [](const Object& o, const ArrayD& points) {
-            check_shape(points, {-1, 3}, "points");
-            py::array_t<double> out(points.shape(0));
-            auto r = points.unchecked<2>();
-            auto w = out.mutable_unchecked<1>();
-            for (py::ssize_t i = 0; i < points.shape(0); ++i) {
-              const Vec3 p(r(i, 0), r(i, 1), r(i, 2));
-              w(i) = o.nearest(p, p).signed_distance;
-            }
+            const PointsN3 p = to_rows<PointsN3>(points, "points");
+            Eigen::VectorXd out(p.rows());
+            for (Eigen::Index i = 0; i < p.rows(); ++i) out(i) = o.nearest(p.row(i), p.row(i)).signed_distance;
             return out;
           },
           py::arg("points"), "Signed distance (n,) of each point (n, 3) to O's surface; negative inside.")
       .def(
           "closest",
           [](const Object& o, const ArrayD& points) {
-            check_shape(points, {-1, 3}, "points");
-            const py::ssize_t n = points.shape(0);
-            py::array_t<double> dist(n), on({n, py::ssize_t(3)}), normal({n, py::ssize_t(3)});
-            py::array_t<std::int64_t> tri(n);
-            auto r = points.unchecked<2>();
-            auto wd = dist.mutable_unchecked<1>();
-            auto wp = on.mutable_unchecked<2>();
-            auto wn = normal.mutable_unchecked<2>();
-            auto wt = tri.mutable_unchecked<1>();
-            for (py::ssize_t i = 0; i < n; ++i) {
-              const Vec3 p(r(i, 0), r(i, 1), r(i, 2));
-              const SignedNearest sn = o.nearest(p, p);
-              const int t = sn.triangle;
-              const Vec3& fn = o.face_normal(t);
-              wd(i) = sn.signed_distance;
-              wt(i) = t;
-              for (int k = 0; k < 3; ++k) wp(i, k) = sn.on_object[k], wn(i, k) = fn[k];
+            const PointsN3 p = to_rows<PointsN3>(points, "points");
+            const Eigen::Index n = p.rows();
+            Eigen::VectorXd dist(n);
+            PointsN3 on(n, 3), normal(n, 3);
+            Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1> tri(n);
+            for (Eigen::Index i = 0; i < n; ++i) {
+              const SignedNearest sn = o.nearest(p.row(i), p.row(i));
+              dist(i) = sn.signed_distance;
+              tri(i) = sn.triangle;
+              on.row(i) = sn.on_object.transpose();
+              normal.row(i) = o.face_normal(sn.triangle).transpose();
             }
             py::dict d;
             d["distance"] = dist;
@@ -90,14 +84,11 @@ void bind_world(py::module_& m) {
       .def(
           "segment_distance",
           [](const Object& o, const ArrayD& a, const ArrayD& b) {
-            check_shape(a, {-1, 3}, "a");
-            check_shape(b, {a.shape(0), 3}, "b");
-            py::array_t<double> out(a.shape(0));
-            auto ra = a.unchecked<2>();
-            auto rb = b.unchecked<2>();
-            auto w = out.mutable_unchecked<1>();
-            for (py::ssize_t i = 0; i < a.shape(0); ++i)
-              w(i) = o.nearest(Vec3(ra(i, 0), ra(i, 1), ra(i, 2)), Vec3(rb(i, 0), rb(i, 1), rb(i, 2))).signed_distance;
+            const PointsN3 pa = to_rows<PointsN3>(a, "a");
+            check_shape(b, {pa.rows(), 3}, "b");
+            const PointsN3 pb = to_rows<PointsN3>(b, "b");
+            Eigen::VectorXd out(pa.rows());
+            for (Eigen::Index i = 0; i < pa.rows(); ++i) out(i) = o.nearest(pa.row(i), pb.row(i)).signed_distance;
             return out;
           },
           py::arg("a"), py::arg("b"),
@@ -105,17 +96,9 @@ void bind_world(py::module_& m) {
       .def(
           "section",
           [](const Object& o, const ArrayD& origin, const ArrayD& u, const ArrayD& v) {
-            const Vec3 uu = to_vec3(u, "u"), vv = to_vec3(v, "v");
-            if (std::abs(uu.norm() - 1) > 1e-9 || std::abs(vv.norm() - 1) > 1e-9 || std::abs(uu.dot(vv)) > 1e-9)
-              throw py::value_error("u and v must be orthonormal");
-            const Section s = o.section(to_vec3(origin, "origin"), uu, vv);
-            py::list loops;
-            for (const auto& loop : s.loops()) {
-              py::array_t<double> a({static_cast<py::ssize_t>(loop.size()), py::ssize_t(2)});
-              auto w = a.mutable_unchecked<2>();
-              for (std::size_t i = 0; i < loop.size(); ++i) w(i, 0) = loop[i].x(), w(i, 1) = loop[i].y();
-              loops.append(a);
-            }
+            const Section s = o.section(to_vec3(origin, "origin"), to_vec3(u, "u"), to_vec3(v, "v"));
+            std::vector<Points2> loops;
+            for (const auto& loop : s.loops()) loops.push_back(rows_of(loop));
             return loops;
           },
           py::arg("origin"), py::arg("u"), py::arg("v"),
@@ -125,36 +108,27 @@ void bind_world(py::module_& m) {
           "section_region",
           [](std::shared_ptr<Object> o, const ArrayD& origin, const ArrayD& u, const ArrayD& v, double radius,
              double flatten) {
-            const Vec3 uu = to_vec3(u, "u"), vv = to_vec3(v, "v"), oo = to_vec3(origin, "origin");
-            if (!oo.allFinite()) throw py::value_error("origin must be finite");
-            if (std::abs(uu.norm() - 1) > 1e-9 || std::abs(vv.norm() - 1) > 1e-9 || std::abs(uu.dot(vv)) > 1e-9)
-              throw py::value_error("u and v must be orthonormal");
-            if (!(radius >= 0.0) || !std::isfinite(radius))
-              throw py::value_error("radius must be finite and >= 0, got " + std::to_string(radius));
-            if (!(flatten > 0.0) || !std::isfinite(flatten))
-              throw py::value_error("flatten must be positive, got " + std::to_string(flatten));
             FingerPlane plane;
-            plane.origin = oo;
-            plane.u = uu;
-            plane.p = vv;
+            plane.origin = to_vec3(origin, "origin");
+            plane.u = to_vec3(u, "u");
+            plane.p = to_vec3(v, "v");
             std::unique_ptr<PlaneRegion> region;
             {
               py::gil_scoped_release release;
               region = std::make_unique<PlaneRegion>(o, plane, radius, flatten);
             }
             const auto& segs = region->segments();
-            const py::ssize_t n = static_cast<py::ssize_t>(segs.size());
-            py::array_t<double> seg({n, py::ssize_t(2), py::ssize_t(2)}), nrm({n, py::ssize_t(2)});
-            auto ws = seg.mutable_unchecked<3>();
-            auto wn = nrm.mutable_unchecked<2>();
-            for (py::ssize_t i = 0; i < n; ++i) {
+            const Eigen::Index n = static_cast<Eigen::Index>(segs.size());
+            Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> ends(n, 4);  // a then b, as (k, 2, 2)
+            Points2 normals(n, 2);
+            for (Eigen::Index i = 0; i < n; ++i) {
               const auto& sg = segs[static_cast<std::size_t>(i)];
-              ws(i, 0, 0) = sg.a.x(), ws(i, 0, 1) = sg.a.y(), ws(i, 1, 0) = sg.b.x(), ws(i, 1, 1) = sg.b.y();
-              wn(i, 0) = sg.normal.x(), wn(i, 1) = sg.normal.y();
+              ends.row(i) << sg.a.transpose(), sg.b.transpose();
+              normals.row(i) = sg.normal.transpose();
             }
             py::dict d;
-            d["segments"] = seg;
-            d["normals"] = nrm;
+            d["segments"] = py::cast(ends).attr("reshape")(n, 2, 2);
+            d["normals"] = normals;
             return d;
           },
           py::arg("origin"), py::arg("u"), py::arg("v"), py::arg("radius"), py::arg("flatten") = 1e-6,
@@ -164,7 +138,7 @@ void bind_world(py::module_& m) {
       .def(
           "palm_gap",
           [](std::shared_ptr<Object> o, const ArrayD& pose, double radius, double thickness) {
-            if (!(radius > 0) || !(thickness > 0)) throw py::value_error("palm radius and thickness must be positive");
+            check_palm_query(radius, thickness, kInf);
             const Pose p = to_pose(pose, "palm_pose");
             py::gil_scoped_release release;
             return SimulatedWorld(o).palm(p, radius, thickness);
