@@ -1,9 +1,12 @@
 // hugger._core: the compiled engine. One bind_<area> per area of the C++ tree.
 #include <pybind11/pybind11.h>
 
+#include "common.hpp"
 #include "hugger/types.hpp"
 
 namespace py = pybind11;
+using hugger::py_helpers::ArrayD;
+using hugger::py_helpers::to_pose;
 
 void bind_hand(py::module_& m);
 void bind_world(py::module_& m);
@@ -14,6 +17,10 @@ void bind_analysis(py::module_& m);
 PYBIND11_MODULE(_core, m) {
   m.doc() = "Hugger engine: hand kinematics, the simulated world and the planner (C++17)";
   m.attr("RIGID_TOLERANCE") = hugger::kRigidTolerance;
+  m.def("check_pose", [](const ArrayD& pose, const std::string& name) { to_pose(pose, name.c_str()); },
+        py::arg("pose"), py::arg("name") = "palm_pose",
+        "Raise ValueError, saying what is wrong, unless ``pose`` is a rigid (4, 4) transform: finite, last row "
+        "(0, 0, 0, 1), rotation orthonormal with determinant +1 within RIGID_TOLERANCE (the engine's rule).");
   bind_hand(m);
   bind_world(m);
   bind_sensing(m);

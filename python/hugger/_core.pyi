@@ -8,7 +8,7 @@ import numpy
 import numpy.typing
 import typing
 __all__: list[str] = ['HandModel', 'Object', 'Planner', 'QualityResult', 'Sensing', 'SimulatedWorld', 'Touch',
-                      'grasp_quality']
+                      'check_pose', 'grasp_quality']
 class HandModel:
     """
     Immutable hand: M fingers of N links on a round palm (metres).
@@ -259,6 +259,11 @@ class QualityResult:
 def grasp_quality(points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], normals: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], center: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], mu: typing.SupportsFloat = 0.5, cone_edges: typing.SupportsInt = 8, torque_scale: typing.SupportsFloat = 1.0, volume: bool = True) -> QualityResult:
     """
     Force closure, epsilon and volume of the L1 grasp wrench space of contacts at points (C, 3) (m, world) with outward normals (C, 3), torques about center (3,) divided by torque_scale (m). Qhull, GIL released. volume=False skips the full hull (volume reported 0): epsilon by cutting planes.
+    """
+
+def check_pose(pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], name: str = 'palm_pose') -> None:
+    """
+    Raise ValueError, saying what is wrong, unless ``pose`` is a rigid (4, 4) transform: finite, last row (0, 0, 0, 1), rotation orthonormal with determinant +1 within RIGID_TOLERANCE (the engine's rule).
     """
 
 

@@ -308,8 +308,7 @@ def contacts_of(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joints: A
             all(map(math.isfinite, (radius, palm_radius, palm_thickness)))):
         raise ValueError("hand sizes must be finite, link_radius >= 0, palm_radius and palm_thickness > 0")
     pose = np.asarray(palm_pose, dtype=np.float64)
-    if pose.shape != (4, 4) or not np.all(np.isfinite(pose)):
-        raise ValueError(f"palm_pose must be a finite (4, 4) transform, got shape {pose.shape}")
+    _core.check_pose(pose)  # the engine's rule: a rigid (4, 4) transform
     j = np.asarray(joints, dtype=np.float64)
     if j.shape != (m, n + 1, 3):
         raise ValueError(f"joints must be (M, N+1, 3) = ({m}, {n + 1}, 3), got {j.shape}")

@@ -70,23 +70,12 @@ def _real_array(name: str, value: Any) -> np.ndarray:
 def rigid_pose(palm_pose: Any, name: str = "palm_pose") -> np.ndarray:
     """``palm_pose`` as a (4, 4) float64 rigid transform T_WP (rotation with det +1, metres).
 
-    ``ValueError`` says what is wrong: shape, non-finite entries, last row not (0, 0, 0, 1),
-    or a linear part that scales, shears or reflects (beyond :data:`RIGID_TOLERANCE`).
+    ``ValueError`` says what is wrong (the engine's rule, ``hugger._core.check_pose``): shape,
+    non-finite entries, last row not (0, 0, 0, 1), or a linear part that scales, shears or
+    reflects (beyond :data:`RIGID_TOLERANCE`).
     """
     pose = _real_array(name, palm_pose)
-    if pose.shape != (4, 4):
-        raise ValueError(f"{name} must be a (4, 4) homogeneous transform, got shape {pose.shape}")
-    if not np.all(np.isfinite(pose)):
-        raise ValueError(f"{name} holds non-finite numbers")
-    if not np.array_equal(pose[3], [0.0, 0.0, 0.0, 1.0]):
-        raise ValueError(f"{name} must be a homogeneous transform with last row (0, 0, 0, 1), got {pose[3].tolist()}")
-    r = pose[:3, :3]
-    orth = float(np.abs(r.T @ r - np.eye(3)).max())
-    det = float(np.linalg.det(r))
-    if not (orth <= RIGID_TOLERANCE and abs(det - 1.0) <= RIGID_TOLERANCE):
-        what = "reflects (det < 0)" if det < 0 else "scales or shears"
-        raise ValueError(f"{name} must be a rigid transform (orthonormal rotation with determinant +1), but it {what}: "
-                         f"|R^T R - I| = {orth:.3g}, det R = {det:.6g}")
+    _core.check_pose(pose, name)
     return pose
 
 
