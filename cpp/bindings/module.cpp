@@ -2,6 +2,7 @@
 #include <pybind11/pybind11.h>
 
 #include "common.hpp"
+#include "hugger/hand/hand_model.hpp"
 #include "hugger/types.hpp"
 
 namespace py = pybind11;
@@ -16,7 +17,10 @@ void bind_analysis(py::module_& m);
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "Hugger engine: hand kinematics, the simulated world and the planner (C++17)";
+  // The engine's limits, each owned by its C++ constant.
   m.attr("RIGID_TOLERANCE") = hugger::kRigidTolerance;
+  m.attr("MAX_FINGERS") = hugger::kMaxFingers;
+  m.attr("MAX_LINKS") = hugger::kMaxLinks;
   m.def("check_pose", [](const ArrayD& pose, const std::string& name) { to_pose(pose, name.c_str()); },
         py::arg("pose"), py::arg("name") = "palm_pose",
         "Raise ValueError, saying what is wrong, unless ``pose`` is a rigid (4, 4) transform: finite, last row "

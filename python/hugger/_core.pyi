@@ -269,3 +269,6 @@ def check_pose(pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], na
 
 #: A palm pose is rigid when |R^T R - I| and |det R - 1| are at most this (the engine's rule).
 RIGID_TOLERANCE: float
+#: Largest number of fingers M and of links per finger N of a hand.
+MAX_FINGERS: int
+MAX_LINKS: int

@@ -1,4 +1,5 @@
-"""Types and constants shared by the package's modules (imported by them, importing none of them).
+"""Types and constants shared by the package's modules (imported by them, importing none of them but
+the compiled engine, which owns the hand-size limits).
 
 :class:`TipState` is the state of a finger in a plan (``tip_state`` in a trajectory file, int8),
 :class:`Configuration` one hand configuration of a plan; the constants are the hand-size limits
@@ -12,13 +13,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import _core
+
+#: The package version (hugger.__version__), recorded in trajectory files and dataset indexes.
+VERSION = "0.1.0"
 #: Largest number of fingers M and of links per finger N. The engine checks every pair of
 #: fingers each iteration (O(M^2 N^2)), so a plan with more fingers would be unusably slow; the
 #: limits are checked before anything is allocated, so ``Hand(fingers=10**6)`` fails at once.
-#: The package version (hugger.__version__), recorded in trajectory files and dataset indexes.
-VERSION = "0.1.0"
-MAX_FINGERS = 64
-MAX_LINKS = 256
+#: The engine owns them (kMaxFingers, kMaxLinks in hugger/hand/hand_model.hpp).
+MAX_FINGERS: int = _core.MAX_FINGERS
+MAX_LINKS: int = _core.MAX_LINKS
 
 #: Gap (m) at or below which a link or the palm counts as touching O, in summaries, analysis,
 #: figures and the physics squeeze.

@@ -187,8 +187,6 @@ class Hand:
             lim = _real_array("limits", limits)
             if lim.shape != (m, n, 2):
                 raise ValueError(f"limits must be an (M, N, 2) = ({m}, {n}, 2) array of [lower, upper], got shape {lim.shape}")
-            if np.any(np.isnan(lim)):
-                raise ValueError("limits hold NaN (use -inf / inf for an unlimited joint)")
             lo, hi = lim[..., 0].copy(), lim[..., 1].copy()
             lo[lo <= -np.pi + 1e-12] = -np.inf  # at or beyond -pi: no bound (rounding allowed)
             hi[hi >= np.pi - 1e-12] = np.inf

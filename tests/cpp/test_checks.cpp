@@ -98,6 +98,14 @@ TEST(Checks, HandCountsAreBoundedByTheConstants) {
             "links must be between 1 and 256, got 257");
 }
 
+TEST(Checks, HandLayoutLimitsMustBeNumbers) {
+  HandLayout layout;
+  layout.lower = MatrixX::Constant(2, 3, -1.0);
+  layout.lower(1, 2) = kNaN;
+  EXPECT_EQ(message_of([&] { HandModel(2, 3, MatrixX::Constant(2, 3, 0.02), 0.002, 0.03, 0.01, layout); }),
+            "the limits of joint 2 of finger 1 must be lower <= upper (rad, +-inf: unlimited), got [nan, inf]");
+}
+
 TEST(Checks, WhatCrossesTheSensingInterface) {
   EXPECT_EQ(message_of([] { check_capsule_query(Vec3::Zero(), Vec3::UnitX(), 0.0, kInf); }), "");
   EXPECT_EQ(message_of([] { check_capsule_query(Vec3(kNaN, 0, 0), Vec3::UnitX(), 0.0, kInf); }),
