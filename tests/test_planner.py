@@ -210,6 +210,28 @@ def test_start_clear_by_a_millimetre_is_accepted(hand, sphere):
 
 # --- planner parameters -------------------------------------------------------------------------
 
+def test_the_engine_gives_typed_results(hand, sphere):
+    """The compiled planner gives PlannerParams, PlannerStats, Configuration and History objects; the
+    Python planner's params and stats stay dicts (as a trajectory records them)."""
+    core = hugger._core
+    assert core.PlannerParams().step is None  # None: the default, resolved by the planner
+    p = hugger.Planner(hand, sphere, [0, 0, 0], start(), max_iterations=3, rules="paper")
+    params = p._core.params
+    assert isinstance(params, core.PlannerParams) and params.step == pytest.approx(0.001)
+    assert (params.max_iterations, params.rules) == (3, "paper")
+    assert p.params == {"step": params.step, "epsilon": params.epsilon, "contact_tolerance": params.contact_tolerance,
+                        "max_iterations": 3, "rules": "paper", "skin": "mesh"}
+    c = p._core.step()
+    assert isinstance(c, core.Configuration) and (c.phase, c.iteration) == (0, 0)
+    assert c.joints.shape == (5, 6, 3) and c.angles.shape == (5, 5) and c.tip_state.dtype == np.int8
+    traj = p.plan()
+    stats = p._core.stats
+    assert isinstance(stats, core.PlannerStats) and p.stats["phase2_iterations"] == stats.phase2_iterations == 3
+    h = p._core.history(1, 3)
+    assert isinstance(h, core.History) and h.palm_pose.shape == (2, 4, 4)
+    np.testing.assert_array_equal(h.joints, traj.joints[1:3])
+
+
 def test_step_equal_to_a_link_is_allowed_and_ends(hand, sphere):
     traj = hugger.Planner(hand, sphere, [0, 0, 0], start(), step=0.02, epsilon=0.002).plan()
     assert traj.status == "done"

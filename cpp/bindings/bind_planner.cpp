@@ -1,9 +1,15 @@
+// The planner and its typed results: PlannerParams, PlannerStats, Configuration and History (a
+// plan's configurations as stacked arrays).
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <sstream>
 
 #include "common.hpp"
 #include "hugger/planner/planner.hpp"
+#include "hugger/world/object.hpp"
 #include "hugger/world/section_skin.hpp"
 #include "hugger/world/simulated_world.hpp"
 
@@ -47,85 +53,138 @@ class Busy {
   std::unique_lock<std::mutex> lock_;
 };
 
-py::dict configuration_dict(const Configuration& c, int M, int N) {
-  py::array_t<double> joints({M, N + 1, 3});
-  py::array_t<double> angles({M, N});
-  py::array_t<std::int8_t> states(M);
-  auto j = joints.mutable_unchecked<3>();
-  auto a = angles.mutable_unchecked<2>();
-  auto s = states.mutable_unchecked<1>();
-  for (int m = 0; m < M; ++m) {
-    s(m) = static_cast<std::int8_t>(c.tip_state[m]);
-    for (int n = 0; n <= N; ++n)
-      for (int k = 0; k < 3; ++k) j(m, n, k) = c.joints[m * (N + 1) + n][k];
-    for (int n = 0; n < N; ++n) a(m, n) = c.angles(m, n);
-  }
-  py::dict d;
-  d["palm_pose"] = from_pose(c.palm);
-  d["joints"] = joints;
-  d["angles"] = angles;
-  d["tip_state"] = states;
-  d["phase"] = c.phase;
-  d["iteration"] = c.iteration;
-  return d;
+py::array_t<std::int8_t> states_array(const std::vector<TipState>& states) {
+  py::array_t<std::int8_t> out(static_cast<py::ssize_t>(states.size()));
+  std::int8_t* w = out.mutable_data();
+  for (TipState s : states) *w++ = static_cast<std::int8_t>(s);
+  return out;
 }
 
-py::dict history_arrays(const Planner& p, std::size_t start, std::size_t stop) {
+/// A plan's configurations [start, stop) as stacked arrays (K configurations of M fingers, N links).
+struct History {
+  py::array_t<double> palm_pose, joints, angles;  ///< (K, 4, 4), (K, M, N+1, 3), (K, M, N)
+  py::array_t<std::int8_t> tip_state, phase;      ///< (K, M), (K,)
+};
+
+History history_of(const Planner& p, std::size_t start, std::size_t stop) {
   const auto& h = p.history();
   stop = std::min(stop, h.size());
   start = std::min(start, stop);
-  const py::ssize_t K = static_cast<py::ssize_t>(stop - start);
-  const int M = p.hand().fingers(), N = p.hand().links();
-  py::array_t<double> palm({K, py::ssize_t(4), py::ssize_t(4)});
-  py::array_t<double> joints({K, py::ssize_t(M), py::ssize_t(N + 1), py::ssize_t(3)});
-  py::array_t<double> angles({K, py::ssize_t(M), py::ssize_t(N)});
-  py::array_t<std::int8_t> states({K, py::ssize_t(M)});
-  py::array_t<std::int8_t> phase(K);
+  const py::ssize_t K = static_cast<py::ssize_t>(stop - start), M = p.hand().fingers(), N = p.hand().links();
+  History out{py::array_t<double>({K, py::ssize_t(4), py::ssize_t(4)}),
+              py::array_t<double>({K, M, N + 1, py::ssize_t(3)}), py::array_t<double>({K, M, N}),
+              py::array_t<std::int8_t>({K, M}), py::array_t<std::int8_t>(K)};
+  double* palm = out.palm_pose.mutable_data();
+  double* joints = out.joints.mutable_data();
+  double* angles = out.angles.mutable_data();
+  std::int8_t* states = out.tip_state.mutable_data();
+  std::int8_t* phase = out.phase.mutable_data();
   {
-    auto P = palm.mutable_unchecked<3>();
-    auto J = joints.mutable_unchecked<4>();
-    auto A = angles.mutable_unchecked<3>();
-    auto S = states.mutable_unchecked<2>();
-    auto F = phase.mutable_unchecked<1>();
     py::gil_scoped_release release;
-    for (py::ssize_t k = 0; k < K; ++k) {
-      const Configuration& c = h[start + k];
-      for (int i = 0; i < 4; ++i)
-        for (int jj = 0; jj < 4; ++jj) P(k, i, jj) = c.palm.matrix()(i, jj);
-      for (int m = 0; m < M; ++m) {
-        S(k, m) = static_cast<std::int8_t>(c.tip_state[m]);
-        for (int n = 0; n <= N; ++n)
-          for (int x = 0; x < 3; ++x) J(k, m, n, x) = c.joints[m * (N + 1) + n][x];
-        for (int n = 0; n < N; ++n) A(k, m, n) = c.angles(m, n);
-      }
-      F(k) = static_cast<std::int8_t>(c.phase);
+    for (std::size_t k = start; k < stop; ++k) {  // each configuration's arrays in C order, one after another
+      const Configuration& c = h[k];
+      Eigen::Map<RowMatrix4>{palm} = c.palm.matrix();
+      palm += 16;
+      for (const Vec3& x : c.joints) joints[0] = x[0], joints[1] = x[1], joints[2] = x[2], joints += 3;
+      Eigen::Map<MatrixX>{angles, M, N} = c.angles;
+      angles += M * N;
+      for (TipState s : c.tip_state) *states++ = static_cast<std::int8_t>(s);
+      *phase++ = static_cast<std::int8_t>(c.phase);
     }
   }
-  py::dict d;
-  d["palm_pose"] = palm;
-  d["joints"] = joints;
-  d["angles"] = angles;
-  d["tip_state"] = states;
-  d["phase"] = phase;
-  return d;
+  return out;
 }
 
-double optional_param(const py::object& value, const char* name) {
+/// A length parameter: None selects the default (NaN in the engine), so NaN itself is refused.
+double optional_length(const py::object& value, const char* name) {
   if (value.is_none()) return std::numeric_limits<double>::quiet_NaN();
-  const double v = value.cast<double>();
-  if (!std::isfinite(v) || v <= 0.0)
-    throw py::value_error(std::string(name) + " must be a positive finite number, got " + py::str(value).cast<std::string>());
-  return v;
+  const double x = real_number(value, name);
+  if (std::isnan(x)) throw py::value_error(std::string(name) + " must be a number or None (the default), got nan");
+  return x;
 }
+
+/// A length parameter as Python sees it: None for the default (NaN).
+std::optional<double> length_or_none(double x) { return std::isnan(x) ? std::nullopt : std::optional<double>(x); }
 
 }  // namespace
 
 void bind_planner(py::module_& m) {
+  py::class_<PlannerParams>(m, "PlannerParams",
+                            "The planner's parameters (docs/python.md). None selects the documented default: step = "
+                            "shortest link / 20, epsilon = step / 10, contact_tolerance = 1e-4 m. The engine checks "
+                            "them (hugger/planner/planner.hpp: check_params); a Planner's params have the defaults "
+                            "resolved.")
+      .def(py::init([](const py::object& step, const py::object& epsilon, const py::object& contact_tolerance,
+                       const py::object& max_iterations, const std::string& rules) {
+             PlannerParams p;
+             p.step = optional_length(step, "step");
+             p.epsilon = optional_length(epsilon, "epsilon");
+             p.contact_tolerance = optional_length(contact_tolerance, "contact_tolerance");
+             if (!max_iterations.is_none()) p.max_iterations = whole_number(max_iterations, "max_iterations");
+             p.rules = rules_from_string(rules);
+             check_params(p);
+             return p;
+           }),
+           py::kw_only(), py::arg("step") = py::none(), py::arg("epsilon") = py::none(),
+           py::arg("contact_tolerance") = py::none(), py::arg("max_iterations") = py::none(), py::arg("rules") = "hug")
+      .def_property_readonly("step", [](const PlannerParams& p) { return length_or_none(p.step); },
+                             "Fingertip step s (m); None: the default")
+      .def_property_readonly("epsilon", [](const PlannerParams& p) { return length_or_none(p.epsilon); },
+                             "Overextension threshold (m); None: the default")
+      .def_property_readonly("contact_tolerance", [](const PlannerParams& p) { return length_or_none(p.contact_tolerance); },
+                             "Sensing distance delta (m); None: the default")
+      .def_readonly("max_iterations", &PlannerParams::max_iterations, "Bound on Phase 2 iterations")
+      .def_property_readonly("rules", [](const PlannerParams& p) { return to_string(p.rules); },
+                             "The rule set of Phase 2: 'hug' or 'paper'")
+      .def("__repr__", [](const PlannerParams& p) {
+        std::ostringstream os;
+        const auto length = [&os](double x) -> std::ostream& { return std::isnan(x) ? os << "None" : os << x; };
+        os << "PlannerParams(step=";
+        length(p.step) << ", epsilon=";
+        length(p.epsilon) << ", contact_tolerance=";
+        length(p.contact_tolerance) << ", max_iterations=" << p.max_iterations << ", rules='" << to_string(p.rules) << "')";
+        return os.str();
+      });
+
+  py::class_<PlannerStats>(m, "PlannerStats", "Counters of one plan, for inspection and benchmarks.")
+      .def_readonly("phase1_configurations", &PlannerStats::phase1_configurations, "Configurations of Phase 1")
+      .def_readonly("phase2_iterations", &PlannerStats::phase2_iterations, "Phase 2 iterations")
+      .def_readonly("first_contact_iteration", &PlannerStats::first_contact_iteration,
+                    "Phase 2 iteration of the first touch (-1: none yet)")
+      .def_readonly("palm_contact_iteration", &PlannerStats::palm_contact_iteration,
+                    "Phase 2 iteration at which the palm touched (-1: none yet)")
+      .def_readonly("sigma_retries", &PlannerStats::sigma_retries, "Iterations whose palm step had to be taken back")
+      .def_readonly("finger_collisions", &PlannerStats::finger_collisions,
+                    "Fingers stopped by another finger or themselves")
+      .def_readonly("clinging_failures", &PlannerStats::clinging_failures,
+                    "Fingers stopped because no free link position was found")
+      .def_readonly("motion_rejections", &PlannerStats::motion_rejections,
+                    "Finger moves refused: a joint would move > 4 s, or the swept motion collides")
+      .def_readonly("approach_configurations", &PlannerStats::approach_configurations,
+                    "Configurations emitted by the approach before the first contact");
+
+  py::class_<Configuration>(m, "Configuration", "One hand configuration of a plan (docs/model.md).")
+      .def_property_readonly("palm_pose", [](const Configuration& c) { return from_pose(c.palm); }, "(4, 4) T_WP")
+      .def_property_readonly(
+          "joints",
+          [](const Configuration& c) { return vec3s_array(c.joints, {c.angles.rows(), c.angles.cols() + 1, 3}); },
+          "(M, N+1, 3) joint positions in the world, tail first")
+      .def_property_readonly("angles", [](const Configuration& c) { return c.angles; }, "(M, N) joint angles (rad)")
+      .def_property_readonly("tip_state", [](const Configuration& c) { return states_array(c.tip_state); },
+                             "(M,) int8: 0 FROZEN, 1 CONTACT, 2 DONE")
+      .def_readonly("phase", &Configuration::phase, "0 for C_init, then 1 or 2")
+      .def_readonly("iteration", &Configuration::iteration, "Index of this configuration in the plan");
+
+  py::class_<History>(m, "History", "Configurations [start, stop) of a plan as stacked arrays.")
+      .def_readonly("palm_pose", &History::palm_pose, "(K, 4, 4)")
+      .def_readonly("joints", &History::joints, "(K, M, N+1, 3)")
+      .def_readonly("angles", &History::angles, "(K, M, N)")
+      .def_readonly("tip_state", &History::tip_state, "(K, M) int8")
+      .def_readonly("phase", &History::phase, "(K,) int8");
+
   py::class_<PyPlanner>(m, "Planner", "The Hugger planner (docs/algorithm.md) over a simulated world.")
       .def(py::init([](const HandModel& hand, const py::object& source, const ArrayD& target,
-                       const ArrayD& palm_pose, const py::object& step, const py::object& epsilon,
-                       const py::object& contact_tolerance, const py::object& max_iterations,
-                       const std::string& rules, const std::string& skin) {
+                       const ArrayD& palm_pose, const PlannerParams& params, const std::string& skin) {
              auto out = std::make_unique<PyPlanner>();
              if (source.is_none()) throw py::value_error("the object or skin must not be None");
              if (skin != "mesh" && skin != "section")
@@ -143,63 +202,36 @@ void bind_planner(py::module_& m) {
                                     py::str(py::type::of(source).attr("__name__")).cast<std::string>());
              }
              const Vec3 t = to_vec3(target, "target");
-             if (!t.allFinite()) throw py::value_error("target must be finite");
              const Pose pose = to_pose(palm_pose, "palm_pose");
-             PlannerParams params;
-             params.step = optional_param(step, "step");
-             params.epsilon = optional_param(epsilon, "epsilon");
-             params.contact_tolerance = optional_param(contact_tolerance, "contact_tolerance");
-             if (!max_iterations.is_none()) params.max_iterations = max_iterations.cast<long>();  // checked by Planner
-             params.rules = rules_from_string(rules);  // std::invalid_argument -> ValueError
              out->source = source;
              py::gil_scoped_release release;
              if (sensing) {  // a skin that need not have a mesh: T is taken as given
                out->planner = std::make_unique<Planner>(hand, std::move(sensing), t, pose, params);
                return out;
              }
-             const double depth = object->nearest(t, t).signed_distance;
-             if (!(depth < 0.0)) {
-               std::ostringstream os;
-               os << "target T = (" << t.x() << ", " << t.y() << ", " << t.z()
-                  << ") is not inside the object (its distance to the surface is " << depth << " m, outside or on it)";
-               throw std::invalid_argument(os.str());
-             }
+             check_target(*object, t);
              std::shared_ptr<const Sensing> world;
              if (skin == "section") world = std::make_shared<SectionSkin>(object);
              else world = std::make_shared<SimulatedWorld>(object);
              out->planner = std::make_unique<Planner>(hand, world, t, pose, params);
              return out;
            }),
-           py::arg("hand"), py::arg("sensing"), py::arg("target"), py::arg("palm_pose"), py::arg("step") = py::none(),
-           py::arg("epsilon") = py::none(), py::arg("contact_tolerance") = py::none(),
-           py::arg("max_iterations") = py::none(), py::arg("rules") = "hug", py::arg("skin") = "mesh")
+           py::arg("hand"), py::arg("sensing"), py::arg("target"), py::arg("palm_pose"),
+           py::arg("params") = PlannerParams(), py::arg("skin") = "mesh")
       .def(
           "step",
-          [](PyPlanner& p) -> py::object {
+          [](PyPlanner& p) -> std::optional<Configuration> {
             Busy busy(p);
-            std::optional<Configuration> c;
-            {
-              if (p.failed) return py::none();
-              py::gil_scoped_release release;
-              c = guarded(p, [&] { return p.planner->step(); });
-            }
-            if (!c) return py::none();
-            return configuration_dict(*c, p.planner->hand().fingers(), p.planner->hand().links());
+            if (p.failed) return std::nullopt;
+            py::gil_scoped_release release;
+            return guarded(p, [&] { return p.planner->step(); });
           },
-          "Advance by one configuration; a dict of arrays, or None when the plan has ended. An exception "
+          "Advance by one configuration; a Configuration, or None when the plan has ended. An exception "
           "raised by the skin propagates unchanged and ends the plan (status 'error').")
       .def(
           "plan",
           [](PyPlanner& p, const py::object& timeout) {
-            double limit = kInf;
-            if (!timeout.is_none()) {
-              if (py::isinstance<py::bool_>(timeout) || (!py::isinstance<py::float_>(timeout) && !py::isinstance<py::int_>(timeout)))
-                throw py::value_error("timeout must be a number of seconds or None, got " + py::repr(timeout).cast<std::string>());
-              limit = timeout.cast<double>();
-              if (!std::isfinite(limit) || limit <= 0.0)
-                throw py::value_error("timeout must be a positive finite number of seconds or None, got " +
-                                      py::repr(timeout).cast<std::string>());
-            }
+            const double limit = timeout.is_none() ? kInf : check_timeout(real_number(timeout, "timeout"));
             Busy busy(p);
             if (p.failed) return status_of(p);
             {
@@ -214,36 +246,18 @@ void bind_planner(py::module_& m) {
           "skin propagates unchanged and ends the plan (status 'error').")
       .def("history", [](PyPlanner& p, std::size_t start, std::size_t stop) {
             Busy busy(p);
-            return history_arrays(*p.planner, start, stop);
+            return history_of(*p.planner, start, stop);
           },
           py::arg("start") = 0, py::arg("stop") = static_cast<std::size_t>(-1),
-          "Configurations [start, stop) so far as arrays: palm_pose (K,4,4), joints (K,M,N+1,3), "
-          "angles (K,M,N), tip_state (K,M) int8, phase (K,) int8.")
+          "Configurations [start, stop) so far, as a History of stacked arrays.")
       .def_property_readonly("size", [](PyPlanner& p) { return p.planner->history().size(); })
       .def_property_readonly("status", [](PyPlanner& p) { return status_of(p); })
-      .def_property_readonly("params", [](PyPlanner& p) {
-        const PlannerParams& q = p.planner->params();
-        py::dict d;
-        d["step"] = q.step;
-        d["epsilon"] = q.epsilon;
-        d["contact_tolerance"] = q.contact_tolerance;
-        d["max_iterations"] = q.max_iterations;
-        d["rules"] = to_string(q.rules);
-        d["skin"] = p.skin;
-        return d;
-      })
-      .def_property_readonly("stats", [](PyPlanner& p) {
-        const PlannerStats& s = p.planner->stats();
-        py::dict d;
-        d["phase1_configurations"] = s.phase1_configurations;
-        d["phase2_iterations"] = s.phase2_iterations;
-        d["first_contact_iteration"] = s.first_contact_iteration;
-        d["palm_contact_iteration"] = s.palm_contact_iteration;
-        d["sigma_retries"] = s.sigma_retries;
-        d["finger_collisions"] = s.finger_collisions;
-        d["clinging_failures"] = s.clinging_failures;
-        d["motion_rejections"] = s.motion_rejections;
-        d["approach_configurations"] = s.approach_configurations;
-        return d;
-      });
+      .def_property_readonly("skin", [](PyPlanner& p) { return p.skin; },
+                             "How the object is sensed: 'mesh', 'section', or 'custom' (a Sensing skin)")
+      .def_property_readonly("params", [](PyPlanner& p) { return p.planner->params(); },
+                             "The parameters in force, defaults resolved")
+      .def_property_readonly("stats", [](PyPlanner& p) { return p.planner->stats(); }, "The plan's counters");
+
+  m.def("check_timeout", [](const py::object& seconds) { return check_timeout(real_number(seconds, "timeout")); },
+        py::arg("seconds"), "``seconds`` as a float: raise ValueError unless it is a positive finite number.");
 }

@@ -3,6 +3,7 @@
 
 #include "common.hpp"
 #include "hugger/hand/hand_model.hpp"
+#include "hugger/planner/planner.hpp"
 #include "hugger/types.hpp"
 
 namespace py = pybind11;
@@ -21,6 +22,7 @@ PYBIND11_MODULE(_core, m) {
   m.attr("RIGID_TOLERANCE") = hugger::kRigidTolerance;
   m.attr("MAX_FINGERS") = hugger::kMaxFingers;
   m.attr("MAX_LINKS") = hugger::kMaxLinks;
+  m.attr("MAX_ITERATIONS") = hugger::kMaxIterations;
   m.def("check_pose", [](const ArrayD& pose, const std::string& name) { to_pose(pose, name.c_str()); },
         py::arg("pose"), py::arg("name") = "palm_pose",
         "Raise ValueError, saying what is wrong, unless ``pose`` is a rigid (4, 4) transform: finite, last row "

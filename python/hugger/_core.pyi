@@ -7,8 +7,9 @@ from __future__ import annotations
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['HandModel', 'Object', 'Planner', 'QualityResult', 'Sensing', 'SimulatedWorld', 'Touch',
-                      'check_pose', 'grasp_quality']
+__all__: list[str] = ['Configuration', 'HandModel', 'History', 'Object', 'Planner', 'PlannerParams', 'PlannerStats',
+                      'QualityResult', 'Sensing', 'SimulatedWorld', 'Touch', 'check_pose', 'check_timeout',
+                      'grasp_quality']
 class HandModel:
     """
     Immutable hand: M fingers of N links on a round palm (metres).
@@ -198,33 +199,193 @@ class SimulatedWorld(Sensing):
     """
     def __init__(self, object: Object) -> None:
         ...
+class PlannerParams:
+    """
+    The planner's parameters (docs/python.md). None selects the documented default: step = shortest link / 20, epsilon = step / 10, contact_tolerance = 1e-4 m. The engine checks them (hugger/planner/planner.hpp: check_params); a Planner's params have the defaults resolved.
+    """
+    def __init__(self, *, step: typing.SupportsFloat | None = None, epsilon: typing.SupportsFloat | None = None, contact_tolerance: typing.SupportsFloat | None = None, max_iterations: typing.SupportsInt | None = None, rules: str = 'hug') -> None:
+        ...
+    def __repr__(self) -> str:
+        ...
+    @property
+    def step(self) -> float | None:
+        """
+        Fingertip step s (m); None: the default
+        """
+    @property
+    def epsilon(self) -> float | None:
+        """
+        Overextension threshold (m); None: the default
+        """
+    @property
+    def contact_tolerance(self) -> float | None:
+        """
+        Sensing distance delta (m); None: the default
+        """
+    @property
+    def max_iterations(self) -> int:
+        """
+        Bound on Phase 2 iterations
+        """
+    @property
+    def rules(self) -> str:
+        """
+        The rule set of Phase 2: 'hug' or 'paper'
+        """
+class PlannerStats:
+    """
+    Counters of one plan, for inspection and benchmarks.
+    """
+    def __init__(self, *args: typing.Any, **kwargs: typing.Any) -> None:
+        """Not constructible from Python: read from Planner.stats."""
+    @property
+    def phase1_configurations(self) -> int:
+        """
+        Configurations of Phase 1
+        """
+    @property
+    def phase2_iterations(self) -> int:
+        """
+        Phase 2 iterations
+        """
+    @property
+    def first_contact_iteration(self) -> int:
+        """
+        Phase 2 iteration of the first touch (-1: none yet)
+        """
+    @property
+    def palm_contact_iteration(self) -> int:
+        """
+        Phase 2 iteration at which the palm touched (-1: none yet)
+        """
+    @property
+    def sigma_retries(self) -> int:
+        """
+        Iterations whose palm step had to be taken back
+        """
+    @property
+    def finger_collisions(self) -> int:
+        """
+        Fingers stopped by another finger or themselves
+        """
+    @property
+    def clinging_failures(self) -> int:
+        """
+        Fingers stopped because no free link position was found
+        """
+    @property
+    def motion_rejections(self) -> int:
+        """
+        Finger moves refused: a joint would move > 4 s, or the swept motion collides
+        """
+    @property
+    def approach_configurations(self) -> int:
+        """
+        Configurations emitted by the approach before the first contact
+        """
+class Configuration:
+    """
+    One hand configuration of a plan (docs/model.md).
+    """
+    def __init__(self, *args: typing.Any, **kwargs: typing.Any) -> None:
+        """Not constructible from Python: returned by Planner.step."""
+    @property
+    def palm_pose(self) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        (4, 4) T_WP
+        """
+    @property
+    def joints(self) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        (M, N+1, 3) joint positions in the world, tail first
+        """
+    @property
+    def angles(self) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        (M, N) joint angles (rad)
+        """
+    @property
+    def tip_state(self) -> numpy.typing.NDArray[numpy.int8]:
+        """
+        (M,) int8: 0 FROZEN, 1 CONTACT, 2 DONE
+        """
+    @property
+    def phase(self) -> int:
+        """
+        0 for C_init, then 1 or 2
+        """
+    @property
+    def iteration(self) -> int:
+        """
+        Index of this configuration in the plan
+        """
+class History:
+    """
+    Configurations [start, stop) of a plan as stacked arrays.
+    """
+    def __init__(self, *args: typing.Any, **kwargs: typing.Any) -> None:
+        """Not constructible from Python: returned by Planner.history."""
+    @property
+    def palm_pose(self) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        (K, 4, 4)
+        """
+    @property
+    def joints(self) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        (K, M, N+1, 3)
+        """
+    @property
+    def angles(self) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        (K, M, N)
+        """
+    @property
+    def tip_state(self) -> numpy.typing.NDArray[numpy.int8]:
+        """
+        (K, M) int8
+        """
+    @property
+    def phase(self) -> numpy.typing.NDArray[numpy.int8]:
+        """
+        (K,) int8
+        """
 class Planner:
     """
     The Hugger planner (docs/algorithm.md) over a simulated world.
     """
-    def __init__(self, hand: HandModel, sensing: Sensing | Object, target: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], palm_pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], step: typing.SupportsFloat | None = None, epsilon: typing.SupportsFloat | None = None, contact_tolerance: typing.SupportsFloat | None = None, max_iterations: typing.SupportsInt | None = None, rules: str = 'hug', skin: str = 'mesh') -> None:
+    def __init__(self, hand: HandModel, sensing: Sensing | Object, target: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], palm_pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], params: PlannerParams = ..., skin: str = 'mesh') -> None:
         ...
-    def history(self, start: typing.SupportsInt | typing.SupportsIndex = 0, stop: typing.SupportsInt | typing.SupportsIndex = ...) -> dict[str, numpy.typing.NDArray[typing.Any]]:
+    def history(self, start: typing.SupportsInt | typing.SupportsIndex = 0, stop: typing.SupportsInt | typing.SupportsIndex = ...) -> History:
         """
-        Configurations [start, stop) so far as arrays: palm_pose (K,4,4), joints (K,M,N+1,3), angles (K,M,N), tip_state (K,M) int8, phase (K,) int8.
+        Configurations [start, stop) so far, as a History of stacked arrays.
         """
     def plan(self, timeout: typing.SupportsFloat | None = None) -> str:
         """
         Run to the end (GIL released); returns the status. With ``timeout`` (seconds, positive finite) the plan stops with status 'timeout' once that much wall-clock time has passed. An exception raised by the skin propagates unchanged and ends the plan (status 'error').
         """
-    def step(self) -> dict[str, typing.Any] | None:
+    def step(self) -> Configuration | None:
         """
-        Advance by one configuration; a dict of arrays, or None when the plan has ended. An exception raised by the skin propagates unchanged and ends the plan (status 'error').
+        Advance by one configuration; a Configuration, or None when the plan has ended. An exception raised by the skin propagates unchanged and ends the plan (status 'error').
         """
     @property
-    def params(self) -> dict[str, typing.Any]:
-        ...
+    def params(self) -> PlannerParams:
+        """
+        The parameters in force, defaults resolved
+        """
     @property
     def size(self) -> int:
         ...
     @property
-    def stats(self) -> dict[str, typing.Any]:
-        ...
+    def skin(self) -> str:
+        """
+        How the object is sensed: 'mesh', 'section', or 'custom' (a Sensing skin)
+        """
+    @property
+    def stats(self) -> PlannerStats:
+        """
+        The plan's counters
+        """
     @property
     def status(self) -> str:
         ...
@@ -265,6 +426,10 @@ def check_pose(pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], na
     """
     Raise ValueError, saying what is wrong, unless ``pose`` is a rigid (4, 4) transform: finite, last row (0, 0, 0, 1), rotation orthonormal with determinant +1 within RIGID_TOLERANCE (the engine's rule).
     """
+def check_timeout(seconds: typing.Any) -> float:
+    """
+    ``seconds`` as a float: raise ValueError unless it is a positive finite number.
+    """
 
 
 #: A palm pose is rigid when |R^T R - I| and |det R - 1| are at most this (the engine's rule).
@@ -272,3 +437,5 @@ RIGID_TOLERANCE: float
 #: Largest number of fingers M and of links per finger N of a hand.
 MAX_FINGERS: int
 MAX_LINKS: int
+#: Largest max_iterations of a plan.
+MAX_ITERATIONS: int

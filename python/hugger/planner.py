@@ -2,14 +2,13 @@
 from __future__ import annotations
 
 import json
-import numbers
 from typing import Any, Iterator, cast
 
 import numpy as np
 
 from . import _core
 from ._types import CONTACT, DONE, FROZEN, Configuration  # noqa: F401  (hugger.planner.FROZEN as before)
-from .hand import Hand, _real_array, rigid_pose
+from .hand import Hand, _real_array
 from .trajectory import Trajectory
 from .world import Object
 
@@ -34,8 +33,8 @@ def look_at(position: Any, target: Any, up: Any = None) -> np.ndarray:
 #: and those plus the extensions for firmer hugs (the default).
 RULES = ("paper", "hug")
 
-#: Largest ``max_iterations`` accepted (a plan that long would take hours).
-MAX_ITERATIONS = 10**9
+#: Largest ``max_iterations`` accepted (a plan that long would take hours); the engine's limit.
+MAX_ITERATIONS: int = _core.MAX_ITERATIONS
 #: Smallest ``contact_tolerance`` relative to the scene's largest coordinate (m / m): below it the
 #: sensing distance drowns in rounding of double-precision positions and the approach never lands.
 MIN_RELATIVE_TOLERANCE = 1e-10
@@ -45,30 +44,14 @@ SKINS = ("mesh", "section")
 DEFAULT_SKIN = "mesh"
 
 
-def _optional_count(name: str, value: Any) -> int | None:
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise ValueError(f"{name} must be a whole number, got {value!r}")
-    if not 1 <= int(value) <= MAX_ITERATIONS:
-        raise ValueError(f"{name} must be between 1 and {MAX_ITERATIONS}, got {value!r}")
-    return int(value)
-
-
-def _optional_size(name: str, value: Any) -> float | None:
-    if value is None:
-        return None
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise ValueError(f"{name} must be a number, got {value!r}")
-    v = float(value)
-    if not np.isfinite(v) or v <= 0:
-        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    return v
-
-
 def _timeout(value: Any) -> float | None:
-    """A plan timeout in seconds: None, or a positive finite number."""
-    return _optional_size("timeout", value)
+    """A plan timeout in seconds: None, or a positive finite number (the engine's rule)."""
+    return None if value is None else _core.check_timeout(value)
+
+
+def _fields(record: Any) -> dict[str, Any]:
+    """The fields of a typed engine record (PlannerParams, PlannerStats) as a dict, in their C++ order."""
+    return {name: getattr(record, name) for name in vars(type(record)) if not name.startswith("_")}
 
 
 class Planner:
@@ -115,24 +98,21 @@ class Planner:
         if obj is not None and not isinstance(obj, Object):
             raise ValueError(f"record_object must be a hugger.Object or None, got {type(obj).__name__}")
         t = _real_array("target", target)
-        if t.shape != (3,) or not np.all(np.isfinite(t)):
-            raise ValueError(f"target must be a finite 3-vector, got {target!r}")
-        pose = rigid_pose(palm_pose)
+        pose = _real_array("palm_pose", palm_pose)
         if not isinstance(rules, str) or rules not in RULES:
             raise ValueError(f"rules must be one of {', '.join(map(repr, RULES))}, got {rules!r}")
-        delta = _optional_size("contact_tolerance", contact_tolerance)
+        # The engine checks the parameters, T and the pose (ValueError saying what is wrong), then plans Phase 1.
+        params = _core.PlannerParams(step=step, epsilon=epsilon, contact_tolerance=contact_tolerance,
+                                     max_iterations=max_iterations, rules=rules)
+        self._core = _core.Planner(hand._core, cast(Object, obj)._core if sensing is None else sensing, t, pose,
+                                   params, DEFAULT_SKIN if skin is None else skin)
+        delta = params.contact_tolerance  # what only Python sees: the recorded mesh's extent
         extent = max(1.0, float(np.abs(obj.vertices).max()) if obj is not None else 0.0,
                      float(np.abs(pose[:3, 3]).max()), float(np.abs(t).max()))
         if delta is not None and delta < MIN_RELATIVE_TOLERANCE * extent:
             raise ValueError(f"contact_tolerance {delta:g} m is below the resolution this scene allows "
                              f"({MIN_RELATIVE_TOLERANCE:g} x its largest coordinate, {extent:g} m)")
         self.hand, self.object, self.sensing, self.target = hand, obj, sensing, t
-        self._core = _core.Planner(hand._core, cast(Object, obj)._core if sensing is None else sensing, t, pose,
-                                   _optional_size("step", step),
-                                   _optional_size("epsilon", epsilon),
-                                   delta,
-                                   _optional_count("max_iterations", max_iterations), rules,
-                                   DEFAULT_SKIN if skin is None else skin)
         self._emitted: int | None = 0  # configurations handed out by step(); None after plan()
 
     @property
@@ -145,22 +125,23 @@ class Planner:
 
     @property
     def params(self) -> dict[str, Any]:
-        """The parameters in force, defaults resolved."""
-        return dict(self._core.params)
+        """The parameters in force, defaults resolved, and the skin (as a trajectory records them)."""
+        return {**_fields(self._core.params), "skin": self._core.skin}
 
     @property
     def stats(self) -> dict[str, Any]:
         """Counters: Phase 1 configurations, Phase 2 iterations, first and palm contact, ..."""
-        return dict(self._core.stats)
+        return _fields(self._core.stats)
 
     def step(self) -> Configuration | None:
         """The next configuration (C_init first), or None when the plan has ended."""
-        d = self._core.step()
-        if d is None:
+        c = self._core.step()
+        if c is None:
             return None
         if self._emitted is not None:
-            self._emitted = d["iteration"] + 1
-        return Configuration(**d)
+            self._emitted = c.iteration + 1
+        return Configuration(palm_pose=c.palm_pose, joints=c.joints, angles=c.angles, tip_state=c.tip_state,
+                             phase=c.phase, iteration=c.iteration)
 
     def __iter__(self) -> Iterator[Configuration]:
         while (c := self.step()) is not None:
@@ -174,7 +155,7 @@ class Planner:
         configuration planned so far (a valid, collision-free partial plan). A timed-out plan has
         ended; Phase 1, done when the planner was made, is not counted.
         """
-        limit = _timeout(timeout)
+        limit = _timeout(timeout)  # refused before anything changes
         try:
             self._core.plan(limit)
         finally:  # after an exception from a skin too: the configurations completed before it
@@ -184,21 +165,18 @@ class Planner:
     def trajectory(self) -> Trajectory:
         """The configurations handed out so far (by ``step()``, or all after ``plan()``), as a
         :class:`Trajectory`."""
-        h = self._core.history()
-        if self._emitted is not None and self._emitted < len(h["phase"]):
-            h = {key: value[: self._emitted] for key, value in h.items()}
-        params = self.params
+        h = self._core.history() if self._emitted is None else self._core.history(0, self._emitted)
         return Trajectory(
             hand_json=self.hand.to_json(),
-            params_json=json.dumps(params),
+            params_json=json.dumps(self.params),
             object_vertices=self.object.vertices if self.object is not None else np.zeros((0, 3)),
             object_faces=self.object.faces if self.object is not None else np.zeros((0, 3), dtype=np.int64),
             target=self.target,
-            palm_pose=h["palm_pose"],
-            joints=h["joints"],
-            angles=h["angles"],
-            tip_state=h["tip_state"],
-            phase=h["phase"],
+            palm_pose=h.palm_pose,
+            joints=h.joints,
+            angles=h.angles,
+            tip_state=h.tip_state,
+            phase=h.phase,
             status=self.status,
             stats_json=json.dumps(self.stats),
         )

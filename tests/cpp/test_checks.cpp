@@ -11,6 +11,8 @@
 #include "hugger/hand/hand_model.hpp"
 #include "hugger/planner/planner.hpp"
 #include "hugger/sensing/sensing.hpp"
+#include "hugger/world/object.hpp"
+#include "meshes.hpp"
 
 using namespace hugger;
 
@@ -122,4 +124,13 @@ TEST(Checks, WhatCrossesTheSensingInterface) {
   t.normal = Vec3::Zero();
   EXPECT_EQ(message_of([&] { check_touch(t, "Sensing.capsule returned"); }),
             "Sensing.capsule returned non-finite points or a zero or non-finite normal");
+}
+
+TEST(Checks, TheTargetMustBeInsideTheObject) {
+  const auto mesh = test::icosphere(2);
+  const Object o(mesh.vertices, mesh.faces);
+  EXPECT_EQ(message_of([&] { check_target(o, Vec3(0.1, 0.0, 0.0)); }), "");
+  EXPECT_EQ(message_of([&] { check_target(o, Vec3(0.0, kNaN, 0.0)); }), "target must be a finite 3-vector, got (0, nan, 0)");
+  EXPECT_NE(message_of([&] { check_target(o, Vec3(2.0, 0.0, 0.0)); }).find("target T = (2, 0, 0) is not inside the object"),
+            std::string::npos);
 }

@@ -192,6 +192,15 @@ bool Object::capsule_clear(const Vec3& a, const Vec3& b, double radius, bool a_o
   return radius > 0.0 ? !inside_off_surface(a) : !inside(a);
 }
 
+void check_target(const Object& object, const Vec3& target) {
+  HUGGER_CHECK_ARGUMENT(target.allFinite(), "target must be a finite 3-vector, got (" << target.x() << ", " << target.y()
+                                                                                      << ", " << target.z() << ")");
+  const double depth = object.nearest(target, target).signed_distance;
+  HUGGER_CHECK_ARGUMENT(depth < 0.0, "target T = (" << target.x() << ", " << target.y() << ", " << target.z()
+                                                    << ") is not inside the object (its distance to the surface is "
+                                                    << depth << " m, outside or on it)");
+}
+
 Section Object::section(const Vec3& origin, const Vec3& u, const Vec3& v) const {
   check_plane_frame(origin, u, v);
   const Vec3 n = u.cross(v);

@@ -78,4 +78,8 @@ class Object {
   std::uint64_t serial_ = 0;  ///< unique per constructed object (keys per-thread memos)
 };
 
+/// The planner's target T for object O: finite and strictly inside O (signed distance < 0).
+/// Throws std::invalid_argument saying where T is otherwise.
+void check_target(const Object& object, const Vec3& target);
+
 }  // namespace hugger
