@@ -115,13 +115,15 @@ void bind_planner(py::module_& m) {
                             "them (hugger/planner/planner.hpp: check_params); a Planner's params have the defaults "
                             "resolved.")
       .def(py::init([](const py::object& step, const py::object& epsilon, const py::object& contact_tolerance,
-                       const py::object& max_iterations, const std::string& rules) {
+                       const py::object& max_iterations, const py::object& rules) {
              PlannerParams p;
              p.step = optional_length(step, "step");
              p.epsilon = optional_length(epsilon, "epsilon");
              p.contact_tolerance = optional_length(contact_tolerance, "contact_tolerance");
              if (!max_iterations.is_none()) p.max_iterations = whole_number(max_iterations, "max_iterations");
-             p.rules = rules_from_string(rules);
+             // not a string: the engine's message, with the value as Python shows it
+             p.rules = rules_from_string(py::isinstance<py::str>(rules) ? rules.cast<std::string>()
+                                                                       : py::repr(rules).cast<std::string>());
              check_params(p);
              return p;
            }),
@@ -184,11 +186,12 @@ void bind_planner(py::module_& m) {
 
   py::class_<PyPlanner>(m, "Planner", "The Hugger planner (docs/algorithm.md) over a simulated world.")
       .def(py::init([](const HandModel& hand, const py::object& source, const ArrayD& target,
-                       const ArrayD& palm_pose, const PlannerParams& params, const std::string& skin) {
+                       const ArrayD& palm_pose, const PlannerParams& params, const py::object& skin_name) {
              auto out = std::make_unique<PyPlanner>();
              if (source.is_none()) throw py::value_error("the object or skin must not be None");
+             const std::string skin = py::isinstance<py::str>(skin_name) ? skin_name.cast<std::string>() : "";
              if (skin != "mesh" && skin != "section")
-               throw py::value_error("skin must be 'mesh' or 'section', got '" + skin + "'");
+               throw py::value_error("skin must be one of 'mesh', 'section', got " + py::repr(skin_name).cast<std::string>());
              out->skin = skin;
              std::shared_ptr<Object> object;
              std::shared_ptr<Sensing> sensing;

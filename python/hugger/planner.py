@@ -82,8 +82,6 @@ class Planner:
                  epsilon: float | None = None, contact_tolerance: float | None = None,
                  max_iterations: int | None = None, rules: str = "hug", skin: str | None = None,
                  record_object: Object | None = None) -> None:
-        if skin is not None and skin not in SKINS:
-            raise ValueError(f"skin must be one of {list(SKINS)}, got {skin!r}")
         if not isinstance(hand, Hand):
             raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
         sensing = None
@@ -99,9 +97,8 @@ class Planner:
             raise ValueError(f"record_object must be a hugger.Object or None, got {type(obj).__name__}")
         t = _real_array("target", target)
         pose = _real_array("palm_pose", palm_pose)
-        if not isinstance(rules, str) or rules not in RULES:
-            raise ValueError(f"rules must be one of {', '.join(map(repr, RULES))}, got {rules!r}")
-        # The engine checks the parameters, T and the pose (ValueError saying what is wrong), then plans Phase 1.
+        # The engine checks the parameters (the rules too), the skin's name, T and the pose
+        # (ValueError saying what is wrong), then plans Phase 1.
         params = _core.PlannerParams(step=step, epsilon=epsilon, contact_tolerance=contact_tolerance,
                                      max_iterations=max_iterations, rules=rules)
         self._core = _core.Planner(hand._core, cast(Object, obj)._core if sensing is None else sensing, t, pose,

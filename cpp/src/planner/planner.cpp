@@ -30,7 +30,7 @@ std::string to_string(Rules r) { return r == Rules::kPaper ? "paper" : "hug"; }
 Rules rules_from_string(const std::string& name) {
   if (name == "paper") return Rules::kPaper;
   if (name == "hug") return Rules::kHug;
-  throw std::invalid_argument("rules must be 'paper' or 'hug', got '" + name + "'");
+  throw std::invalid_argument("rules must be one of 'paper', 'hug', got '" + name + "'");
 }
 
 namespace {
