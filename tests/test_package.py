@@ -145,7 +145,10 @@ def test_core_stub_matches_the_compiled_module():
     constants = {a.target.id for a in tree.body
                  if isinstance(a, ast.AnnAssign) and isinstance(a.target, ast.Name) and not a.target.id.startswith("_")}
     assert functions | constants == {n for n in dir(_core) if not n.startswith("_") and n not in compiled}
-    assert all(isinstance(getattr(_core, n), (int, float)) for n in constants)  # the engine's limits
+    # the engine's limits, and the names of its rule sets and skins
+    assert all(isinstance(getattr(_core, n), (int, float)) or
+               (isinstance(getattr(_core, n), tuple) and all(isinstance(x, str) for x in getattr(_core, n)))
+               for n in constants)
     for name, members in stub.items():
         cls = getattr(_core, name)
         own = {m for m in vars(cls) if not m.startswith("_") or m in ("__init__", "__repr__")}

@@ -189,9 +189,13 @@ void bind_planner(py::module_& m) {
                        const ArrayD& palm_pose, const PlannerParams& params, const py::object& skin_name) {
              auto out = std::make_unique<PyPlanner>();
              if (source.is_none()) throw py::value_error("the object or skin must not be None");
-             const std::string skin = py::isinstance<py::str>(skin_name) ? skin_name.cast<std::string>() : "";
-             if (skin != "mesh" && skin != "section")
-               throw py::value_error("skin must be one of 'mesh', 'section', got " + py::repr(skin_name).cast<std::string>());
+             const py::tuple skins = py::module_::import("hugger._core").attr("SKINS");
+             if (!skins.contains(skin_name)) {
+               std::string names;
+               for (const auto& name : skins) names += (names.empty() ? "" : ", ") + py::repr(name).cast<std::string>();
+               throw py::value_error("skin must be one of " + names + ", got " + py::repr(skin_name).cast<std::string>());
+             }
+             const std::string skin = skin_name.cast<std::string>();
              out->skin = skin;
              std::shared_ptr<Object> object;
              std::shared_ptr<Sensing> sensing;

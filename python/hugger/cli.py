@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any, NoReturn, Sequence, TextIO
 
 from ._files import atomic_path, write_atomic
 from ._progress import Progress
+from ._core import RULES, SKINS
 from ._types import VERSION
 
 if TYPE_CHECKING:
@@ -84,10 +85,10 @@ def _planner_options(p: argparse.ArgumentParser) -> None:
                         "Ferrari-Canny epsilon of the grasp quality")
     g.add_argument("--contact-tolerance", type=float, help="sensing distance delta, m (default 1e-4)")
     g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
-    g.add_argument("--rules", choices=("hug", "paper"), default="hug",
+    g.add_argument("--rules", choices=RULES, default="hug",
                    help="Phase 2 rule set: 'hug' (default; the paper's rules plus extensions for firmer "
                         "grasps) or 'paper' (the 1994 method with the documented decisions only)")
-    g.add_argument("--skin", choices=("mesh", "section"),
+    g.add_argument("--skin", choices=SKINS,
                    help="sensing skin: mesh (exact 3D queries, the default) or section (2D per finger plane)")
     g.add_argument("--timeout", type=float, metavar="SECONDS",
                    help="stop planning after this long, with status 'timeout' and a valid partial plan")
@@ -723,7 +724,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--epsilon", type=float, help="overextension threshold epsilon of the planner, m (default step / 10)")
     g.add_argument("--contact-tolerance", type=float, help="sensing distance delta, m (default 1e-4)")
     g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
-    g.add_argument("--rules", choices=("hug", "paper"), default=None, help="Phase 2 rule set (default hug)")
+    g.add_argument("--rules", choices=RULES, default=None, help="Phase 2 rule set (default hug)")
     p.set_defaults(func=cmd_generate)
 
     p = sub.add_parser("export-mjcf", help="write the hand and object at a configuration as MJCF (hugger[physics])")

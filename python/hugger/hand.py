@@ -67,18 +67,6 @@ def _real_array(name: str, value: Any) -> np.ndarray:
         return a.astype(np.float64)
 
 
-def rigid_pose(palm_pose: Any, name: str = "palm_pose") -> np.ndarray:
-    """``palm_pose`` as a (4, 4) float64 rigid transform T_WP (rotation with det +1, metres).
-
-    ``ValueError`` says what is wrong (the engine's rule, ``hugger._core.check_pose``): shape,
-    non-finite entries, last row not (0, 0, 0, 1), or a linear part that scales, shears or
-    reflects (beyond :data:`RIGID_TOLERANCE`).
-    """
-    pose = _real_array(name, palm_pose)
-    _core.check_pose(pose, name)
-    return pose
-
-
 def implausible_size(what: str, size: float) -> str | None:
     """The warning text when ``size`` (m) is outside :data:`PLAUSIBLE_SIZE`, else None."""
     lo, hi = PLAUSIBLE_SIZE
@@ -297,7 +285,7 @@ class Hand:
             raise ValueError(f"angles must have shape ({self.fingers}, {self.links}), got {a.shape}")
         if not np.all(np.isfinite(a)):
             raise ValueError("angles hold non-finite numbers")
-        return self._core.forward(rigid_pose(palm_pose), a)
+        return self._core.forward(_real_array("palm_pose", palm_pose), a)  # the engine checks the pose
 
     def angles_from_joints(self, palm_pose: Any, joints: Any) -> np.ndarray:
         """Joint angles (M, N) in radians from joint positions (M, N+1, 3) in the world (m)."""
@@ -306,11 +294,11 @@ class Hand:
             raise ValueError(f"joints must have shape ({self.fingers}, {self.links + 1}, 3), got {j.shape}")
         if not np.all(np.isfinite(j)):
             raise ValueError("joints hold non-finite numbers")
-        return self._core.angles_from_joints(rigid_pose(palm_pose), j)
+        return self._core.angles_from_joints(_real_array("palm_pose", palm_pose), j)
 
     def roots(self, palm_pose: Any) -> np.ndarray:
         """Finger roots R_m (M, 3) in the world (m) for the rigid palm pose T_WP (4, 4)."""
-        return self._core.roots(rigid_pose(palm_pose))
+        return self._core.roots(_real_array("palm_pose", palm_pose))
 
     def to_dict(self) -> dict[str, Any]:
         """The hand as in the trajectory file's ``hand_json``. A general layout adds

@@ -31,7 +31,7 @@ def look_at(position: Any, target: Any, up: Any = None) -> np.ndarray:
 
 #: The rule sets of Phase 2 (docs/algorithm.md): the paper's rules with the documented decisions,
 #: and those plus the extensions for firmer hugs (the default).
-RULES = ("paper", "hug")
+RULES: tuple[str, ...] = _core.RULES
 
 #: Largest ``max_iterations`` accepted (a plan that long would take hours); the engine's limit.
 MAX_ITERATIONS: int = _core.MAX_ITERATIONS
@@ -40,7 +40,7 @@ MAX_ITERATIONS: int = _core.MAX_ITERATIONS
 MIN_RELATIVE_TOLERANCE = 1e-10
 #: The sensing skins a plan can use: ``section`` answers Phase 2 in each finger plane by exact 2D
 #: geometry (docs/performance.md), ``mesh`` by 3D queries on the mesh (the reference).
-SKINS = ("mesh", "section")
+SKINS: tuple[str, ...] = _core.SKINS
 DEFAULT_SKIN = "mesh"
 
 
