@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
 
 #include "hugger/planner/planner.hpp"
@@ -48,6 +49,17 @@ void expect_motion_rules(const Planner& p) {
 
 double palm_height(const Configuration& c) { return c.palm.translation().z(); }
 
+/// The plan of `hand` about `world` with `rules` from 20 cm above, facing down at the origin; it
+/// does not end max_iterations and keeps the motion rules.
+std::unique_ptr<Planner> plan_from_above(const HandModel& hand, const std::shared_ptr<SimulatedWorld>& world, Rules rules) {
+  PlannerParams params;
+  params.rules = rules;
+  auto p = std::make_unique<Planner>(hand, world, Vec3::Zero(), test::facing_down(0.2), params);
+  EXPECT_NE(p->plan(), Status::kMaxIterations) << to_string(rules);
+  expect_motion_rules(*p);
+  return p;
+}
+
 }  // namespace
 
 // A straight finger whose tip lands on a flat face that faces the palm. The paper's rules: the
@@ -88,13 +100,9 @@ TEST(Rules, PalmStepIsTheFreeDistanceAlongP) {
   auto world = test::sphere_world(rho, 4);
   long to_palm[2] = {0, 0};
   for (Rules rules : {Rules::kPaper, Rules::kHug}) {
-    PlannerParams params;
-    params.rules = rules;
-    Planner p(hand, world, Vec3::Zero(), test::facing_down(0.2), params);
-    EXPECT_NE(p.plan(), Status::kMaxIterations);
-    expect_motion_rules(p);
-    EXPECT_GE(p.stats().palm_contact_iteration, 0) << to_string(rules) << ": the palm lands on the sphere";
-    to_palm[static_cast<int>(rules)] = p.stats().palm_contact_iteration;
+    const auto p = plan_from_above(hand, world, rules);
+    EXPECT_GE(p->stats().palm_contact_iteration, 0) << to_string(rules) << ": the palm lands on the sphere";
+    to_palm[static_cast<int>(rules)] = p->stats().palm_contact_iteration;
   }
   // the fingers pass the flank for about 6 cm (the sphere's height and more): 40 steps of s
   EXPECT_GT(to_palm[0], 150) << "paper: the palm crawls at the fingers' gap";
@@ -109,13 +117,9 @@ TEST(Rules, DoneFingerAtRestWhileThePalmAdvances) {
   auto world = std::make_shared<SimulatedWorld>(std::make_shared<Object>(mesh.vertices, mesh.faces));
   bool exercised = false;
   for (Rules rules : {Rules::kPaper, Rules::kHug}) {
-    PlannerParams params;
-    params.rules = rules;
-    Planner p(hand, world, Vec3::Zero(), test::facing_down(0.2), params);
-    EXPECT_NE(p.plan(), Status::kMaxIterations);
-    expect_motion_rules(p);
+    const auto p = plan_from_above(hand, world, rules);
     // some finger is DONE while the palm still moves (with either rule set): the rule is exercised
-    const auto& h = p.history();
+    const auto& h = p->history();
     for (std::size_t k = 1; k < h.size() && !exercised; ++k)
       for (int m = 0; m < 5; ++m)
         if (h[k - 1].tip_state[m] == TipState::kDone &&
