@@ -154,3 +154,102 @@ def test_verify_chooses_the_first_ranked_grasp_that_holds(hand, monkeypatch):
     assert none.best == plain.best  # nothing held: the ranking's choice stands
     with pytest.raises(ValueError, match="verify"):
         hugger.search(hand, case.obj, case.target, approaches=2, verify=-1)
+
+
+def _ranking_order(hand, case, monkeypatch, approaches=6):
+    """The ranking's order of every working candidate: a verify run in which nothing holds checks them all."""
+    from hugger import physics
+
+    monkeypatch.setattr(physics, "validate", lambda traj, *a, **k: {"held": False})
+    lost = hugger.search(hand, case.obj, case.target, approaches=approaches, threads=1, verify=approaches)
+    return lost, list(lost.verified)
+
+
+def test_robust_verify_keeps_the_first_robust_grasp_or_the_largest_held_fraction(hand, monkeypatch):
+    pytest.importorskip("mujoco")
+    from hugger import physics
+
+    case = hugger.scenarios.default_case("box", hand)
+    plain, order = _ranking_order(hand, case, monkeypatch)
+    assert order[0] == plain.best and len(order) >= 4
+    start = {c.index: c.start_pose for c in plain.candidates}
+
+    def index_of(traj):
+        return min(start, key=lambda i: np.abs(traj.palm_pose[0] - start[i]).max())
+
+    # by ranking position: 0 lost at nominal settings, 1 loses one perturbation, 2 loses two, 3 robust
+    losses = {order[0]: {"nominal"}, order[1]: {"mu=0.5"}, order[2]: {"mu=1.0", "kp-20%"}, order[3]: set()}
+    calls = []
+
+    def fake(traj, k=-1, **kwargs):
+        i = index_of(traj)
+        name = next((n for n, v in physics.PERTURBATIONS.items() if v and all(kwargs.get(a) == b for a, b in v.items())),
+                    "nominal")
+        calls.append((i, name))
+        return {"held": name not in losses.get(i, set())}
+
+    monkeypatch.setattr(physics, "validate", fake)
+    seen = []
+    r = hugger.search(hand, case.obj, case.target, approaches=6, threads=1, verify=5, robust=True, workers=1,
+                      progress=lambda d, t: seen.append((d, t)))
+    assert r.best == order[3] and r.verified == tuple(order[:4]) and r.chosen.robust is True
+    assert [i for i, _ in calls].count(order[0]) == 1  # lost at nominal: no perturbation run
+    assert len(calls) == 1 + 3 * 9 and not any(i == order[4] for i, _ in calls)  # stopped at the robust one
+    got = {c.index: (c.held, c.robust, c.held_fraction) for c in r.candidates}
+    assert got[order[0]] == (False, False, None)
+    assert got[order[1]] == (True, False, pytest.approx(8 / 9))
+    assert got[order[2]] == (True, False, pytest.approx(7 / 9))
+    assert got[order[3]] == (True, True, 1.0)
+    assert all(got[i] == (None, None, None) for i in order[4:])
+    assert seen[-1][0] == seen[-1][1] == 6 + len(calls)  # plans, then every simulation run
+    assert [d for d, _ in seen] == sorted(d for d, _ in seen)
+    d = r.chosen.to_dict()
+    assert d["robust"] is True and d["held_fraction"] == 1.0
+
+    calls.clear()  # none robust among the three checked: the largest held fraction wins
+    r3 = hugger.search(hand, case.obj, case.target, approaches=6, threads=1, verify=3, robust=True, workers=1)
+    assert r3.best == order[1] and r3.verified == tuple(order[:3]) and r3.chosen.robust is False
+    losses[order[1]] = {"nominal"}  # nothing held at all: the ranking's best stays
+    r2 = hugger.search(hand, case.obj, case.target, approaches=6, threads=1, verify=2, robust=True, workers=1)
+    assert r2.best == order[0] and all(not r2.candidates[i].held for i in r2.verified)
+    with pytest.raises(ValueError, match="verify"):
+        hugger.search(hand, case.obj, case.target, approaches=2, robust=True)
+    with pytest.raises(ValueError, match="workers"):
+        hugger.search(hand, case.obj, case.target, approaches=2, verify=1, robust=True, workers=0)
+
+
+@pytest.mark.slow
+def test_robust_verify_on_a_sphere_matches_validate_robust(hand):
+    """27 simulations (about 30 s on a loaded machine): real physics, one process and two."""
+    pytest.importorskip("mujoco")
+    from hugger import physics
+
+    case = hugger.scenarios.default_case("sphere", hand)
+    r = hugger.search(hand, case.obj, case.target, approaches=2, threads=1, verify=1, robust=True, workers=1)
+    assert r.verified == (r.best,)
+    full = physics.validate_robust(r.trajectory, workers=2, bisect_steps=0, max_factor=10.0)
+    assert (r.chosen.held, r.chosen.robust, r.chosen.held_fraction) == (full["held"], full["robust"],
+                                                                        full["held_fraction"])
+    assert r.chosen.robust  # the sphere's grasp is robustly held (docs/generation.md)
+    r2 = hugger.search(hand, case.obj, case.target, approaches=2, threads=2, verify=1, robust=True, workers=2)
+    def figures(res):
+        return [(c.status, c.hug, c.epsilon, c.held, c.robust, c.held_fraction) for c in res.candidates]
+
+    assert r2.best == r.best and r2.verified == r.verified and figures(r2) == figures(r)
+
+
+def test_cli_plan_robust_verify(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("mujoco")
+    from hugger import physics
+    from hugger.cli import main
+
+    monkeypatch.setattr(physics, "validate", lambda traj, *a, **k: {"held": k.get("mu") != 0.5})
+    out = tmp_path / "p.npz"
+    assert main(["plan", "box", "--approaches", "3", "--threads", "1", "--verify", "2", "--robust-verify",
+                 "--workers", "1", "--out", str(out), "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)["search"]
+    checked = [s["candidates"][i] for i in s["verified"]]
+    assert len(checked) == 2 and all(c["held"] and c["robust"] is False for c in checked)
+    assert checked[0]["held_fraction"] == pytest.approx(8 / 9) and s["best"] == s["verified"][0]
+    assert main(["plan", "box", "--approaches", "3", "--robust-verify", "--out", str(out)]) == 2
+    assert "--verify" in capsys.readouterr().err

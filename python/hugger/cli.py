@@ -228,15 +228,18 @@ def _search(case: Case, hand: Hand, args: argparse.Namespace) -> tuple[Trajector
 
     if args.start is not None or args.normal is not None or args.turn:
         raise UsageError("--approaches K > 1 chooses the start poses itself: not with --start, --normal or --turn")
+    if args.robust_verify and args.verify < 1:
+        raise UsageError("--robust-verify checks the --verify V best-ranked grasps: give --verify V >= 1")
     pole = case.palm_pose[:3, 3] - case.target
     with Progress(f"searching {args.approaches} approaches of {case.name}", total=args.approaches) as p:
         result = hugger.search(hand, case.obj, case.target, approaches=args.approaches, threads=args.threads,
                                pole=pole, timeout=args.timeout, progress=p.update,
-                               verify=args.verify, **_params(args))
+                               verify=args.verify, robust=args.robust_verify, workers=args.workers,
+                               **_params(args))
     chosen = result.chosen
     summary = {"approaches": len(result.candidates), "best": result.best,
                "direction": [float(x) for x in chosen.direction], "time_s": round(result.time_s, 6),
-               "judged": sum(c.epsilon is not None for c in result.candidates),
+               "judged": sum(c.epsilon is not None for c in result.candidates), "verified": list(result.verified),
                "candidates": [c.to_dict() for c in result.candidates]}
     return result.trajectory, chosen.plan_time_s, summary
 
@@ -648,6 +651,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--verify", type=int, default=0, metavar="V",
                    help="with --approaches: put the V best-ranked grasps through the physics test in turn and "
                         "keep the first that holds (hugger[physics]; default 0: no physics)")
+    p.add_argument("--robust-verify", action="store_true",
+                   help="with --verify V: keep the first of the V that is robustly held (every perturbation of "
+                        "'hugger validate --robust'), else the one holding the largest fraction of them")
+    p.add_argument("--workers", type=_count, default=None, metavar="W",
+                   help="simulation processes of --robust-verify (default: the CPUs available)")
     _hand_options(p)
     _planner_options(p)
     _case_options(p)

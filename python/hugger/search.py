@@ -63,6 +63,8 @@ class Candidate:
     epsilon: float | None = None  #: Ferrari-Canny epsilon, mu = 0.5 (None: not judged)
     score: float | None = None  #: the custom score, when one was given
     held: bool | None = None  #: the six-direction physics verdict, when ``verify`` checked it
+    robust: bool | None = None  #: held under every perturbation, when ``verify`` with ``robust`` checked it
+    held_fraction: float | None = None  #: fraction of the perturbations held (None: not measured)
     error: str | None = None  #: the exception message when planning failed
 
     @property
@@ -80,7 +82,8 @@ class Candidate:
                 "configurations": self.configurations, "plan_time_s": self.plan_time_s,
                 "links_in_contact": self.links_in_contact, "palm_contact": self.palm_contact, "hug": self.hug,
                 "contacts": self.contacts, "force_closure": self.force_closure, "epsilon": self.epsilon,
-                "score": self.score, "held": self.held, "error": self.error}
+                "score": self.score, "held": self.held, "robust": self.robust,
+                "held_fraction": self.held_fraction, "error": self.error}
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,6 +97,7 @@ class SearchResult:
     time_s: float  #: wall time of the whole search (s): planning and ranking
     trajectories: tuple[Trajectory | None, ...] | None = field(default=None, repr=False)
     #: every candidate's plan (None where planning failed) when ``keep_all``; else None
+    verified: tuple[int, ...] = ()  #: the candidates ``verify`` checked, in the order checked
 
     @property
     def chosen(self) -> Candidate:
@@ -196,10 +200,77 @@ def rank(candidates: Sequence[Candidate], judge: Callable[[Candidate], Candidate
     return best.index, out
 
 
+def _verify(order: Sequence[Candidate], trajs: Sequence[Trajectory | None], count: int, robust: bool,
+            workers: int, progress: Callable[[int, int], Any] | None, planned: int) -> tuple[int, list[Candidate]]:
+    """The physics check of ``search(verify=count, robust=robust)``: the chosen index and the
+    checked candidates (in the order checked), each with ``held`` (and ``robust``,
+    ``held_fraction`` when ``robust``) filled in."""
+    from . import physics
+    from .physics.hold import PERTURBATIONS, _validate_job
+    from .physics.mjcf import GRAVITY
+
+    physics._mujoco()  # fail early when MuJoCo is missing
+    force = 10.0 * 0.1 * GRAVITY  # the push of validate_robust: it stays 9.81 N when the mass is perturbed
+    others = [n for n in PERTURBATIONS if n != "nominal"]
+    total = planned + len(order[:count]) * (1 + (len(others) if robust else 0))
+    done = planned
+    checked: list[Candidate] = []
+    pool: Any = None
+    try:
+        for c in order[:count]:
+            traj = trajs[c.index]
+            assert traj is not None
+            if not robust:
+                held = bool(physics.validate(traj)["held"])
+                checked.append(replace(c, held=held))
+            else:
+                held = bool(physics.validate(traj, force=force)["held"])  # nominal first: the cheapest
+                verdicts = [held]
+                if held:  # then the other perturbations, in a process pool when workers > 1
+                    jobs: list[tuple[Trajectory, int, dict[str, Any]]] = [
+                        (traj, -1, {**PERTURBATIONS[n], "force": force}) for n in others]
+                    if workers > 1 and pool is None:
+                        import multiprocessing
+                        from concurrent.futures import ProcessPoolExecutor
+
+                        pool = ProcessPoolExecutor(max_workers=min(workers, len(jobs)),
+                                                   mp_context=multiprocessing.get_context("spawn"))
+                    found = (pool.map(_validate_job, jobs) if pool is not None
+                             else (physics.validate(j[0], j[1], **j[2]) for j in jobs))
+                    for r in found:
+                        verdicts.append(bool(r["held"]))
+                        done += 1
+                        if progress is not None:
+                            progress(done, total)
+                else:  # lost at nominal settings: not robust, the perturbations are not run
+                    total -= len(others)
+                fraction = sum(verdicts) / len(PERTURBATIONS) if held else None
+                checked.append(replace(c, held=held, robust=all(verdicts) and held, held_fraction=fraction))
+            done += 1
+            if progress is not None:
+                progress(done, total)
+            last = checked[-1]
+            if (last.robust if robust else last.held):
+                break
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    if progress is not None and done != total:  # stopped early: the work is complete
+        progress(done, done)
+    last = checked[-1]
+    if (last.robust if robust else last.held):
+        return last.index, checked
+    held_ones = [c for c in checked if c.held]
+    if robust and held_ones:  # none robust: the largest held fraction, then the ranking's order
+        return max(held_ones, key=lambda c: c.held_fraction or 0.0).index, checked
+    return order[0].index, checked
+
+
 def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, rules: str | None = None,
            threads: int | None = None, score: Callable[[Candidate], float] | None = None,
            pole: Any = (0.0, 0.0, 1.0), timeout: float | None = None, keep_all: bool = False,
-           progress: Callable[[int, int], Any] | None = None, verify: int = 0, **params: Any) -> SearchResult:
+           progress: Callable[[int, int], Any] | None = None, verify: int = 0, robust: bool = False,
+           workers: int | None = None, **params: Any) -> SearchResult:
     """The firmest of ``approaches`` grasps of ``obj``, approached evenly from all around T.
 
     ``target``: T (default :func:`hugger.scenarios.interior_target`). Direction 0 is ``pole``
@@ -215,6 +286,18 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
     is judged, and the V best by the ranking are put through the six-direction test of
     :func:`hugger.physics.validate` in ranking order; the first that holds is chosen (``held`` in
     its figures), or the ranking's best when none of them does.
+
+    With ``robust=True`` the V best are checked with the robust verdict of
+    :func:`hugger.physics.validate_robust` instead (without its largest-push search), cheapest first:
+    the six-direction test at nominal settings, and only for a candidate that holds there the other
+    eight perturbations (on ``workers`` processes, default: the CPUs available). The first robustly
+    held one is chosen; when none is, the held one with the largest ``held_fraction`` (ties: the
+    ranking's order), or the ranking's best when none holds. Checked candidates carry ``held``,
+    ``robust`` and ``held_fraction`` (None where the nominal test was lost: the perturbations are
+    not run); ``SearchResult.verified`` lists them in the order checked. With ``verify``,
+    ``progress(done, total)`` goes on counting the simulations after the plans (``total`` grows
+    then, and shrinks when perturbations are skipped). The choice does not depend on ``threads``
+    or ``workers``.
     """
     from .batch import _PARAMS
     from .planner import Planner, _timeout
@@ -230,6 +313,11 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
         raise ValueError(f"unknown planner parameters {sorted(bad)}; expected some of {list(_PARAMS)}")
     if isinstance(verify, bool) or not isinstance(verify, numbers.Integral) or verify < 0:
         raise ValueError(f"verify must be a whole number >= 0, got {verify!r}")
+    if not isinstance(robust, bool):
+        raise ValueError(f"robust must be True or False, got {robust!r}")
+    if robust and not verify:
+        raise ValueError("robust=True checks the verify=V best-ranked candidates: give verify >= 1")
+    procs = _checks.workers("workers", workers)
     if score is not None and not callable(score):
         raise ValueError("score must be callable as score(candidate) -> float, or None")
     if rules is not None:
@@ -277,20 +365,15 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
     trajs = [r[1] for r in results]
     judge = lambda c: _judge(c, trajs[c.index], hand, obj, t, scale)  # noqa: E731
     best, ranked = rank([r[0] for r in results], judge, score)
+    verified: tuple[int, ...] = ()
     if verify:
-        from . import physics
-
-        physics._mujoco()  # fail early when MuJoCo is missing
         ranked = [judge(c) if c.ok and c.epsilon is None else c for c in ranked]
         key = (lambda c: (c.score, -c.index)) if score is not None else _default_key
         order = sorted((c for c in ranked if c.ok), key=key, reverse=True)
-        for c in order[:int(verify)]:
-            held = bool(physics.validate(trajs[c.index])["held"])
-            ranked[c.index] = replace(c, held=held)
-            if held:
-                best = c.index
-                break
-        else:
-            best = order[0].index
+        best, checked = _verify(order, trajs, int(verify), robust, procs, progress, k)
+        for c in checked:
+            ranked[c.index] = c
+        verified = tuple(c.index for c in checked)
     return SearchResult(best=best, trajectory=trajs[best], candidates=tuple(ranked), target=t,
-                        time_s=time.perf_counter() - t0, trajectories=tuple(trajs) if keep_all else None)
+                        time_s=time.perf_counter() - t0, trajectories=tuple(trajs) if keep_all else None,
+                        verified=verified)
