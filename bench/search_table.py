@@ -1,6 +1,7 @@
 """Default single approach vs the best of K approaches, object by object (the README table).
 
-    python bench/search_table.py [--approaches 26] [--robust] [--blobs 30] [--rules hug|paper] [--json]
+    python bench/search_table.py [--approaches 26] [--robust] [--verify V [--robust-verify]] [--blobs 30]
+                                 [--rules hug|paper] [--json]
 
 For every built-in and shared mesh that fits the hand (generation_common.fits), and with
 ``--blobs N`` for N random bodies (hugger.objects.blob(seed=s), s = 0..N-1, radius 3-4.5 cm, and
@@ -8,8 +9,12 @@ random ellipsoids and boxes that fit), it plans the default single approach and 
 hugger.search with K approaches, and reports links in contact, palm, epsilon and the physics
 verdict of both: the six-direction test for the single approach, and with ``--robust`` the robust
 verdict (every perturbation of hugger.physics.validate_robust) of the chosen grasp, its held
-fraction and largest push held. Search time is the wall time of hugger.search (planning and
-ranking) on ``--threads`` threads. Every chosen plan is checked by ../shared/tools/check_trajectory.py
+fraction and largest push held. ``--verify V`` passes verify=V to hugger.search, and
+``--robust-verify`` also robust=True (the V best-ranked checked with the robust verdict): the
+robust columns of the chosen grasp then come from the search's own check (the largest push is only
+measured with ``--max-push``), or from hugger.physics.validate_robust when the search did not
+measure them. Search time is the wall time of hugger.search (planning, ranking and any
+verification; ``--workers`` simulation processes) on ``--threads`` threads. Every chosen plan is checked by ../shared/tools/check_trajectory.py
 when that is present (``--check``).
 """
 from __future__ import annotations
@@ -57,7 +62,7 @@ def row(name, obj, target, pole, hand, args, checker) -> dict:
     single = hugger.Planner(hand, obj, target, start_pose(obj, hand, target, pole), **params).plan()
     a1 = analysis.analyze(single, obj=obj, volume=False)
     res = hugger.search(hand, obj, target, approaches=args.approaches, threads=args.threads, pole=pole,
-                        rules=args.rules, verify=args.verify)
+                        rules=args.rules, verify=args.verify, robust=args.robust_verify, workers=args.workers)
     best = res.trajectory
     a2 = analysis.analyze(best, obj=obj, volume=False)
     out = {"object": name, "triangles": len(obj.faces),
@@ -65,10 +70,16 @@ def row(name, obj, target, pole, hand, args, checker) -> dict:
                       "epsilon": a1["epsilon"]},
            "best": {"index": res.best, "status": best.status, "links": a2["links_in_contact"],
                     "palm": a2["palm_contact"], "epsilon": a2["epsilon"]},
-           "search_time_s": res.time_s, "judged": sum(c.epsilon is not None for c in res.candidates)}
+           "search_time_s": res.time_s, "judged": sum(c.epsilon is not None for c in res.candidates),
+           "verified": [{"index": i, "held": res.candidates[i].held, "robust": res.candidates[i].robust,
+                         "held_fraction": res.candidates[i].held_fraction} for i in res.verified]}
     if args.physics:
         out["single"]["held"] = physics.validate(single)["held"]
-        if args.robust:
+        chosen = res.chosen
+        if args.robust and chosen.held_fraction is not None and not args.max_push:
+            out["best"].update({"held": chosen.held, "robust": chosen.robust, "held_fraction": chosen.held_fraction,
+                                "max_force_N": float("nan")})
+        elif args.robust:
             r = physics.validate_robust(best, workers=args.workers)
             out["best"].update({"held": r["held"], "robust": r["robust"], "held_fraction": r["held_fraction"],
                                 "max_force_N": r["max_force_N"]})
@@ -85,6 +96,10 @@ def row(name, obj, target, pole, hand, args, checker) -> dict:
     return out
 
 
+def _num(x: float | None, digits: int) -> str:
+    return "-" if x is None or x != x else f"{x:.{digits}f}"
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--approaches", type=int, default=26)
@@ -92,6 +107,10 @@ def main() -> int:
     ap.add_argument("--workers", type=int, default=None, help="processes of the robust verdict")
     ap.add_argument("--rules", default=None, help="the Phase 2 rule set, when the planner has one")
     ap.add_argument("--verify", type=int, default=0, help="hugger.search(verify=V): physics check of the V best-ranked")
+    ap.add_argument("--robust-verify", action="store_true",
+                    help="hugger.search(verify=V, robust=True): the V best-ranked checked with the robust verdict")
+    ap.add_argument("--max-push", action="store_true",
+                    help="measure the largest push even where the search's check gave the robust verdict")
     ap.add_argument("--objects", nargs="*", default=None, help="only these (names as in the table, without .obj)")
     ap.add_argument("--no-physics", dest="physics", action="store_false")
     ap.add_argument("--robust", action="store_true", help="the robust verdict of the chosen grasp")
@@ -128,8 +147,8 @@ def main() -> int:
                   f"{b['links']}{'+palm' if b['palm'] else ''} | {b['epsilon']:.3f} | "
                   f"{'yes' if b.get('held') else 'no' if 'held' in b else '-'} | "
                   f"{'yes' if b.get('robust') else 'no' if 'robust' in b else '-'} | "
-                  f"{b.get('held_fraction', float('nan')):.2f} | {b.get('max_force_N', float('nan')):.1f} | "
-                  f"{r['search_time_s']:.2f} | {r.get('checker', '-')} |", flush=True)
+                  f"{_num(b.get('held_fraction'), 2)} | {_num(b.get('max_force_N'), 1)} | "
+                  f"{r['search_time_s']:.2f} | {len(r['verified'])} | {r.get('checker', '-')} |", flush=True)
     n = len(rows)
     if n and not args.json:
         held1 = sum(bool(r["single"].get("held")) for r in rows)
@@ -138,6 +157,11 @@ def main() -> int:
         print(f"\n{n} objects: single approach held {held1}/{n}; best of {args.approaches} held {held2}/{n}"
               + (f", robustly held {robust}/{n}" if args.robust else "")
               + f"; median search time {np.median([r['search_time_s'] for r in rows]):.2f} s")
+        if args.robust_verify:  # the ranking's best is the first one checked
+            first = sum(bool(r["verified"] and r["verified"][0]["robust"]) for r in rows)
+            print(f"the ranking's best alone robustly held {first}/{n}; candidates checked "
+                  f"{sum(len(r['verified']) for r in rows)}; total search time "
+                  f"{sum(r['search_time_s'] for r in rows):.0f} s")
     return 0
 
 
