@@ -227,8 +227,9 @@ def _verify(order: Sequence[Candidate], trajs: Sequence[Trajectory | None], coun
                 held = bool(physics.validate(traj, force=force)["held"])  # nominal first: the cheapest
                 verdicts = [held]
                 if held:  # then the other perturbations, in a process pool when workers > 1
+                    sent = replace(traj)  # without the object the nominal test cached (not picklable)
                     jobs: list[tuple[Trajectory, int, dict[str, Any]]] = [
-                        (traj, -1, {**PERTURBATIONS[n], "force": force}) for n in others]
+                        (sent, -1, {**PERTURBATIONS[n], "force": force}) for n in others]
                     if workers > 1 and pool is None:
                         import multiprocessing
                         from concurrent.futures import ProcessPoolExecutor
