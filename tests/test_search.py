@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import pickle
 
 import numpy as np
 import pytest
@@ -231,6 +232,7 @@ def test_robust_verify_on_a_sphere_matches_validate_robust(hand):
     assert (r.chosen.held, r.chosen.robust, r.chosen.held_fraction) == (full["held"], full["robust"],
                                                                         full["held_fraction"])
     assert r.chosen.robust  # the sphere's grasp is robustly held (docs/generation.md)
+    pickle.dumps(r.trajectory)  # the check cached no compiled object on it: it can go to a process pool
     r2 = hugger.search(hand, case.obj, case.target, approaches=2, threads=2, verify=1, robust=True, workers=2)
     def figures(res):
         return [(c.status, c.hug, c.epsilon, c.held, c.robust, c.held_fraction) for c in res.candidates]

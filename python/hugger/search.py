@@ -221,15 +221,16 @@ def _verify(order: Sequence[Candidate], trajs: Sequence[Trajectory | None], coun
             traj = trajs[c.index]
             assert traj is not None
             if not robust:
-                held = bool(physics.validate(traj)["held"])
+                held = bool(physics.validate(replace(traj))["held"])
                 checked.append(replace(c, held=held))
             else:
-                held = bool(physics.validate(traj, force=force)["held"])  # nominal first: the cheapest
+                # nominal first, the cheapest; on a copy, so that the plan caches no compiled object
+                # (which would not pickle for a process pool, here or in physics.validate_robust)
+                held = bool(physics.validate(replace(traj), force=force)["held"])
                 verdicts = [held]
                 if held:  # then the other perturbations, in a process pool when workers > 1
-                    sent = replace(traj)  # without the object the nominal test cached (not picklable)
                     jobs: list[tuple[Trajectory, int, dict[str, Any]]] = [
-                        (sent, -1, {**PERTURBATIONS[n], "force": force}) for n in others]
+                        (traj, -1, {**PERTURBATIONS[n], "force": force}) for n in others]
                     if workers > 1 and pool is None:
                         import multiprocessing
                         from concurrent.futures import ProcessPoolExecutor
