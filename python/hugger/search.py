@@ -238,7 +238,7 @@ def _verify(order: Sequence[Candidate], trajs: Sequence[Trajectory | None], coun
                         pool = ProcessPoolExecutor(max_workers=min(workers, len(jobs)),
                                                    mp_context=multiprocessing.get_context("spawn"))
                     found = (pool.map(_validate_job, jobs) if pool is not None
-                             else (physics.validate(j[0], j[1], **j[2]) for j in jobs))
+                             else (physics.validate(replace(j[0]), j[1], **j[2]) for j in jobs))
                     for r in found:
                         verdicts.append(bool(r["held"]))
                         done += 1
