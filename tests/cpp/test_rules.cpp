@@ -17,14 +17,8 @@ namespace {
 
 /// An axis-aligned box of half-extents h about `centre`, 12 outward triangles.
 std::shared_ptr<SimulatedWorld> box_world(const Vec3& h, const Vec3& centre = Vec3::Zero()) {
-  PointsN3 v(8, 3);
-  for (int i = 0; i < 8; ++i)
-    v.row(i) = (centre + Vec3((i & 1 ? 1 : -1) * h.x(), (i & 2 ? 1 : -1) * h.y(), (i & 4 ? 1 : -1) * h.z())).transpose();
-  const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
-                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-  FacesN3 faces(12, 3);
-  for (int i = 0; i < 12; ++i) faces.row(i) << f[i][0], f[i][1], f[i][2];
-  return std::make_shared<SimulatedWorld>(std::make_shared<Object>(v, faces));
+  const test::Mesh m = test::box(h, centre);
+  return std::make_shared<SimulatedWorld>(std::make_shared<Object>(m.vertices, m.faces));
 }
 
 /// Every emitted configuration: DONE fingers keep their angles; in Phase 2 no joint moves more

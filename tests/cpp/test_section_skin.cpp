@@ -20,40 +20,10 @@ namespace {
 
 constexpr double kFlatten = 2e-7;
 
-/// An axis-aligned box (12 triangles, outward normals): edges parallel to many planes.
-test::Mesh box(const Vec3& half) {
-  test::Mesh m;
-  m.vertices.resize(8, 3);
-  for (int i = 0; i < 8; ++i)
-    m.vertices.row(i) << ((i & 1) ? half.x() : -half.x()), ((i & 2) ? half.y() : -half.y()), ((i & 4) ? half.z() : -half.z());
-  const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
-                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-  m.faces.resize(12, 3);
-  for (int i = 0; i < 12; ++i)
-    for (int k = 0; k < 3; ++k) m.faces(i, k) = f[i][k];
-  return m;
-}
-
-/// The benchmark's `curvy` object (non-convex: concave dents), at a given subdivision.
-test::Mesh curvy(int subdivisions) {
-  test::Mesh m = test::icosphere(subdivisions);
-  for (Eigen::Index i = 0; i < m.vertices.rows(); ++i) {
-    const double x = m.vertices(i, 0), y = m.vertices(i, 1), z = m.vertices(i, 2);
-    const double g = (x - 0.1) / 0.3;
-    const double rho = 1.0 + 0.20 * std::sin(3.0 * x + 0.7) * std::cos(2.5 * y - 0.3) +
-                       0.12 * std::sin(4.0 * z + 1.2) * std::cos(2.0 * x - 0.5) +
-                       0.10 * std::cos(3.5 * y + 0.9) * std::sin(2.5 * z) - 0.10 * std::exp(-(g * g));
-    m.vertices.row(i) *= rho * 0.04;
-    m.vertices(i, 0) *= 1.2;
-  }
-  return m;
-}
-
 /// A Wavefront OBJ (v and f lines; polygons fanned), or an empty mesh if the file is absent.
 test::Mesh load_obj(const std::string& path) {
-  test::Mesh m;
   std::ifstream in(path);
-  if (!in) return m;
+  if (!in) return {};
   std::vector<Vec3> v;
   std::vector<std::array<std::int64_t, 3>> f;
   std::string line;
@@ -72,12 +42,7 @@ test::Mesh load_obj(const std::string& path) {
       for (std::size_t k = 1; k + 1 < idx.size(); ++k) f.push_back({idx[0], idx[k], idx[k + 1]});
     }
   }
-  m.vertices.resize(static_cast<Eigen::Index>(v.size()), 3);
-  for (std::size_t i = 0; i < v.size(); ++i) m.vertices.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
-  m.faces.resize(static_cast<Eigen::Index>(f.size()), 3);
-  for (std::size_t i = 0; i < f.size(); ++i)
-    for (int k = 0; k < 3; ++k) m.faces(static_cast<Eigen::Index>(i), k) = f[i][k];
-  return m;
+  return test::to_mesh(v, f);
 }
 
 std::string shared_dir() {
@@ -152,8 +117,8 @@ TEST(SectionSkin, AgreesWithTheMeshWorldOnRandomQueries) {
   };
   std::vector<Case> cases = {{"sphere", test::icosphere(3, Vec3::Constant(0.04))},
                              {"ellipsoid", test::icosphere(3, Vec3(0.05, 0.03, 0.02), Vec3(0.01, 0.0, -0.02))},
-                             {"box", box(Vec3(0.03, 0.02, 0.05))},
-                             {"curvy", curvy(4)}};
+                             {"box", test::box(Vec3(0.03, 0.02, 0.05))},
+                             {"curvy", test::curvy(4)}};
   Tally total;
   unsigned seed = 1;
   for (const auto& c : cases) {
@@ -233,8 +198,8 @@ TEST(SectionSkin, PlansAreCollisionFreeIn3DAndDeterministic) {
     const char* name;
     test::Mesh mesh;
   };
-  std::vector<Case> cases = {{"sphere", test::icosphere(4, Vec3::Constant(0.04))}, {"curvy", curvy(5)},
-                             {"box", box(Vec3(0.03, 0.025, 0.04))}};
+  std::vector<Case> cases = {{"sphere", test::icosphere(4, Vec3::Constant(0.04))}, {"curvy", test::curvy(5)},
+                             {"box", test::box(Vec3(0.03, 0.025, 0.04))}};
   const HandModel hand = HandModel::uniform(5, 5, 0.02, 0.004, 0.03, 0.01);
   for (const auto& c : cases) {
     auto object = std::make_shared<const Object>(c.mesh.vertices, c.mesh.faces);
