@@ -241,7 +241,7 @@ MatrixX HandModel::angles_from_joints(const Pose& palm, const std::vector<Vec3>&
   for (int m = 0; m < fingers_; ++m) {
     const FingerPlane pl = plane(palm, m);
     std::vector<Vec2> j;
-    for (int n = 0; n <= links_; ++n) j.push_back(pl.to_plane(joints[m * (links_ + 1) + n]));
+    for (int n = 0; n <= links_; ++n) j.push_back(pl.to_plane(joints[joint_index(m, n)]));
     planar_angles(j, angles.row(m).data());
   }
   return angles;

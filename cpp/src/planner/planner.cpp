@@ -97,7 +97,7 @@ void Planner::check_clear(const Configuration& c, const char* when) const {
   const int N = hand_.links();
   for (int m = 0; m < hand_.fingers(); ++m)
     for (int n = 0; n < N; ++n) {
-      const Touch t = sensing_->capsule(c.joints[m * (N + 1) + n], c.joints[m * (N + 1) + n + 1], hand_.link_radius(), delta);
+      const Touch t = sensing_->capsule(c.joints[hand_.joint_index(m, n)], c.joints[hand_.joint_index(m, n + 1)], hand_.link_radius(), delta);
       if (t.gap <= delta)
         invalid(std::string("the hand touches or penetrates the object ") + when + ": link " + std::to_string(n) +
                 " of finger " + std::to_string(m) + " has a gap of " + fmt(t.gap) +

@@ -55,6 +55,8 @@ class HandModel {
 
   int fingers() const { return fingers_; }
   int links() const { return links_; }
+  /// Index of joint n of finger m in a configuration's joints (finger by finger, root first).
+  int joint_index(int m, int n) const { return m * (links_ + 1) + n; }
   double link_length(int m, int n) const { return lengths_(m, n); }
   const MatrixX& link_lengths() const { return lengths_; }
   double finger_length(int m) const { return lengths_.row(m).sum(); }
