@@ -109,16 +109,42 @@ double segment_distance(const Vec2& p1, const Vec2& q1, const Vec2& p2, const Ve
 /// A segment query's bounds, for the node test.
 struct Query {
   Vec2 a, b, lo, hi, n;
-  bool line = false;  ///< n is the unit normal of the query's line (a != b)
+  Vec2 u = Vec2::Zero();  ///< unit direction from a to b (a != b)
+  double len = 0.0;       ///< |b - a|
+  bool line = false;      ///< n is the unit normal of the query's line (a != b)
   Query(const Vec2& a_, const Vec2& b_) : a(a_), b(b_), lo(a_.cwiseMin(b_)), hi(a_.cwiseMax(b_)) {
     const Vec2 d = b - a;
-    const double len = d.norm();
+    len = d.norm();
     if (len > 0.0) {
       n = Vec2(-d.y(), d.x()) / len;
+      u = d / len;
       line = true;
     }
   }
+  /// A margin for rounding in the cheap bounds below, for coordinates up to `extent`.
+  double slack(double extent) const { return 1e-12 * (extent + std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff())); }
 };
+
+/// True when segment [p0, p1] (unit normal `normal` of its line) lies farther than `limit` from
+/// the query: a cheap lower bound tried before the exact distance (the larger of the separation
+/// across the segment's line and the distance between the two segments' boxes in the query's
+/// frame). The caller adds a rounding margin to `limit`: a segment this rejects would have been
+/// rejected by its exact distance.
+inline bool farther_than(const Query& q, const Vec2& p0, const Vec2& p1, const Vec2& normal, double limit) {
+  const double ha = normal.dot(q.a - p0), hb = normal.dot(q.b - p0);
+  if ((ha > limit && hb > limit) || (ha < -limit && hb < -limit)) return true;
+  double du, dn;
+  if (q.line) {
+    const Vec2 e0 = p0 - q.a, e1 = p1 - q.a;
+    const double u0 = q.u.dot(e0), u1 = q.u.dot(e1), n0 = q.n.dot(e0), n1 = q.n.dot(e1);
+    du = std::max({std::min(u0, u1) - q.len, -std::max(u0, u1), 0.0});
+    dn = n0 > 0.0 && n1 > 0.0 ? std::min(n0, n1) : (n0 < 0.0 && n1 < 0.0 ? -std::max(n0, n1) : 0.0);
+  } else {
+    du = std::max({std::min(p0.x(), p1.x()) - q.a.x(), q.a.x() - std::max(p0.x(), p1.x()), 0.0});
+    dn = std::max({std::min(p0.y(), p1.y()) - q.a.y(), q.a.y() - std::max(p0.y(), p1.y()), 0.0});
+  }
+  return du * du + dn * dn > limit * limit;
+}
 
 }  // namespace
 
@@ -450,7 +476,11 @@ void PlaneRegion::build_bvh() {
   nodes_.reserve(segments_.size() + 8);
   build_node(0, static_cast<int>(segments_.size()), centres, 1);
   std::vector<Segment> sorted(segments_.size());
-  for (std::size_t i = 0; i < segments_.size(); ++i) sorted[i] = segments_[order_[i]];
+  extent_ = 0.0;
+  for (std::size_t i = 0; i < segments_.size(); ++i) {
+    sorted[i] = segments_[order_[i]];
+    extent_ = std::max({extent_, sorted[i].a.cwiseAbs().maxCoeff(), sorted[i].b.cwiseAbs().maxCoeff()});
+  }
   segments_.swap(sorted);
   order_.clear();
   order_.shrink_to_fit();
@@ -481,6 +511,7 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
   Near out;
   if (nodes_.empty()) return out;
   const Query q(a, b);
+  const double slack = q.slack(extent_);
   double best = std::max(cap, 0.0);
   bool found = false;
   struct Item {
@@ -497,6 +528,7 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
     if (nd.count > 0) {
       for (int i = nd.first; i < nd.first + nd.count; ++i) {
         const Segment& s = segments_[i];
+        if (farther_than(q, s.a, s.b, s.normal, best + kTie + slack)) continue;
         Vec2 c1, c2;
         const double d = segment_distance(a, b, s.a, s.b, &c1, &c2);
         if (d > best + kTie) continue;
@@ -544,6 +576,7 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
 bool PlaneRegion::any_within(const Vec2& a, const Vec2& b, double distance) const {
   if (nodes_.empty()) return false;
   const Query q(a, b);
+  const double limit = distance + q.slack(extent_);
   int stack[96];
   int top = 0;
   stack[top++] = 0;
@@ -552,6 +585,7 @@ bool PlaneRegion::any_within(const Vec2& a, const Vec2& b, double distance) cons
     if (node_bound(nd, q) > distance) continue;
     if (nd.count > 0) {
       for (int i = nd.first; i < nd.first + nd.count; ++i) {
+        if (farther_than(q, segments_[i].a, segments_[i].b, segments_[i].normal, limit)) continue;
         Vec2 c1, c2;
         if (segment_distance(a, b, segments_[i].a, segments_[i].b, &c1, &c2) <= distance) return true;
       }

@@ -112,6 +112,7 @@ class PlaneRegion {
   std::vector<std::pair<int, double>> cuts_;     ///< while building: crossings (segment, parameter)
   std::vector<std::array<Vec2, 2>> piece_ends_;  ///< while building: first and last point of each piece
   int depth_ = 0;
+  double extent_ = 0.0;  ///< largest absolute coordinate of a segment's end (for rounding margins)
   long dropped_ = 0;
   mutable std::atomic<long> fallbacks_{0};
 };
