@@ -335,7 +335,7 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next) const {
     reach += hand_.link_length(m, n) * std::abs(cum);
     const double D = d_root + reach;
     bound = std::max(bound, D);
-    sample[n] = link_gap(m, next[n], next[n + 1], D) < D;
+    sample[n] = sensing_->link_gap_below(planes_[m], next[n], next[n + 1], r, D);
     any = any || sample[n];
   }
   if (!any) return true;

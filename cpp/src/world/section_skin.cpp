@@ -782,6 +782,15 @@ Touch SectionSkin::link(const FingerPlane& plane, const Vec2& a, const Vec2& b, 
   return t;
 }
 
+bool SectionSkin::link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                                 double below) const {
+  // A piece of R's boundary closer than `below` to the axis: link() would find the nearest piece
+  // at most that close, and report a gap below `below` on either side of it.
+  const PlaneRegion* R = below > 0.0 ? region(plane, radius) : nullptr;
+  if (R && R->any_within(a, b, std::nextafter(below, 0.0))) return true;
+  return link(plane, a, b, radius, below).gap < below;
+}
+
 bool SectionSkin::link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
                             bool a_outside) const {
   constexpr double kSlack = 1e-12;

@@ -75,6 +75,12 @@ class Sensing {
   virtual Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap = kInf) const {
     return capsule(plane.to_world(a), plane.to_world(b), radius, cap);
   }
+  /// True when the link's gap (as `link` reports it) is below `below` (> 0). Override with a test
+  /// that can stop at the first piece of O closer than that; the default asks `link`.
+  virtual bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                              double below) const {
+    return link(plane, a, b, radius, below).gap < below;
+  }
   /// True when the capsule does not penetrate O (gap >= 0). `a_outside`: the caller knows that
   /// the point a lies outside O (the end of a link just found free, say), so a capsule that
   /// comes no closer than `radius` to O's surface is clear without an inside test. Override

@@ -142,6 +142,9 @@ class SectionSkin final : public Sensing {
   Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap = kInf) const override;
   bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
                  bool a_outside = false) const override;
+  /// As link(...).gap < below, stopping at the first boundary piece closer than `below`.
+  bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                      double below) const override;
 
   /// The region of a plane and radius, built on first use; nullptr past kMaxRegions regions
   /// (queries in further planes then go to the mesh world).
