@@ -31,6 +31,15 @@ Touch SimulatedWorld::capsule(const Vec3& a, const Vec3& b, double radius, doubl
   return t;
 }
 
+bool SimulatedWorld::link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                                    double below) const {
+  const Vec3 wa = plane.to_world(a), wb = plane.to_world(b);
+  // A triangle closer than radius + below (less a relative margin, far above rounding): the
+  // nearest one is at least that close, and capsule() reports a gap below `below`.
+  if (below > 0.0 && object_->bvh().any_within(wa, wb, (radius + below) * (1.0 - 1e-9))) return true;
+  return capsule(wa, wb, radius, below).gap < below;
+}
+
 double SimulatedWorld::palm(const Pose& palm, double radius, double thickness, double cap) const {
   const Vec3 centre = palm * Vec3(0.0, 0.0, -0.5 * thickness);
   const Vec3 n = palm.linear().col(2);

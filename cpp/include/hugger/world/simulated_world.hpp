@@ -19,6 +19,9 @@ class SimulatedWorld final : public Sensing {
   bool capsule_clear(const Vec3& a, const Vec3& b, double radius, bool a_outside) const override {
     return object_->capsule_clear(a, b, radius, a_outside);
   }
+  /// As link(...).gap < below, stopping at the first triangle clearly closer than that.
+  bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                      double below) const override;
 
   const Object& object() const { return *object_; }
 
