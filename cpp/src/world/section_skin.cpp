@@ -109,7 +109,8 @@ double segment_distance(const Vec2& p1, const Vec2& q1, const Vec2& p2, const Ve
 /// A segment query's bounds, for the node test.
 struct Query {
   Vec2 a, b, lo, hi, n;
-  Vec2 u = Vec2::Zero();  ///< unit direction from a to b (a != b)
+  Vec2 n_abs = Vec2::Zero();  ///< |n|, componentwise
+  Vec2 u = Vec2::Zero();      ///< unit direction from a to b (a != b)
   double len = 0.0;       ///< |b - a|
   bool line = false;      ///< n is the unit normal of the query's line (a != b)
   Query(const Vec2& a_, const Vec2& b_) : a(a_), b(b_), lo(a_.cwiseMin(b_)), hi(a_.cwiseMax(b_)) {
@@ -117,6 +118,7 @@ struct Query {
     len = d.norm();
     if (len > 0.0) {
       n = Vec2(-d.y(), d.x()) / len;
+      n_abs = n.cwiseAbs();
       u = d / len;
       line = true;
     }
@@ -447,6 +449,10 @@ int PlaneRegion::build_node(int begin, int end, std::vector<Vec2>& centres, int 
       nd.hi[a] = std::max({nd.hi[a], s.a[a], s.b[a]});
     }
   }
+  for (int a = 0; a < 2; ++a) {
+    nd.c[a] = 0.5 * (nd.lo[a] + nd.hi[a]);
+    nd.h[a] = 0.5 * (nd.hi[a] - nd.lo[a]);
+  }
   if (end - begin <= 4) {
     nd.first = begin;
     nd.count = end - begin;
@@ -496,10 +502,8 @@ inline double node_bound(const Node& nd, const Query& q) {
   const double dy = std::max({nd.lo[1] - q.hi.y(), q.lo.y() - nd.hi[1], 0.0});
   double lb = std::sqrt(dx * dx + dy * dy);
   if (q.line) {
-    const double cx = 0.5 * (nd.lo[0] + nd.hi[0]), cy = 0.5 * (nd.lo[1] + nd.hi[1]);
-    const double hx = 0.5 * (nd.hi[0] - nd.lo[0]), hy = 0.5 * (nd.hi[1] - nd.lo[1]);
-    const double l = std::abs(q.n.x() * (cx - q.a.x()) + q.n.y() * (cy - q.a.y())) -
-                     (std::abs(q.n.x()) * hx + std::abs(q.n.y()) * hy);
+    const double l = std::abs(q.n.x() * (nd.c[0] - q.a.x()) + q.n.y() * (nd.c[1] - q.a.y())) -
+                     (q.n_abs.x() * nd.h[0] + q.n_abs.y() * nd.h[1]);
     lb = std::max(lb, l);
   }
   return lb;
@@ -718,9 +722,19 @@ const PlaneRegion* SectionSkin::region(const FingerPlane& plane, double radius) 
     return e->radius == radius && e->plane.origin == plane.origin && e->plane.u == plane.u && e->plane.p == plane.p;
   };
   const int n = count_.load(std::memory_order_acquire);
+  // Queries come in runs in one plane: try this thread's last hit first (a hint, checked like
+  // every other slot; entries are unique, so any match is the one).
+  thread_local int last = 0;
+  if (last < n) {
+    const Entry* e = slots_[last].load(std::memory_order_acquire);
+    if (same(e)) return &e->region;
+  }
   for (int i = 0; i < n; ++i) {
     const Entry* e = slots_[i].load(std::memory_order_acquire);
-    if (same(e)) return &e->region;
+    if (same(e)) {
+      last = i;
+      return &e->region;
+    }
   }
   if (!(radius >= 0.0) || !std::isfinite(radius) || !plane.origin.allFinite() || !plane.u.allFinite() ||
       !plane.p.allFinite())

@@ -85,6 +85,7 @@ class PlaneRegion {
  private:
   struct Node {
     double lo[2], hi[2];
+    double c[2], h[2];  ///< centre and half extent, (lo + hi) / 2 and (hi - lo) / 2
     int left = -1, right = -1;
     int first = 0, count = 0;
   };
