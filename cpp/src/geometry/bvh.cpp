@@ -20,12 +20,13 @@ TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int lea
   nodes_.reserve(2 * std::max(1, n / std::max(1, leaf_size)) + 1);
   build(ids, 0, n, centroids, boxes, std::max(1, leaf_size), order, 0);
   if (depth_ + 2 > kStackSize) throw std::length_error("TriangleBvh: tree too deep for the traversal stack");
-  tris_.resize(n);
+  tris_.reserve(n);  // filled below, not zeroed first
   ids_ = order;
   planes_.resize(n);
   for (int i = 0; i < n; ++i) {
     const int f = order[i];
-    for (int k = 0; k < 3; ++k) tris_[i][k] = vertices.row(faces(f, k)).transpose();
+    tris_.push_back({Vec3(vertices.row(faces(f, 0)).transpose()), Vec3(vertices.row(faces(f, 1)).transpose()),
+                     Vec3(vertices.row(faces(f, 2)).transpose())});
     const Vec3 nrm = (tris_[i][1] - tris_[i][0]).cross(tris_[i][2] - tris_[i][0]);
     const double len = nrm.norm();
     // A degenerate triangle gets no plane (normal 0): the plane test below never rejects it.
@@ -39,18 +40,19 @@ int TriangleBvh::build(std::vector<int>& ids, int begin, int end, const std::vec
   depth_ = std::max(depth_, depth);
   const int index = static_cast<int>(nodes_.size());
   nodes_.emplace_back();
-  Aabb box, cbox;
-  for (int i = begin; i < end; ++i) {
-    box.grow(boxes[ids[i]]);
-    cbox.grow(centroids[ids[i]]);
-  }
-  nodes_[index].box = box;
   if (end - begin <= leaf_size) {
+    Aabb box;
+    for (int i = begin; i < end; ++i) box.grow(boxes[ids[i]]);
+    nodes_[index].box = box;
     nodes_[index].first = static_cast<int>(order.size());
     nodes_[index].count = end - begin;
     for (int i = begin; i < end; ++i) order.push_back(ids[i]);
     return index;
   }
+  // An inner node's box is its children's union (the same box: min and max are exact), so only
+  // the centroids' box is gathered here, for the split axis.
+  Aabb cbox;
+  for (int i = begin; i < end; ++i) cbox.grow(centroids[ids[i]]);
   int axis = 0;
   cbox.extent().maxCoeff(&axis);
   const int mid = (begin + end) / 2;
@@ -61,6 +63,9 @@ int TriangleBvh::build(std::vector<int>& ids, int begin, int end, const std::vec
   const int right = build(ids, mid, end, centroids, boxes, leaf_size, order, depth + 1);
   nodes_[index].left = left;
   nodes_[index].right = right;
+  Aabb box = nodes_[left].box;
+  box.grow(nodes_[right].box);
+  nodes_[index].box = box;
   return index;
 }
 
