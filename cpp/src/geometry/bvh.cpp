@@ -44,6 +44,8 @@ int TriangleBvh::build(std::vector<int>& ids, int begin, int end, const std::vec
     Aabb box;
     for (int i = begin; i < end; ++i) box.grow(boxes[ids[i]]);
     nodes_[index].box = box;
+    nodes_[index].centre = box.centre();
+    nodes_[index].half = 0.5 * box.extent();
     nodes_[index].first = static_cast<int>(order.size());
     nodes_[index].count = end - begin;
     for (int i = begin; i < end; ++i) order.push_back(ids[i]);
@@ -66,6 +68,8 @@ int TriangleBvh::build(std::vector<int>& ids, int begin, int end, const std::vec
   Aabb box = nodes_[left].box;
   box.grow(nodes_[right].box);
   nodes_[index].box = box;
+  nodes_[index].centre = box.centre();
+  nodes_[index].half = 0.5 * box.extent();
   return index;
 }
 
@@ -87,10 +91,10 @@ struct SegmentBound {
     sbox.grow(b);
     if (!is_point) inv_len2 = 1.0 / ab.squaredNorm();
   }
-  double operator()(const Aabb& box, double useful) const {
+  /// `c` and `h`: the box's centre and half extent.
+  double operator()(const Aabb& box, const Vec3& c, const Vec3& h, double useful) const {
     const double d_boxes = box.squared_distance(sbox);
     if (d_boxes >= useful || is_point) return d_boxes;  // for a point the box distance is exact
-    const Vec3 c = box.centre(), h = 0.5 * box.extent();
     const double t = std::clamp((c - a).dot(ab) * inv_len2, 0.0, 1.0);
     const Vec3 d = c - (a + t * ab);
     const double dc = d.dot(c), dh = d.cwiseAbs().dot(h), da = d.dot(a), dab = d.dot(ab);
@@ -129,9 +133,9 @@ struct Witness {
     if (!valid) return -kInf;
     return (low - high) - 1e-14 * (std::abs(low) + std::abs(high));
   }
-  double box_bound(const Aabb& box) const {
+  /// For a box of centre c and half extent h.
+  double box_bound(const Vec3& c, const Vec3& h) const {
     if (!valid) return -kInf;
-    const Vec3 c = box.centre(), h = 0.5 * box.extent();
     return bound(nu.dot(c) + nu.cwiseAbs().dot(h));
   }
   double triangle_bound(const std::array<Vec3, 3>& t) const {
@@ -160,8 +164,8 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
   Witness w;
   // A node or triangle whose witness bound exceeds the best distance cannot hold the nearest.
   auto beyond = [&](double wb) { return wb > 0.0 && wb * wb > best_sq; };
-  walk([&](const Aabb& box) { return node_bound(box, best_sq); },
-       [&](const Aabb& box) { return beyond(w.box_bound(box)); },
+  walk([&](const Node& n) { return node_bound(n.box, n.centre, n.half, best_sq); },
+       [&](const Node& n) { return beyond(w.box_bound(n.centre, n.half)); },
        [&](int i) {
          const auto& t = tris_[i];
          if (beyond(w.triangle_bound(t))) return;
@@ -198,11 +202,11 @@ bool TriangleBvh::any_within(const Vec3& a, const Vec3& b, double distance) cons
   double bound = bound_sq;  // set below 0 to stop once one is found
   bool found = false;
   walk(
-      [&](const Aabb& box) {
-        const double lb = node_bound(box, bound_sq);
+      [&](const Node& n) {
+        const double lb = node_bound(n.box, n.centre, n.half, bound_sq);
         return lb < bound_sq || lb == 0.0 ? lb : kInf;
       },
-      [&](const Aabb& box) { return w.box_bound(box) > distance; },
+      [&](const Node& n) { return w.box_bound(n.centre, n.half) > distance; },
       [&](int i) {
         const auto& t = tris_[i];
         // Both ends farther than `distance` on one side of the triangle's plane: too far.

@@ -66,7 +66,8 @@ class TriangleBvh {
   /// nearest-style search) or set it below 0 to stop.
   template <class NodeBound, class Leaf>
   void traverse(NodeBound&& node_bound, Leaf&& leaf, double& bound) const {
-    walk(node_bound, [](const Aabb&) { return false; }, [&](int i) { leaf(tris_[i], ids_[i]); }, bound);
+    walk([&](const Node& n) { return node_bound(n.box); }, [](const Node&) { return false; },
+         [&](int i) { leaf(tris_[i], ids_[i]); }, bound);
   }
 
   const Aabb& bounds() const { return nodes_.front().box; }
@@ -74,8 +75,8 @@ class TriangleBvh {
 
  private:
   /// The best-first traversal every query shares. Children are visited nearer first by
-  /// `node_bound(box)` (computed when pushed); a node is skipped when that bound exceeds `bound`,
-  /// or when `skip(box)` says so as it is popped (a test that may have sharpened meanwhile);
+  /// `node_bound(node)` (computed when pushed); a node is skipped when that bound exceeds `bound`,
+  /// or when `skip(node)` says so as it is popped (a test that may have sharpened meanwhile);
   /// `leaf(i)` sees tris_[i] and may lower `bound`, or set it below 0 to stop.
   template <class NodeBound, class Skip, class Leaf>
   void walk(NodeBound&& node_bound, Skip&& skip, Leaf&& leaf, double& bound) const {
@@ -86,18 +87,18 @@ class TriangleBvh {
     };
     Item stack[kStackSize];
     int top = 0;
-    stack[top++] = {0, node_bound(nodes_[0].box)};
+    stack[top++] = {0, node_bound(nodes_[0])};
     while (top > 0) {
       const Item it = stack[--top];
       if (it.lb > bound) continue;
       const Node& nd = nodes_[it.node];
-      if (skip(nd.box)) continue;
+      if (skip(nd)) continue;
       if (nd.count > 0) {
         for (int i = nd.first; i < nd.first + nd.count && bound >= 0.0; ++i) leaf(i);
         if (bound < 0.0) return;
         continue;
       }
-      const double ll = node_bound(nodes_[nd.left].box), lr = node_bound(nodes_[nd.right].box);
+      const double ll = node_bound(nodes_[nd.left]), lr = node_bound(nodes_[nd.right]);
       if (top + 2 > kStackSize) continue;  // unreachable: the depth is checked when built
       if (ll < lr) {  // nearer child last, so that it is visited first
         stack[top++] = {nd.right, lr};
@@ -111,6 +112,7 @@ class TriangleBvh {
 
   struct Node {
     Aabb box;
+    Vec3 centre, half;  ///< box.centre() and box.extent() / 2, kept for the traversals' bounds
     int left = -1, right = -1;  ///< children (internal node)
     int first = 0, count = 0;   ///< range in tris_ (leaf when count > 0)
   };
