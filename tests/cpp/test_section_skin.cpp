@@ -244,3 +244,40 @@ TEST(SectionSkin, RegionSizeBarelyGrowsWithTheMesh) {
   }
   EXPECT_LT(counts.back(), 8 * counts.front());
 }
+
+// link_gap_below (the motion check's question) gives link(...).gap < below with both skins, also
+// for bounds at and next to the link's own gap, where a shortcut would first disagree.
+TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
+  for (const test::Mesh& m : {test::icosphere(3, Vec3::Constant(0.04)), curvy(4)}) {
+    const auto object = std::make_shared<Object>(m.vertices, m.faces);
+    const SectionSkin skin(object, kFlatten);
+    const SimulatedWorld& mesh = skin.mesh_world();
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    const Vec3 c = object->bounds().centre();
+    const double size = object->bounds().extent().maxCoeff();
+    long checked = 0;
+    for (int k = 0; k < 12; ++k) {
+      FingerPlane pl;
+      pl.origin = c;
+      pl.p = test::random_unit(rng);
+      pl.u = test::random_unit(rng).cross(pl.p).normalized();
+      const double r = (k % 3) * 0.03 * size;
+      for (int q = 0; q < 60; ++q) {
+        const Vec2 a = Vec2(U(rng) - 0.5, U(rng) - 0.5) * 1.4 * size;
+        const double len = q % 3 == 0 ? 0.0 : U(rng) * 0.4 * size, ang = U(rng) * 2 * kPi;
+        const Vec2 b = a + len * Vec2(std::cos(ang), std::sin(ang));
+        for (const Sensing* s : {static_cast<const Sensing*>(&skin), static_cast<const Sensing*>(&mesh)}) {
+          const double g = s->link(pl, a, b, r).gap;
+          for (double below : {0.01 * size, 0.1 * size, g, std::nextafter(g, kInf), std::nextafter(g, 0.0)}) {
+            if (!(below > 0.0) || !std::isfinite(below)) continue;
+            EXPECT_EQ(s->link_gap_below(pl, a, b, r, below), s->link(pl, a, b, r, below).gap < below)
+                << "plane " << k << " query " << q << " below " << below;
+            ++checked;
+          }
+        }
+      }
+    }
+    EXPECT_GE(checked, 2000);
+  }
+}
