@@ -248,7 +248,7 @@ TEST(SectionSkin, RegionSizeBarelyGrowsWithTheMesh) {
 // link_gap_below (the motion check's question) gives link(...).gap < below with both skins, also
 // for bounds at and next to the link's own gap, where a shortcut would first disagree.
 TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
-  for (const test::Mesh& m : {test::icosphere(3, Vec3::Constant(0.04)), curvy(4)}) {
+  for (const test::Mesh& m : {test::icosphere(3, Vec3::Constant(0.04)), test::curvy(4)}) {
     const auto object = std::make_shared<Object>(m.vertices, m.faces);
     const SectionSkin skin(object, kFlatten);
     const SimulatedWorld& mesh = skin.mesh_world();
