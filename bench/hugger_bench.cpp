@@ -31,7 +31,7 @@
 #include "hugger/world/object.hpp"
 #include "hugger/world/section_skin.hpp"
 #include "hugger/world/simulated_world.hpp"
-#include "meshes.hpp"  // tests/cpp: the icosphere and curvy, as hugger.objects builds them
+#include "meshes.hpp"  // tests/cpp: the icosphere and curvy, built as hugger.objects builds them
 
 using namespace hugger;
 using Clock = std::chrono::steady_clock;

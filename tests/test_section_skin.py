@@ -18,8 +18,11 @@ def test_skin_choice_is_recorded_and_checked():
         assert traj.status == "done"
         assert json.loads(traj.params_json)["skin"] == skin
     assert json.loads(hugger.Planner(hand, obj, [0, 0, 0], start).plan().params_json)["skin"] == "mesh"
-    with pytest.raises(ValueError, match="skin"):
-        hugger.Planner(hand, obj, [0, 0, 0], start, skin="voxels")
+    # not a skin's name, or not a string (an array equal to "mesh" included): ValueError
+    for bad in ("voxels", b"mesh", 3, np.array("mesh"), np.array(["mesh"])):
+        with pytest.raises(ValueError, match="skin must be one of 'mesh', 'section'"):
+            hugger.Planner(hand, obj, [0, 0, 0], start, skin=bad)
+    assert hugger._core.SKINS == ("mesh", "section")
 
 
 def test_region_boundary_is_a_link_radius_from_the_object():

@@ -1,6 +1,8 @@
 // The planner and its typed results: PlannerParams, PlannerStats, Configuration and History (a
 // plan's configurations as stacked arrays).
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -189,13 +191,12 @@ void bind_planner(py::module_& m) {
                        const ArrayD& palm_pose, const PlannerParams& params, const py::object& skin_name) {
              auto out = std::make_unique<PyPlanner>();
              if (source.is_none()) throw py::value_error("the object or skin must not be None");
-             const py::tuple skins = py::module_::import("hugger._core").attr("SKINS");
-             if (!skins.contains(skin_name)) {
+             const std::string skin = py::isinstance<py::str>(skin_name) ? skin_name.cast<std::string>() : "";
+             if (std::find(std::begin(kSkins), std::end(kSkins), skin) == std::end(kSkins)) {
                std::string names;
-               for (const auto& name : skins) names += (names.empty() ? "" : ", ") + py::repr(name).cast<std::string>();
+               for (const char* name : kSkins) names += (names.empty() ? "'" : ", '") + std::string(name) + "'";
                throw py::value_error("skin must be one of " + names + ", got " + py::repr(skin_name).cast<std::string>());
              }
-             const std::string skin = skin_name.cast<std::string>();
              out->skin = skin;
              std::shared_ptr<Object> object;
              std::shared_ptr<Sensing> sensing;

@@ -21,6 +21,10 @@
 namespace hugger::py_helpers {
 
 namespace py = pybind11;
+
+/// How a Planner senses an Object (exported as hugger._core.SKINS): "mesh", 3D queries on the
+/// mesh (the reference), or "section", 2D geometry in each finger plane.
+inline constexpr const char* kSkins[] = {"mesh", "section"};
 using ArrayD = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using ArrayI = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
 using RowMatrix4 = Eigen::Matrix<double, 4, 4, Eigen::RowMajor>;

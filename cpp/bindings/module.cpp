@@ -25,7 +25,7 @@ PYBIND11_MODULE(_core, m) {
   m.attr("MAX_ITERATIONS") = hugger::kMaxIterations;
   // The names the planner accepts, owned by the engine (rules) and the binding (skins).
   m.attr("RULES") = py::make_tuple(to_string(hugger::Rules::kPaper), to_string(hugger::Rules::kHug));
-  m.attr("SKINS") = py::make_tuple("mesh", "section");
+  m.attr("SKINS") = py::make_tuple(hugger::py_helpers::kSkins[0], hugger::py_helpers::kSkins[1]);
   m.def("check_pose", [](const ArrayD& pose, const std::string& name) { to_pose(pose, name.c_str()); },
         py::arg("pose"), py::arg("name") = "palm_pose",
         "Raise ValueError, saying what is wrong, unless ``pose`` is a rigid (4, 4) transform: finite, last row "

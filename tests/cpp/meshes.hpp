@@ -31,9 +31,9 @@ inline Mesh to_mesh(const std::vector<Vec3>& v, const std::vector<std::array<std
 }
 
 /// The icosphere of `subdivisions`, scaled by `radii` about `centre`. The unit icosphere is built
-/// exactly as hugger.objects.icosphere (python/hugger/objects.py): the same base vertices and
-/// faces, the same order of new vertices, normalised the same way (p / sqrt(p . p)), so a given
-/// subdivision level gives the same arrays bit for bit (the benchmark relies on it).
+/// as hugger.objects.icosphere (python/hugger/objects.py) builds it: the same base vertices and
+/// faces, the same order of new vertices, normalised as p / sqrt(p . p); the same faces, and
+/// vertices equal to the last bit or so (NumPy's norm rounds its own way).
 inline Mesh icosphere(int subdivisions, const Vec3& radii = Vec3::Ones(), const Vec3& centre = Vec3::Zero()) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
   std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
