@@ -26,11 +26,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import hugger  # noqa: E402
 from generation_common import auc, fitting_objects  # noqa: E402
 from hugger import physics  # noqa: E402
-from hugger.physics.hold import GRAVITY, PERTURBATIONS  # noqa: E402
+from hugger.physics.hold import NOMINAL_FORCE, PERTURBATIONS  # noqa: E402
 from hugger.scenarios import default_case  # noqa: E402
 from hugger.search import _default_key  # noqa: E402
 
-NOMINAL_FORCE = 10.0 * 0.1 * GRAVITY
 
 
 def _held(job: tuple[hugger.Trajectory, dict]) -> bool:

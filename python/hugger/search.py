@@ -206,11 +206,10 @@ def _verify(order: Sequence[Candidate], trajs: Sequence[Trajectory | None], coun
     checked candidates (in the order checked), each with ``held`` (and ``robust``,
     ``held_fraction`` when ``robust``) filled in."""
     from . import physics
-    from .physics.hold import PERTURBATIONS, _validate_job
-    from .physics.mjcf import GRAVITY
+    from .physics.hold import NOMINAL_FORCE as force
+    from .physics.hold import PERTURBATIONS, _process_pool, _validate_job
 
     physics._mujoco()  # fail early when MuJoCo is missing
-    force = 10.0 * 0.1 * GRAVITY  # the push of validate_robust: it stays 9.81 N when the mass is perturbed
     others = [n for n in PERTURBATIONS if n != "nominal"]
     total = planned + len(order[:count]) * (1 + (len(others) if robust else 0))
     done = planned
@@ -231,12 +230,8 @@ def _verify(order: Sequence[Candidate], trajs: Sequence[Trajectory | None], coun
                 if held:  # then the other perturbations, in a process pool when workers > 1
                     jobs: list[tuple[Trajectory, int, dict[str, Any]]] = [
                         (traj, -1, {**PERTURBATIONS[n], "force": force}) for n in others]
-                    if workers > 1 and pool is None:
-                        import multiprocessing
-                        from concurrent.futures import ProcessPoolExecutor
-
-                        pool = ProcessPoolExecutor(max_workers=min(workers, len(jobs)),
-                                                   mp_context=multiprocessing.get_context("spawn"))
+                    if workers > 1 and pool is None:  # one pool for every candidate checked
+                        pool = _process_pool(workers, len(jobs))
                     found = (pool.map(_validate_job, jobs) if pool is not None
                              else (physics.validate(replace(j[0]), j[1], **j[2]) for j in jobs))
                     for r in found:

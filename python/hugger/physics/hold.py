@@ -152,20 +152,30 @@ PERTURBATIONS = {
 }
 
 
+#: The robust verdict's object mass (kg) and push (N): 10 x its weight, also when the mass is perturbed.
+NOMINAL_MASS = 0.1
+NOMINAL_FORCE = 10.0 * NOMINAL_MASS * GRAVITY
+
+
 def _validate_job(job: tuple[Any, int, dict[str, Any]]) -> dict[str, Any]:
     traj, k, kwargs = job
     return validate(traj, k, **kwargs)
 
 
-def _run_jobs(jobs: list[tuple[Any, int, dict[str, Any]]], workers: int) -> list[dict[str, Any]]:
-    """validate() over many (traj, k, kwargs) jobs: a process pool when workers > 1 (MuJoCo holds
-    the GIL through a whole mj_step batch, so threads would not help), in order."""
-    if workers <= 1 or len(jobs) <= 1:
-        return [_validate_job(j) for j in jobs]
+def _process_pool(workers: int, jobs: int) -> Any:
+    """The process pool simulations run in (spawned: MuJoCo holds the GIL through a whole mj_step
+    batch, so threads would not help)."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
-    with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=multiprocessing.get_context("spawn")) as pool:
+    return ProcessPoolExecutor(max_workers=min(workers, jobs), mp_context=multiprocessing.get_context("spawn"))
+
+
+def _run_jobs(jobs: list[tuple[Any, int, dict[str, Any]]], workers: int) -> list[dict[str, Any]]:
+    """validate() over many (traj, k, kwargs) jobs, in order: in a process pool when workers > 1."""
+    if workers <= 1 or len(jobs) <= 1:
+        return [_validate_job(j) for j in jobs]
+    with _process_pool(workers, len(jobs)) as pool:
         return list(pool.map(_validate_job, jobs))
 
 
@@ -187,8 +197,8 @@ def validate_robust(traj: Any, k: int = -1, *, workers: int | None = None, bisec
     traj = _trajectory(traj)
     k = _index(traj, k)
     workers = _workers("workers", workers)
-    weight = 0.1 * GRAVITY
-    nominal_force = 10.0 * weight
+    weight = NOMINAL_MASS * GRAVITY
+    nominal_force = NOMINAL_FORCE
     names = list(PERTURBATIONS)
     jobs = [(traj, k, {**PERTURBATIONS[n], "force": nominal_force, "cache_dir": cache_dir}) for n in names]
     if workers > 1:
