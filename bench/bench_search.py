@@ -42,7 +42,7 @@ def main() -> int:
     plan = sorted(c.plan_time_s for c in result.candidates)
     print(f"search of {args.approaches} approaches on curvy ({len(case.obj.faces)} triangles), {args.threads} threads: "
           f"median {statistics.median(times):.3f} s, min {min(times):.3f} s over {args.repeat} runs; "
-          f"per plan median {1000 * statistics.median(plan):.1f} ms; judged {sum(c.epsilon is not None for c in result.candidates)}")
+          f"per plan median {1000 * statistics.median(plan):.1f} ms; judged {sum(c.firmness is not None for c in result.candidates)}")
     torque_scale = float(np.linalg.norm(case.obj.vertices - case.target, axis=1).max())
     fast, full = [], []
     for traj in result.trajectories:

@@ -31,6 +31,11 @@ def fitting_objects() -> list[str]:
     return [s for s in specs if fits(load_object(s)[1])]
 
 
+def ranking_value(force_closure, firmness) -> float:
+    """hugger.search's ranking key (force closure, then firmness) as one number, for AUCs."""
+    return 1000.0 * bool(force_closure) + float(firmness)
+
+
 def auc(scores, labels) -> float:
     """Area under the ROC curve: P(score of a held grasp > score of a lost one), ties count half."""
     s = np.asarray(scores, dtype=np.float64)

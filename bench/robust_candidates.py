@@ -24,7 +24,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import hugger  # noqa: E402
-from generation_common import auc, fitting_objects  # noqa: E402
+from generation_common import auc, fitting_objects, ranking_value  # noqa: E402
 from hugger import physics  # noqa: E402
 from hugger.physics.hold import NOMINAL_FORCE, PERTURBATIONS  # noqa: E402
 from hugger.scenarios import default_case  # noqa: E402
@@ -98,12 +98,14 @@ def main() -> int:
                       f"{'-' if first is None else first + 1} | {out['time_s']:.0f} |", flush=True)
     rows = [r for o in everything for r in o["candidates"]]
     robust = [r["robust"] for r in rows]
-    key = [1000.0 * bool(r["force_closure"]) + r["hug"] + min(float(r["epsilon"]), 0.999) for r in rows]
+    key = [ranking_value(r["force_closure"], r["firmness"]) for r in rows]
     if not args.json and rows:
         print(f"\n{len(rows)} candidates, {sum(robust)} robustly held; AUC for robust: "
               f"epsilon {auc([r['epsilon'] for r in rows], robust):.3f}, "
               f"links {auc([r['links_in_contact'] for r in rows], robust):.3f}, "
-              f"hug {auc([r['hug'] for r in rows], robust):.3f}, ranking key {auc(key, robust):.3f}")
+              f"hug {auc([r['hug'] for r in rows], robust):.3f}, "
+              f"escape {auc([-r['escape'] for r in rows], robust):.3f}, "
+              f"firmness {auc([r['firmness'] for r in rows], robust):.3f}, ranking key {auc(key, robust):.3f}")
     return 0
 
 

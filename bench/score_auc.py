@@ -4,8 +4,9 @@
     python bench/score_auc.py DIR [--json]
 
 Prints the AUC (probability that a held grasp outscores a lost one) of: epsilon alone, links in
-contact, hug (links + 2 for the palm), and the search's ranking key (force closure, then hug, then
-epsilon), and how often the chosen grasp of each (object, hand) is held against the single default
+contact, hug (links + 2 for the palm), the escape (the largest free slide, smaller is better),
+firmness (epsilon less the escape penalty) and the search's ranking key (force closure, then
+firmness), and how often the chosen grasp of each (object, hand) is held against the single default
 approach (direction 0).
 """
 from __future__ import annotations
@@ -19,7 +20,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import hugger  # noqa: E402
-from generation_common import auc  # noqa: E402
+from generation_common import auc, ranking_value  # noqa: E402
+from hugger.analysis import ESCAPE_REACH  # noqa: E402
+from hugger.search import ESCAPE_WEIGHT  # noqa: E402
 
 
 def main() -> int:
@@ -28,13 +31,15 @@ def main() -> int:
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     ds = hugger.Dataset(args.dataset)
-    eps, links, hug, key, held = [], [], [], [], []
+    eps, links, hug, slide, firm, key, held = [], [], [], [], [], [], []
     chosen_held = default_held = 0
     shards = 0
     for s in range(len(ds.shards)):
         z = ds.shard(s)
         if "held" not in z:
             raise SystemExit(f"{args.dataset} was made without --validate")
+        if "escape" not in z:
+            raise SystemExit(f"{args.dataset} has shards of format 1 (no escape): make it again")
         shards += 1
         ok = z["status"] != "error"
         chosen_held += bool(z["held"][int(z["best"])])
@@ -44,18 +49,20 @@ def main() -> int:
             eps.append(float(z["epsilon"][i]))
             links.append(int(z["links_in_contact"][i]))
             hug.append(h)
-            # the ranking key as one number: closure first, then hug, then epsilon (< 1 here)
-            key.append(1000.0 * bool(z["force_closure"][i]) + h + min(float(z["epsilon"][i]), 0.999))
+            slide.append(-float(z["escape"][i]))  # less is firmer
+            firm.append(float(z["epsilon"][i]) - ESCAPE_WEIGHT * float(z["escape"][i]) / ESCAPE_REACH)
+            key.append(ranking_value(z["force_closure"][i], firm[-1]))
             held.append(bool(z["held"][i]))
     out = {"grasps": len(held), "held": int(sum(held)), "objects_x_hands": shards,
            "auc_epsilon": auc(eps, held), "auc_links_in_contact": auc(links, held), "auc_hug": auc(hug, held),
-           "auc_search_key": auc(key, held), "chosen_held": chosen_held, "default_held": default_held}
+           "auc_escape": auc(slide, held), "auc_firmness": auc(firm, held), "auc_search_key": auc(key, held), "chosen_held": chosen_held, "default_held": default_held}
     if args.json:
         print(json.dumps(out))
     else:
         print(f"{out['grasps']} grasps ({out['held']} held) over {shards} (object, hand) pairs")
         print("| figure | AUC |\n|---|---:|")
-        for k in ("auc_epsilon", "auc_links_in_contact", "auc_hug", "auc_search_key"):
+        for k in ("auc_epsilon", "auc_links_in_contact", "auc_hug", "auc_escape", "auc_firmness",
+                  "auc_search_key"):
             print(f"| {k[4:]} | {out[k]:.3f} |")
         print(f"held: chosen {chosen_held}/{shards}, default single approach {default_held}/{shards}")
     return 0

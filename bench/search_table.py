@@ -70,7 +70,7 @@ def row(name, obj, target, pole, hand, args, checker) -> dict:
                       "epsilon": a1["epsilon"]},
            "best": {"index": res.best, "status": best.status, "links": a2["links_in_contact"],
                     "palm": a2["palm_contact"], "epsilon": a2["epsilon"]},
-           "search_time_s": res.time_s, "judged": sum(c.epsilon is not None for c in res.candidates),
+           "search_time_s": res.time_s, "judged": sum(c.firmness is not None for c in res.candidates),
            "verified": [{"index": i, "held": res.candidates[i].held, "robust": res.candidates[i].robust,
                          "held_fraction": res.candidates[i].held_fraction} for i in res.verified]}
     if args.physics:

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import hugger
-from hugger import dataset
+from hugger import analysis, dataset
 from hugger.cli import main
 
 from helpers import save_and_check
@@ -125,6 +125,9 @@ def test_loader_and_every_saved_grasp_passes_the_checker(reference, tmp_path, ch
         assert g.best == (g.index == int(z["best"]))
         traj = ds.trajectory(i)  # re-planned from the stored start, checked against the stored grasp
         assert np.array_equal(traj.angles[-1], g.angles)
+        # the stored escape is the ranking's figure, capped at the reach
+        slide = analysis.escape_distance(traj.hand, traj.object(), g.palm_pose, g.joints).max()
+        assert g.escape == min(float(slide), analysis.ESCAPE_REACH)
         save_and_check(checker, traj, tmp_path / f"g{i}.npz", context=i)
     with pytest.raises(IndexError):
         ds[len(ds)]

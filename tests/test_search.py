@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import pickle
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -35,31 +36,77 @@ def _cand(i, hug, closure=None, eps=None, status="done"):
     return Candidate(index=i, direction=np.zeros(3), status=status, links_in_contact=hug)
 
 
-def test_rank_judges_only_where_it_decides():
+def test_rank_finds_the_escape_only_where_it_decides():
     cands = [_cand(0, 5), _cand(1, 9), _cand(2, 9), _cand(3, 3), _cand(4, 12, status="error")]
-    truth = {0: (True, 0.5), 1: (True, 0.1), 2: (True, 0.2), 3: (True, 0.9)}
-    judged = []
+    truth = {0: (True, 0.5), 1: (True, 0.1), 2: (True, 0.45), 3: (False, 0.9)}
+    slides = {0: 0.05, 1: 0.0, 2: 0.002, 3: 0.0}
+    judged, escaped = [], []
 
     def judge(c):
         judged.append(c.index)
         fc, eps = truth[c.index]
-        return Candidate(**{**c.__dict__, "force_closure": fc, "epsilon": eps, "contacts": 4})
+        return replace(c, force_closure=fc, epsilon=eps, contacts=4)
 
-    best, out = rank(cands, judge)
-    assert best == 2  # most links; epsilon breaks the tie
-    assert sorted(judged) == [1, 2]  # candidates of fewer links cannot win: never judged
-    assert out[0].epsilon is None and out[2].epsilon == 0.2
-    # without force closure at the top, judging goes on down the list
-    truth.update({1: (False, 0.0), 2: (False, 0.0)})
-    judged.clear()
+    def escape(c):
+        escaped.append(c.index)
+        return replace(c, escape=slides[c.index])
+
+    best, out = rank(cands, judge, escape=escape)
+    # firmness: 0.5 - 0.2 (slides the whole reach) < 0.45 - 0.008: candidate 2 cages the object
+    assert best == 2 and out[2].firmness == pytest.approx(0.45 - 0.2 * 0.002 / 0.05)
+    assert sorted(judged) == [0, 1, 2, 3]  # every plan's contacts and epsilon
+    assert escaped == [0, 2]  # candidate 1's epsilon (0.1) cannot reach 0.442; 3 lacks closure
+    assert out[1].escape is None and out[1].firmness is None and out[0].escape == 0.05
+    # without an escape, epsilon alone ranks
     best, _ = rank(cands, judge)
-    assert best == 0 and sorted(judged) == [0, 1, 2]
+    assert best == 0
+    # without force closure anywhere, firmness ranks them all
+    truth.update({0: (False, 0.5), 1: (False, 0.1), 2: (False, 0.45)})
+    escaped.clear()
+    best, _ = rank(cands, judge, escape=escape)
+    assert best == 3 and escaped == [3]  # 0.9 - 0 beats every other epsilon
     # a custom score judges everything that planned
     judged.clear()
-    best, out = rank(cands, judge, score=lambda c: c.epsilon)
-    assert best == 3 and sorted(judged) == [0, 1, 2, 3] and out[3].score == 0.9
+    escaped.clear()
+    best, out = rank(cands, judge, score=lambda c: c.epsilon - c.escape, escape=escape)
+    assert best == 3 and sorted(judged) == [0, 1, 2, 3] and sorted(escaped) == [0, 1, 2, 3]
+    assert out[3].score == 0.9
     with pytest.raises(ValueError, match="no approach"):
         rank([_cand(0, 1, status="error")], judge)
+
+
+def test_escape_distance_of_a_palm_resting_on_a_ball(hand):
+    from hugger import analysis
+
+    ball = hugger.objects.sphere(0.03)
+    pose = hugger.look_at([0.0, 0.0, 0.03 + 1e-4], [0.0, 0.0, 0.0])  # the palm on top, facing down
+    far = np.zeros((hand.fingers, hand.links + 1, 3)) + [1.0, 0.0, 0.0]
+    far[:, :, 1] = np.arange(hand.links + 1) * 0.01  # fingers a metre away
+    d = analysis.escape_distance(hand, ball, pose, far)
+    dirs = hugger.approach_directions(26)
+    # the ball is blocked (at once) where it moves up into the palm, and slides free downward
+    up, down = dirs[:, 2] > 0.2, dirs[:, 2] < 0.0
+    assert up.any() and down.any()
+    assert np.all(d[up] <= 0.004) and np.all(np.isinf(d[down]))
+    # the palm a metre away: free everywhere; a finer reach and step are honoured
+    away = pose.copy()
+    away[:3, 3] += [0.0, 1.0, 0.0]
+    assert np.all(np.isinf(analysis.escape_distance(hand, ball, away, far, reach=0.01, step=0.005)))
+    d2 = analysis.escape_distance(hand, ball, pose, far, step=0.001)
+    assert np.all(d2[up] <= 0.002)
+    with pytest.raises(ValueError, match="step"):
+        analysis.escape_distance(hand, ball, pose, far, step=0.0)
+    with pytest.raises(ValueError, match="joints"):
+        analysis.escape_distance(hand, ball, pose, far[:2])
+
+
+def test_a_hugging_grasp_cages_its_object(hand):
+    from hugger import analysis
+
+    case = hugger.scenarios.default_case("sphere", hand)
+    traj = hugger.Planner(hand, case.obj, case.target, case.palm_pose).plan()
+    d = analysis.escape_distance(hand, case.obj, traj.palm_pose[-1], traj.joints[-1])
+    assert np.all(d <= 0.02)  # wrapped: no direction lets the ball out
 
 
 def test_search_is_deterministic_and_single_approach_is_the_default_plan(hand):
@@ -75,12 +122,14 @@ def test_search_is_deterministic_and_single_approach_is_the_default_plan(hand):
            [c.to_dict() | {"plan_time_s": 0} for c in b.candidates]
     chosen = a.chosen
     assert chosen.force_closure is not None
-    # the chosen one is best by the documented key among everything judged
+    # the chosen one is best by the documented key: (force closure, firmness); firmness <= epsilon
+    # bounds the candidates whose escape was not needed
+    assert chosen.firmness is not None
     for c in a.candidates:
-        if c.epsilon is not None:
-            assert (bool(c.force_closure), c.hug, c.epsilon) <= (bool(chosen.force_closure), chosen.hug, chosen.epsilon)
-        elif chosen.force_closure:
-            assert c.hug < chosen.hug or not c.ok
+        if not c.ok:
+            continue
+        bound = c.firmness if c.firmness is not None else c.epsilon
+        assert (bool(c.force_closure), bound) <= (bool(chosen.force_closure), chosen.firmness)
     assert len(a.trajectories) == 8 and a.trajectories[a.best] is a.trajectory
     assert a.directions.shape == (8, 3)
 

@@ -6,6 +6,8 @@ Three layers, each usable on its own:
   object: points on the object's surface, outward normals, which finger and link (or the palm)
   each belongs to, and the gap. numpy only.
 * :func:`wrap_angle` says how far each finger's contacts wrap around the target T. numpy only.
+* :func:`escape_distance` says how far the object can slide away from the hand, held fixed, in
+  directions all around: a caging figure. numpy only.
 * :func:`grasp_quality` builds the grasp wrench space of a set of contacts and reports force
   closure, the Ferrari-Canny epsilon and the hull volume (Qhull, in the compiled core). numpy only.
 
@@ -36,6 +38,7 @@ __all__ = [
     "analyze",
     "contacts",
     "contacts_of",
+    "escape_distance",
     "grasp_quality",
     "primitive_wrenches",
     "wrap_angle",
@@ -48,6 +51,13 @@ _MAX_SPACING = 1e-3
 _MAX_LINK_SAMPLES = 400
 #: At most this many representative contacts from the palm's touching region.
 _PALM_CONTACTS = 8
+#: :func:`escape_distance` slides the object this far at most (m): the hold test's limit on how
+#: far a held object may move (docs/validation.md).
+ESCAPE_REACH = 0.05
+#: :func:`escape_distance`'s sample spacing along each direction (m).
+ESCAPE_STEP = 0.002
+#: A hand part penetrating the slid object by more than this (m) blocks the slide.
+_ESCAPE_PENETRATION = 1e-4
 
 
 # --------------------------------------------------------------------------------------------
@@ -266,6 +276,35 @@ def _palm_contacts(obj: Any, palm_pose: np.ndarray, radius: float, thickness: fl
     return cast(np.ndarray, world[touching[extreme]])
 
 
+def _configuration(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joints: Any
+                   ) -> tuple[int, int, float, float, float, np.ndarray, np.ndarray]:
+    """The checked arguments of a configuration's analysis: fingers M, links N, link radius, palm
+    radius and thickness, the palm pose and the (M, N+1, 3) joints, as arrays."""
+    from .world import Object
+
+    if not isinstance(obj, Object):
+        raise ValueError(f"obj must be a hugger.Object, got {type(obj).__name__}")
+    if hasattr(hand, "to_dict"):  # a hugger.Hand
+        hand = hand.to_dict()
+    try:
+        m, n = int(hand["fingers"]), int(hand["links"])
+        radius = float(hand["link_radius"])
+        palm_radius, palm_thickness = float(hand["palm_radius"]), float(hand["palm_thickness"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"hand must be a hand dict (Hand.to_dict()), missing or bad entry: {exc}") from None
+    if not (radius >= 0 and palm_radius > 0 and palm_thickness > 0 and
+            all(map(math.isfinite, (radius, palm_radius, palm_thickness)))):
+        raise ValueError("hand sizes must be finite, link_radius >= 0, palm_radius and palm_thickness > 0")
+    pose = np.asarray(palm_pose, dtype=np.float64)
+    _core.check_pose(pose)  # the engine's rule: a rigid (4, 4) transform
+    j = np.asarray(joints, dtype=np.float64)
+    if j.shape != (m, n + 1, 3):
+        raise ValueError(f"joints must be (M, N+1, 3) = ({m}, {n + 1}, 3), got {j.shape}")
+    if not np.all(np.isfinite(j)):
+        raise ValueError("joints must be finite")
+    return m, n, radius, palm_radius, palm_thickness, pose, j
+
+
 def contacts_of(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joints: Any,
                 distance: float = CONTACT_DISTANCE) -> Contacts:
     """All contacts of a hand configuration with ``obj`` (a :class:`hugger.Object`).
@@ -292,28 +331,7 @@ def contacts_of(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joints: A
     ``gap`` is the signed distance from the sample on the hand's surface (link axis point minus
     r, or palm surface point) to the object; negative when penetrating.
     """
-    from .world import Object
-
-    if not isinstance(obj, Object):
-        raise ValueError(f"obj must be a hugger.Object, got {type(obj).__name__}")
-    if hasattr(hand, "to_dict"):  # a hugger.Hand
-        hand = hand.to_dict()
-    try:
-        m, n = int(hand["fingers"]), int(hand["links"])
-        radius = float(hand["link_radius"])
-        palm_radius, palm_thickness = float(hand["palm_radius"]), float(hand["palm_thickness"])
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ValueError(f"hand must be a hand dict (Hand.to_dict()), missing or bad entry: {exc}") from None
-    if not (radius >= 0 and palm_radius > 0 and palm_thickness > 0 and
-            all(map(math.isfinite, (radius, palm_radius, palm_thickness)))):
-        raise ValueError("hand sizes must be finite, link_radius >= 0, palm_radius and palm_thickness > 0")
-    pose = np.asarray(palm_pose, dtype=np.float64)
-    _core.check_pose(pose)  # the engine's rule: a rigid (4, 4) transform
-    j = np.asarray(joints, dtype=np.float64)
-    if j.shape != (m, n + 1, 3):
-        raise ValueError(f"joints must be (M, N+1, 3) = ({m}, {n + 1}, 3), got {j.shape}")
-    if not np.all(np.isfinite(j)):
-        raise ValueError("joints must be finite")
+    m, n, radius, palm_radius, palm_thickness, pose, j = _configuration(hand, obj, palm_pose, joints)
     dist = positive("distance", distance, allow_zero=True)
 
     sources: list[tuple[int, int, np.ndarray, float]] = []  # finger, link, hand-surface samples, radius
@@ -348,6 +366,47 @@ def contacts(traj: Any, k: int = -1, distance: float = CONTACT_DISTANCE, obj: An
     k = _trajectory_index(traj, k)
     obj = traj.object() if obj is None else obj
     return contacts_of(traj.hand, obj, traj.palm_pose[k], traj.joints[k], distance)
+
+
+def escape_distance(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joints: Any, directions: int = 26,
+                    reach: float = ESCAPE_REACH, step: float = ESCAPE_STEP) -> np.ndarray:
+    """How far (m) the object can slide away from the hand, held fixed, in each of ``directions``
+    directions spread evenly over the sphere (:func:`hugger.approach_directions`): a caging figure.
+
+    The object is translated by t along each direction, t = ``step``, 2 ``step``, ... up to
+    ``reach``; the slide is blocked at the first t where a link capsule (as in
+    :func:`contacts_of`) penetrates the moved object by more than 0.1 mm, or the palm at all (its
+    gap is signed only to touching). Returns
+    ``(directions,)`` distances: that first blocked t, or ``inf`` where the object slides the whole
+    ``reach`` freely. A grasp that cages the object has small distances in every direction; a grasp
+    that holds it by friction alone has a free direction. Sampled: a part thinner than ``step``
+    may be passed between two samples. ``hand``, ``palm_pose`` and ``joints`` are as in
+    :func:`contacts_of`.
+    """
+    from .search import approach_directions
+
+    _, _, radius, palm_radius, palm_thickness, pose, j = _configuration(hand, obj, palm_pose, joints)
+    reach = positive("reach", reach)
+    step = positive("step", step)
+    dirs = approach_directions(directions)
+    a, b = j[:, :-1].reshape(-1, 3), j[:, 1:].reshape(-1, 3)
+    out = np.full(len(dirs), np.inf)
+    alive = np.arange(len(dirs))  # the directions still sliding freely
+    for i in range(1, int(math.floor(reach / step + 1e-9)) + 1):
+        t = i * step
+        shift = -t * dirs[alive]  # moving the object by +t d is moving the hand by -t d
+        gaps = obj.segment_distance((a[None] + shift[:, None]).reshape(-1, 3),
+                                    (b[None] + shift[:, None]).reshape(-1, 3)).reshape(len(alive), len(a)) - radius
+        blocked = (gaps < -_ESCAPE_PENETRATION).any(axis=1)
+        for k in np.flatnonzero(~blocked):
+            moved = pose.copy()
+            moved[:3, 3] += shift[k]
+            blocked[k] = obj._core.palm_gap(moved, palm_radius, palm_thickness) < 0.0  # signed to touching only
+        out[alive[blocked]] = t
+        alive = alive[~blocked]
+        if not len(alive):
+            break
+    return out
 
 
 # --------------------------------------------------------------------------------------------

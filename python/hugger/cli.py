@@ -239,7 +239,7 @@ def _search(case: Case, hand: Hand, args: argparse.Namespace) -> tuple[Trajector
     chosen = result.chosen
     summary = {"approaches": len(result.candidates), "best": result.best,
                "direction": [float(x) for x in chosen.direction], "time_s": round(result.time_s, 6),
-               "judged": sum(c.epsilon is not None for c in result.candidates), "verified": list(result.verified),
+               "judged": sum(c.firmness is not None for c in result.candidates), "verified": list(result.verified),
                "candidates": [c.to_dict() for c in result.candidates]}
     return result.trajectory, chosen.plan_time_s, summary
 

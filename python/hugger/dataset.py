@@ -39,7 +39,7 @@ __all__ = ["Dataset", "Grasp", "generate", "parse_hand", "DATASET_FORMAT", "SHAR
 
 DATASET_FORMAT = "hugger-dataset"
 DATASET_VERSION = 1
-SHARD_FORMAT = 1
+SHARD_FORMAT = 2  # 2: the escape figure of the ranking
 _ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # fixed member timestamps: byte-identical shards
 _HAND_KEYS = {"link_length": float, "link_radius": float, "palm_radius": float, "palm_thickness": float}
 
@@ -131,7 +131,7 @@ def make_shard(task: dict[str, Any]) -> bytes:
     gives the same bytes in any process."""
     from .hand import Hand
     from .scenarios import default_case
-    from .search import final_grasp_quality, search, torque_scale
+    from .search import _escape, final_grasp_quality, search, torque_scale
 
     ob = task["object"]
     hand = Hand(**task["hand"]["kwargs"])
@@ -158,7 +158,7 @@ def make_shard(task: dict[str, Any]) -> bytes:
         "joints": np.full((k, m, n + 1, 3), nan), "angles": np.full((k, m, n), nan),
         "tip_state": np.full((k, m), -1, dtype=np.int8),
         "links_in_contact": np.zeros(k, dtype=np.int64), "palm_contact": np.zeros(k, dtype=bool),
-        "force_closure": np.zeros(k, dtype=bool), "epsilon": np.zeros(k),
+        "force_closure": np.zeros(k, dtype=bool), "epsilon": np.zeros(k), "escape": np.full(k, nan),
     }
     points, normals, finger, link, offsets = [], [], [], [], [0]
     verdicts: list[dict[str, Any] | None] = []
@@ -172,6 +172,7 @@ def make_shard(task: dict[str, Any]) -> bytes:
         a["links_in_contact"][i], a["palm_contact"][i] = cand.links_in_contact, cand.palm_contact
         found, q = final_grasp_quality(traj, hand, case.obj, case.target, scale)
         a["force_closure"][i], a["epsilon"][i] = q.force_closure, q.epsilon
+        a["escape"][i] = (cand if cand.escape is not None else _escape(cand, traj, hand, case.obj)).escape
         points.append(found.points)
         normals.append(found.normals)
         finger.append(found.finger)
@@ -376,6 +377,7 @@ class Grasp:
     palm_contact: bool
     force_closure: bool
     epsilon: float  #: Ferrari-Canny epsilon (mu = 0.5) over all contacts
+    escape: float | None  #: the largest free slide of the object (m, at most 0.05; None: a shard of format 1)
     contact_points: np.ndarray  #: (C, 3) contact points on the object
     contact_normals: np.ndarray  #: (C, 3) outward normals there
     contact_finger: np.ndarray  #: (C,) finger of each contact, -1 the palm
@@ -432,7 +434,8 @@ class Dataset:
                      start_pose=z["start_pose"][j], palm_pose=z["palm_pose"][j], joints=z["joints"][j],
                      angles=z["angles"][j], links_in_contact=int(z["links_in_contact"][j]),
                      palm_contact=bool(z["palm_contact"][j]), force_closure=bool(z["force_closure"][j]),
-                     epsilon=float(z["epsilon"][j]), contact_points=z["contact_points"][lo:hi],
+                     epsilon=float(z["epsilon"][j]),
+                     escape=float(z["escape"][j]) if "escape" in z else None, contact_points=z["contact_points"][lo:hi],
                      contact_normals=z["contact_normals"][lo:hi], contact_finger=z["contact_finger"][lo:hi],
                      contact_link=z["contact_link"][lo:hi], held=bool(z["held"][j]) if "held" in z else None)
 

@@ -6,18 +6,20 @@ distance facing T (:func:`hugger.scenarios.start_pose`), plans them all in paral
 engine releases the GIL) and ranks the final grasps (:func:`rank`). The result holds the best
 trajectory and every candidate's figures.
 
-The ranking (the default score) is lexicographic, cheap figures first:
+The ranking (the default score) is lexicographic:
 
 1. the plan ended without an error (``done``, ``stalled``, ``max_iterations``, ``timeout`` all count);
 2. force closure of the grasp over all its contacts (:func:`hugger.analysis.grasp_quality`);
-3. *hug* = links in contact + 2 if the palm touches (a link or the palm within 1 mm, as in
-   :meth:`hugger.Trajectory.summary`): enveloping grasps hold;
-4. the Ferrari-Canny epsilon (mu = 0.5), then the lowest candidate index.
+3. *firmness* = epsilon - ``ESCAPE_WEIGHT`` x escape / ``ESCAPE_REACH``: the Ferrari-Canny epsilon
+   (mu = 0.5) less a penalty for the largest distance *escape* the object can slide away from the
+   fixed hand in any of 26 directions (:func:`hugger.analysis.escape_distance`, up to 5 cm, the
+   hold test's limit): a grasp that cages the object holds when friction or squeeze falls short;
+4. the lowest candidate index.
 
-Hug comes from 25 segment distances and one palm distance per candidate. Contacts, force closure
-and epsilon (about 20 ms together) are computed only where they can decide: candidates are visited
-by decreasing hug, and once one with force closure is found, candidates of lower hug cannot win
-and are never judged further (their ``force_closure`` and ``epsilon`` stay ``None``).
+Contacts, force closure and epsilon (about 20 ms together) are computed for every candidate that
+planned, in the planning threads; the escape (a few ms to a few tens of ms) only where it can decide: candidates are
+visited by decreasing (force closure, epsilon), and as firmness is at most epsilon, once the best
+so far beats the next one's epsilon the rest cannot win (their ``escape`` stays ``None``).
 
 A custom ``score(candidate) -> float`` (larger is better) judges every candidate fully and ranks
 by it (ties: lowest index).
@@ -34,6 +36,7 @@ import numpy as np
 
 from . import _checks
 from ._types import CONTACT_DISTANCE
+from .analysis import ESCAPE_REACH
 from .hand import Hand
 from .trajectory import Trajectory
 from .world import Object
@@ -42,6 +45,8 @@ __all__ = ["Candidate", "SearchResult", "approach_directions", "rank", "search"]
 
 #: Friction coefficient of the epsilon used for ranking (as :func:`hugger.analysis.analyze`).
 RANK_MU = 0.5
+#: Firmness = epsilon - ESCAPE_WEIGHT x escape / ESCAPE_REACH (docs/generation.md#the-score).
+ESCAPE_WEIGHT = 0.2
 _GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))
 _FAILED = ("error",)
 
@@ -61,6 +66,9 @@ class Candidate:
     contacts: int | None = None  #: contact points (None: not judged, see the module docstring)
     force_closure: bool | None = None  #: force closure over all contacts (None: not judged)
     epsilon: float | None = None  #: Ferrari-Canny epsilon, mu = 0.5 (None: not judged)
+    escape: float | None = None
+    #: the largest distance (m) the object slides freely from the fixed hand, at most ESCAPE_REACH
+    #: (None: not judged, see the module docstring)
     score: float | None = None  #: the custom score, when one was given
     held: bool | None = None  #: the six-direction physics verdict, when ``verify`` checked it
     robust: bool | None = None  #: held under every perturbation, when ``verify`` with ``robust`` checked it
@@ -76,13 +84,20 @@ class Candidate:
     def ok(self) -> bool:
         return self.status not in _FAILED
 
+    @property
+    def firmness(self) -> float | None:
+        """epsilon - ESCAPE_WEIGHT x escape / ESCAPE_REACH: the ranking's figure (None: not judged)."""
+        if self.epsilon is None or self.escape is None:
+            return None
+        return self.epsilon - ESCAPE_WEIGHT * self.escape / ESCAPE_REACH
+
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON types."""
         return {"index": self.index, "direction": [float(x) for x in self.direction], "status": self.status,
                 "configurations": self.configurations, "plan_time_s": self.plan_time_s,
                 "links_in_contact": self.links_in_contact, "palm_contact": self.palm_contact, "hug": self.hug,
                 "contacts": self.contacts, "force_closure": self.force_closure, "epsilon": self.epsilon,
-                "score": self.score, "held": self.held, "robust": self.robust,
+                "escape": self.escape, "firmness": self.firmness, "score": self.score, "held": self.held, "robust": self.robust,
                 "held_fraction": self.held_fraction, "error": self.error}
 
 
@@ -162,37 +177,55 @@ def _judge(cand: Candidate, traj: Trajectory, hand: Hand, obj: Object, target: n
     return replace(cand, contacts=len(found), force_closure=bool(q.force_closure), epsilon=float(q.epsilon))
 
 
+def _escape(cand: Candidate, traj: Trajectory, hand: Hand, obj: Object) -> Candidate:
+    """The candidate with its escape filled in."""
+    from .analysis import escape_distance
+
+    e = escape_distance(hand, obj, traj.palm_pose[-1], traj.joints[-1])
+    return replace(cand, escape=float(min(e.max(), ESCAPE_REACH)))
+
+
 def _default_key(c: Candidate) -> tuple[Any, ...]:
-    return (c.ok, bool(c.force_closure), c.hug, c.epsilon if c.epsilon is not None else -1.0, -c.index)
+    firm = c.firmness
+    return (c.ok, bool(c.force_closure), firm if firm is not None else -math.inf, -c.index)
+
+
+def _upper_key(c: Candidate) -> tuple[Any, ...]:
+    """A bound on _default_key(c) before its escape is known: firmness <= epsilon."""
+    return (c.ok, bool(c.force_closure), c.epsilon if c.epsilon is not None else -math.inf, -c.index)
 
 
 def rank(candidates: Sequence[Candidate], judge: Callable[[Candidate], Candidate],
-         score: Callable[[Candidate], float] | None = None) -> tuple[int, list[Candidate]]:
+         score: Callable[[Candidate], float] | None = None,
+         escape: Callable[[Candidate], Candidate] | None = None) -> tuple[int, list[Candidate]]:
     """The index of the best candidate and the candidates, judged where it decides.
 
-    ``judge(c)`` returns c with ``contacts``, ``force_closure`` and ``epsilon`` filled in. Default
-    ranking: see the module docstring; with ``score``, every working candidate is judged and the
-    largest ``score(c)`` wins (ties: lowest index).
+    ``judge(c)`` returns c with ``contacts``, ``force_closure`` and ``epsilon`` filled in;
+    ``escape(c)`` returns c with ``escape`` filled in (None: every escape counts as 0, so epsilon
+    alone ranks). Default ranking: see the module docstring; with ``score``, every working
+    candidate is judged fully and the largest ``score(c)`` wins (ties: lowest index).
     """
     out = list(candidates)
     working = [c for c in out if c.ok]
     if not working:
         raise ValueError("no approach could be planned: " + "; ".join(f"{c.index}: {c.error}" for c in out))
-    best: Candidate | None
+    caged = escape if escape is not None else (lambda c: replace(c, escape=0.0))
+    for c in working:  # search judges as its plans end; judge the others
+        out[c.index] = judge(c) if c.epsilon is None else c
     if score is not None:
         for c in working:
-            j = judge(c)
+            j = caged(out[c.index])
             s = float(score(j))
             if not math.isfinite(s):
                 raise ValueError(f"score must return a finite number, got {s!r} for candidate {c.index}")
             out[c.index] = replace(j, score=s)
-        best = max((c for c in out if c.ok), key=lambda c: (c.score, -c.index))
-        return best.index, out
-    best = None
-    for c in sorted(working, key=lambda c: (-c.hug, c.index)):
-        if best is not None and best.force_closure and c.hug < best.hug:
-            break  # cannot beat a force-closure grasp that hugs more
-        j = judge(c)
+        chosen = max((c for c in out if c.ok), key=lambda c: (c.score, -c.index))
+        return chosen.index, out
+    best: Candidate | None = None
+    for c in sorted((out[c.index] for c in working), key=_upper_key, reverse=True):
+        if best is not None and _upper_key(c) < _default_key(best):
+            break  # its firmness cannot reach the best's
+        j = caged(c)
         out[c.index] = j
         if best is None or _default_key(j) > _default_key(best):
             best = j
@@ -339,9 +372,10 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
                              error=f"{type(exc).__name__}: {exc}"), None
         elapsed = time.perf_counter() - t1
         s = traj.summary(obj=obj)
-        return Candidate(index=i, direction=d, status=traj.status, start_pose=pose, configurations=len(traj),
+        cand = Candidate(index=i, direction=d, status=traj.status, start_pose=pose, configurations=len(traj),
                          plan_time_s=elapsed,
-                         links_in_contact=int(s["links_in_contact"]), palm_contact=bool(s["palm_contact"])), traj
+                         links_in_contact=int(s["links_in_contact"]), palm_contact=bool(s["palm_contact"]))
+        return _judge(cand, traj, hand, obj, t, scale), traj  # in this thread: the queries release the GIL
 
     k = len(dirs)
     results: list[tuple[Candidate, Trajectory | None]] = [None] * k
@@ -361,10 +395,11 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
                     progress(done, k)
     trajs = [r[1] for r in results]
     judge = lambda c: _judge(c, trajs[c.index], hand, obj, t, scale)  # noqa: E731
-    best, ranked = rank([r[0] for r in results], judge, score)
+    caged = lambda c: _escape(c, trajs[c.index], hand, obj)  # noqa: E731
+    best, ranked = rank([r[0] for r in results], judge, score, caged)
     verified: tuple[int, ...] = ()
     if verify:
-        ranked = [judge(c) if c.ok and c.epsilon is None else c for c in ranked]
+        ranked = [caged(c) if c.ok and c.escape is None else c for c in ranked]
         key = (lambda c: (c.score, -c.index)) if score is not None else _default_key
         order = sorted((c for c in ranked if c.ok), key=key, reverse=True)
         best, checked = _verify(order, trajs, int(verify), robust, procs, progress, k)
