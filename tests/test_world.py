@@ -25,6 +25,27 @@ def test_object_queries(fine_sphere):
     assert len(loops) == 1 and np.linalg.norm(loops[0], axis=1) == pytest.approx(0.04, abs=3e-4)
 
 
+def test_closest_within_a_distance_is_exact_there_and_skips_the_rest(fine_sphere):
+    rng = np.random.default_rng(3)
+    pts = rng.normal(size=(400, 3)) * 0.03
+    full = fine_sphere.closest(pts)
+    near = fine_sphere.closest(pts, max_distance=0.005)
+    within = np.abs(full["distance"]) <= 0.005
+    assert within.any() and (~within).any()
+    for key in ("distance", "point", "normal", "triangle"):
+        assert np.array_equal(near[key][within], full[key][within]), key
+    # the rest: skipped (infinite, signed as before, no point) or found all the same
+    skipped = near["triangle"] == -1
+    assert not skipped[within].any() and skipped.any()
+    assert np.all(np.isinf(near["distance"][skipped]))
+    assert np.array_equal(np.sign(near["distance"][skipped]), np.sign(full["distance"][skipped]))
+    assert np.all(np.isnan(near["point"][skipped])) and np.all(np.isnan(near["normal"][skipped]))
+    assert np.array_equal(near["distance"][~skipped], full["distance"][~skipped])
+    for bad in (-1.0, float("nan")):
+        with pytest.raises(ValueError, match="max_distance"):
+            fine_sphere.closest(pts, max_distance=bad)
+
+
 def _mesh():
     return hugger.objects.icosphere(1)
 

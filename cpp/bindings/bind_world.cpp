@@ -1,8 +1,10 @@
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 
 #include "common.hpp"
+#include "hugger/check.hpp"
 #include "hugger/world/object.hpp"
 #include "hugger/world/section_skin.hpp"
 #include "hugger/world/simulated_world.hpp"
@@ -58,18 +60,28 @@ void bind_world(py::module_& m) {
           py::arg("points"), "Signed distance (n,) of each point (n, 3) to O's surface; negative inside.")
       .def(
           "closest",
-          [](const Object& o, const ArrayD& points) {
+          [](const Object& o, const ArrayD& points, double max_distance) {
             const PointsN3 p = to_rows<PointsN3>(points, "points");
+            HUGGER_CHECK_ARGUMENT(max_distance >= 0.0, "max_distance must be >= 0, got " << max_distance);
             const Eigen::Index n = p.rows();
             Eigen::VectorXd dist(n);
             PointsN3 on(n, 3), normal(n, 3);
             Eigen::Matrix<std::int64_t, Eigen::Dynamic, 1> tri(n);
-            for (Eigen::Index i = 0; i < n; ++i) {
-              const SignedNearest sn = o.nearest(p.row(i), p.row(i));
-              dist(i) = sn.signed_distance;
-              tri(i) = sn.triangle;
-              on.row(i) = sn.on_object.transpose();
-              normal.row(i) = o.face_normal(sn.triangle).transpose();
+            {
+              py::gil_scoped_release release;  // queries of a const Object: other threads may query too
+              const double nan = std::numeric_limits<double>::quiet_NaN();
+              for (Eigen::Index i = 0; i < n; ++i) {
+                const SignedNearest sn = o.nearest(p.row(i), p.row(i), max_distance);
+                dist(i) = sn.signed_distance;
+                tri(i) = sn.triangle;
+                if (sn.triangle < 0) {  // nothing within max_distance
+                  on.row(i).setConstant(nan);
+                  normal.row(i).setConstant(nan);
+                } else {
+                  on.row(i) = sn.on_object.transpose();
+                  normal.row(i) = o.face_normal(sn.triangle).transpose();
+                }
+              }
             }
             py::dict d;
             d["distance"] = dist;
@@ -78,9 +90,11 @@ void bind_world(py::module_& m) {
             d["triangle"] = tri;
             return d;
           },
-          py::arg("points"),
+          py::arg("points"), py::arg("max_distance") = kInf,
           "For points (n, 3): signed distance (n,), closest surface point (n, 3), the outward unit normal "
-          "of its triangle (n, 3) and the triangle index (n,).")
+          "of its triangle (n, 3) and the triangle index (n,). Points farther than `max_distance` from "
+          "the surface may get distance +inf or -inf (the sign still says outside or inside), NaN point "
+          "and normal, and triangle -1.")
       .def(
           "segment_distance",
           [](const Object& o, const ArrayD& a, const ArrayD& b) {
@@ -88,6 +102,7 @@ void bind_world(py::module_& m) {
             check_shape(b, {pa.rows(), 3}, "b");
             const PointsN3 pb = to_rows<PointsN3>(b, "b");
             Eigen::VectorXd out(pa.rows());
+            py::gil_scoped_release release;
             for (Eigen::Index i = 0; i < pa.rows(); ++i) out(i) = o.nearest(pa.row(i), pb.row(i)).signed_distance;
             return out;
           },

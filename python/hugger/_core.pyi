@@ -105,9 +105,9 @@ class Object:
     """
     def __init__(self, vertices: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], faces: typing.Annotated[numpy.typing.ArrayLike, numpy.int64]) -> None:
         ...
-    def closest(self, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> dict[str, typing.Any]:
+    def closest(self, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], max_distance: typing.SupportsFloat | typing.SupportsIndex = ...) -> dict[str, typing.Any]:
         """
-        For points (n, 3): signed distance (n,), closest surface point (n, 3), the outward unit normal of its triangle (n, 3) and the triangle index (n,).
+        For points (n, 3): signed distance (n,), closest surface point (n, 3), the outward unit normal of its triangle (n, 3) and the triangle index (n,). Points farther than `max_distance` from the surface may get distance +inf or -inf (the sign still says outside or inside), NaN point and normal, and triangle -1.
         """
     def inside(self, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.bool_]:
         """

@@ -255,9 +255,10 @@ def _palm_contacts(obj: Any, palm_pose: np.ndarray, radius: float, thickness: fl
     rot, origin = palm_pose[:3, :3], palm_pose[:3, 3]
     local = _palm_samples(radius, thickness, min(_MAX_SPACING, radius / 8.0, thickness / 2.0))
     world = local @ rot.T + origin
-    d = obj.closest(world)["distance"]
+    d = obj.closest(world, max_distance=distance)["distance"]  # only the touching samples matter
     touching = np.flatnonzero(d <= distance)
     if touching.size == 0:
+        d = obj.closest(world)["distance"]
         # The palm comes within reach between samples: alternate nearest-point projections
         # (object <- palm <- object ...) from the best sample to the nearest pair.
         p = local[int(np.argmin(d))]

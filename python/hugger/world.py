@@ -1,6 +1,7 @@
 """The object O: a closed triangle mesh, validated, with the queries the simulated world uses."""
 from __future__ import annotations
 
+import math
 import warnings
 from typing import Any, Callable, cast
 
@@ -172,11 +173,14 @@ class Object:
         p = np.asarray(points, dtype=np.float64)
         return self._core.signed_distance(p.reshape(-1, 3)).reshape(p.shape[:-1])
 
-    def closest(self, points: Any) -> dict[str, np.ndarray]:
+    def closest(self, points: Any, max_distance: float = math.inf) -> dict[str, np.ndarray]:
         """For points (n, 3): ``distance`` (n,) signed (negative inside), closest surface ``point``
-        (n, 3), outward unit ``normal`` (n, 3) of its triangle, and the ``triangle`` index (n,)."""
+        (n, 3), outward unit ``normal`` (n, 3) of its triangle, and the ``triangle`` index (n,).
+        Points farther than ``max_distance`` (m) from the surface may be skipped, which is faster:
+        their distance is then +inf or -inf (the sign still says outside or inside), point and
+        normal NaN, triangle -1."""
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-        return self._core.closest(p)
+        return self._core.closest(p, float(max_distance))
 
     def segment_distance(self, a: Any, b: Any) -> np.ndarray:
         """Signed distance (n,) of segments [a_i, b_i] to O (<= 0 when crossing the surface)."""
