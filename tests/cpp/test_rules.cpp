@@ -84,6 +84,33 @@ TEST(Rules, TipOnAFaceFacingThePalm) {
   EXPECT_LT(end_height[1], 0.02 + 0.001) << "hug: the fingers yield and the palm lands on the face";
 }
 
+// Hug rule H5: the same face tilted toward the palm (the palm comes at it from 15 and 35 degrees
+// off its normal). The uphill fingertips could slide outward only toward the palm; Tail2Head
+// folded those fingers into a Z that held the palm 3 cm off the face. Such a finger opens (its
+// root joint turns back) while the palm advances, and closes again once the palm lands.
+TEST(Rules, FingersOpenOnATiltedFace) {
+  const HandModel hand = HandModel::uniform(3, 4, 0.02, 0.0, 0.02, 0.01);
+  auto world = box_world(Vec3(0.06, 0.06, 0.02));
+  for (double degrees : {15.0, 35.0}) {
+    const double a = degrees * kPi / 180.0;
+    Pose start = Pose::Identity();
+    start.linear() = Eigen::AngleAxisd(kPi - a, Vec3::UnitX()).toRotationMatrix();  // p at the origin
+    start.translation() = 0.2 * Vec3(0.0, std::sin(a), std::cos(a));
+    PlannerParams params;
+    params.rules = Rules::kHug;
+    Planner p(hand, world, Vec3::Zero(), start, params);
+    EXPECT_EQ(p.plan(), Status::kDone) << degrees;
+    expect_motion_rules(p);
+    const auto& h = p.history();
+    double most_open = 0.0;  // the smallest root joint angle (extension is negative)
+    for (const Configuration& c : h)
+      for (int m = 0; m < hand.fingers(); ++m) most_open = std::min(most_open, c.angles(m, 0));
+    EXPECT_LT(most_open, -1.0) << degrees << " degrees: a finger opened";
+    const double gap = world->palm(h.back().palm, hand.palm_radius(), hand.palm_thickness(), 1.0);
+    EXPECT_LT(gap, 0.01) << degrees << " degrees: the palm comes within 1 cm of the face";
+  }
+}
+
 // Hug rule H4: a FROZEN finger sliding past a sphere's flank, 0.2 mm from it, does not hold the
 // palm to its gap. Two opposite fingers whose roots lie just outside the sphere's silhouette pass
 // beside it while the palm comes down onto its top: the paper's rules clip every palm step to
@@ -104,14 +131,22 @@ TEST(Rules, PalmStepIsTheFreeDistanceAlongP) {
 }
 
 // A DONE finger keeps its joint angles while the palm still advances: the 5 x 5 hand on an
-// ellipsoid of 10 x 8 x 6 cm from above, where some fingers are DONE before the palm lands.
+// ellipsoid of 10 x 8 x 6 cm from above (turned 30 degrees about the vertical), where some
+// fingers are DONE before the palm lands (with the paper's rules; under the hug rules they open
+// instead, H5, and the rule is checked all the same).
 TEST(Rules, DoneFingerAtRestWhileThePalmAdvances) {
   const HandModel hand = HandModel::uniform(5, 5, 0.02, 0.004, 0.03, 0.01);
   const auto mesh = test::icosphere(4, Vec3(0.05, 0.04, 0.03));
   auto world = std::make_shared<SimulatedWorld>(std::make_shared<Object>(mesh.vertices, mesh.faces));
+  Pose start = test::facing_down(0.2);
+  start.linear() = Eigen::AngleAxisd(kPi / 6.0, Vec3::UnitZ()).toRotationMatrix() * start.linear();
   bool exercised = false;
   for (Rules rules : {Rules::kPaper, Rules::kHug}) {
-    const auto p = plan_from_above(hand, world, rules);
+    PlannerParams params;
+    params.rules = rules;
+    const auto p = std::make_unique<Planner>(hand, world, Vec3::Zero(), start, params);
+    EXPECT_NE(p->plan(), Status::kMaxIterations) << to_string(rules);
+    expect_motion_rules(*p);
     // some finger is DONE while the palm still moves (with either rule set): the rule is exercised
     const auto& h = p->history();
     for (std::size_t k = 1; k < h.size() && !exercised; ++k)

@@ -153,6 +153,7 @@ void Planner::plan_phase1(const Pose& start) {
   frozen_lb_.assign(static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1), -kInf);
   closing_.assign(hand_.fingers(), 0);
   closed_.assign(hand_.fingers(), 0);
+  opened_.assign(hand_.fingers(), 0);
 }
 
 Vec2 Planner::root2d(int m, double eta) const {
@@ -388,6 +389,55 @@ bool Planner::close_step(int m, Chain& chain) const {
   return false;
 }
 
+bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vector<Chain>& others, Chain& out) {
+  const int N = hand_.links();
+  const double s = params_.step;
+  std::vector<double> a(N);
+  HandModel::planar_angles(old, a.data());
+  // The root joint may open to the palm's front plane and its lower limit.
+  const double lowest = std::max(-kPi / 2.0, hand_.lower()(m, 0));
+  double dist = 0.0;  // the farthest joint from the root
+  for (int n = 1; n <= N; ++n) dist = std::max(dist, (old[n] - old[0]).norm());
+  if (!(dist > 0.0)) return false;
+  const double d_eta = new_eta - old[0].y();
+  const double budget = kMaxJointSteps * s - d_eta;  // a joint moves at most rotation + the root's step
+  if (!(budget > 0.0)) return false;
+  const double max_turn = budget / dist, inc = 0.25 * s / dist;
+  const Vec2 root = root2d(m, new_eta);
+  for (double phi = inc; phi <= max_turn + 1e-12; phi += inc) {
+    if (a[0] - phi < lowest - kLimitSlack) return false;
+    std::vector<double> b = a;
+    b[0] -= phi;
+    Chain c = hand_.forward_planar(m, root, b.data());
+    if (!tail_to_head(*sensing_, snake_request(m, new_eta), root, c)) continue;
+    if (!motion_ok(m, old, c) || !fingers_clear(m, c, others)) continue;
+    out = std::move(c);
+    return true;
+  }
+  return false;
+}
+
+bool Planner::reclose_step(int m, Chain& chain) const {
+  const int N = hand_.links();
+  const double s = params_.step;
+  std::vector<double> a(N);
+  HandModel::planar_angles(chain, a.data());
+  double dist = 0.0;
+  for (int n = 1; n <= N; ++n) dist = std::max(dist, (chain[n] - chain[0]).norm());
+  const double top = std::min(kMaxCloseFlexion, hand_.upper()(m, 0));
+  const double inc = std::min(2.0 * s / dist, top - a[0]);
+  if (!(inc > 1e-9)) return false;
+  std::vector<double> b = a;
+  b[0] += inc;
+  Chain c = hand_.forward_planar(m, chain[0], b.data());
+  if (!tail_to_head(*sensing_, snake_request(m, chain[0].y()), chain[0], c)) return false;
+  double moved = 0.0;
+  for (int n = 0; n <= N; ++n) moved = std::max(moved, (c[n] - chain[n]).norm());
+  if (moved < params_.epsilon) return false;
+  chain = std::move(c);
+  return true;
+}
+
 double Planner::free_along_p(const Pose& palm, double palm_gap, double sigma) {
   const int M = hand_.fingers(), N = hand_.links();
   const double s = params_.step, delta = params_.contact_tolerance, level = 0.5 * delta, r = hand_.link_radius();
@@ -513,6 +563,7 @@ void Planner::phase2_iteration() {
   const std::vector<Chain> old = chains_;
   std::vector<Chain> cand = chains_;
   std::vector<char> touching(M, 0);  // the finger touches O (not closing)
+  std::vector<char> prefer_open(M, 0);
   for (int m = 0; m < M; ++m) {
     if (states_[m] != TipState::kContact) continue;
     if (closing_[m]) {
@@ -520,6 +571,11 @@ void Planner::phase2_iteration() {
       closing_[m] = 0;  // a link at the tip touches, or no joint can flex: the ordinary rules take over
     }
     touching[m] = 1;
+    if (hug && opened_[m] && palm_touched_) {
+      // Hug rule: a finger that opened to let the palm land closes its root joint again.
+      if (reclose_step(m, cand[m])) continue;
+      opened_[m] = 0;
+    }
     const Vec2 tip = old[m][N];
     Vec2 head = tip;
     if (link_gap(m, tip, tip, delta) <= delta) {
@@ -535,6 +591,9 @@ void Planner::phase2_iteration() {
       fr.reach = hand_.finger_length(m);
       fr.front = eta_;
       head = sensing_->follow_boundary(fr).head;
+      // Hug rule H5: a tip whose slide would take it toward the palm (a face that faces the
+      // palm, uphill) opens the finger instead while the palm advances.
+      prefer_open[m] = hug && head.y() < tip.y();
     } else {
       RotateRequest rr;
       rr.plane = planes_[m];
@@ -606,8 +665,10 @@ void Planner::phase2_iteration() {
   // (d) Tail2Head toward the moved roots; commit finger by finger, checking the motion of each
   // finger (joint steps, swept collision) and the fingers against each other. If anything fails
   // with the palm moved, retry with a shorter palm step, and finally with the palm still.
+  std::vector<char> opened_now(M, 0);
   auto attempt = [&](double sig, std::vector<Chain>& out, std::vector<TipState>& st) {
     const bool last = sig == 0.0;  // the palm still: what cannot move stays where it is, DONE
+    std::fill(opened_now.begin(), opened_now.end(), 0);
     out = old;
     st = states_;
     const double new_eta = eta_ + sig;
@@ -623,7 +684,11 @@ void Planner::phase2_iteration() {
           // Its Head2Tail chain re-attached to the moved root; failing that (clinging finds no
           // free position, a joint would jump, the swept motion collides), the old chain
           // re-attached: the finger only yields to the palm step this iteration.
-          bool ok = false;
+          // Hug rule H5: a touching finger whose tip would slide toward the palm, or that can
+          // follow no other way, opens (its root joint turns back) while the palm advances.
+          const bool may_open = hug && !last && !palm_touched_ && touching[m] && !closing_[m];
+          bool ok = may_open && prefer_open[m] && open_step(m, old[m], new_eta, out, c);
+          bool opened = ok;
           for (int pass = 0; pass < 2 && !ok; ++pass) {
             if (pass == 1 && (sig == 0.0 || cand[m] == old[m])) break;  // the same chain again
             c = pass == 0 ? cand[m] : old[m];
@@ -633,7 +698,15 @@ void Planner::phase2_iteration() {
               ok = false;
               ++stats_.motion_rejections;
             }
+            // Hug rule: a chain that would hit another finger or itself while the palm moves is
+            // refused like one whose motion collides (the old chain re-attached is tried next).
+            if (ok && hug && !last && !fingers_clear(m, c, out)) {
+              ok = false;
+              ++stats_.finger_collisions;
+            }
           }
+          if (!ok && may_open && !prefer_open[m]) ok = opened = open_step(m, old[m], new_eta, out, c);
+          if (opened) opened_now[m] = 1;
           if (!ok) {
             if (!last) return false;
             c = old[m];  // last: sig == 0, the old chain is still attached to its root
@@ -665,6 +738,8 @@ void Planner::phase2_iteration() {
     sigma = 0.0;
     attempt(0.0, next, next_states);
   }
+  for (int m = 0; m < M; ++m)
+    if (opened_now[m]) opened_[m] = 1;
   bool starts_closing = false;  // a finger starts closing: the next iteration moves it
   for (int m = 0; m < M; ++m) {
     if (next_states[m] != TipState::kContact) continue;

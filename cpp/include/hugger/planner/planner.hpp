@@ -131,6 +131,13 @@ class Planner {
   /// Hug rule H4: sigma clipped to the distance the palm, the FROZEN fingers and the roots may
   /// translate along p staying clear of O (sampled; at least their gaps allow).
   double free_along_p(const Pose& palm, double palm_gap, double sigma);
+  /// Hug rule: finger m, which cannot follow the palm to new_eta otherwise, opens: its root joint
+  /// turns back (extension) by the smallest sampled angle at which Tail2Head from the moved root
+  /// finds a free chain whose motion is allowed and which clears the other fingers.
+  /// Hug rule: one step of closing finger m's root joint again after it opened (Tail2Head
+  /// clinging for the rest). Returns false when the finger moves less than epsilon.
+  bool reclose_step(int m, Chain& chain) const;
+  bool open_step(int m, const Chain& old, double new_eta, const std::vector<Chain>& others, Chain& out);
   bool fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const;
   double link_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
   /// A lower bound of the gap of FROZEN finger m's link n (n == N: its root, as a sphere), exact
@@ -162,6 +169,7 @@ class Planner {
   bool any_contact_ = false;
   std::vector<char> closing_;  ///< hug rule: per finger, closing until contact
   std::vector<char> closed_;   ///< hug rule: per finger, has closed (or is closing) once
+  std::vector<char> opened_;   ///< hug rule: per finger, opened to yield and not closed again yet
 };
 
 }  // namespace hugger
