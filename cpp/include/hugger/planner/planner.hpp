@@ -131,13 +131,14 @@ class Planner {
   /// Hug rule H4: sigma clipped to the distance the palm, the FROZEN fingers and the roots may
   /// translate along p staying clear of O (sampled; at least their gaps allow).
   double free_along_p(const Pose& palm, double palm_gap, double sigma);
-  /// Hug rule: finger m, which cannot follow the palm to new_eta otherwise, opens: its root joint
-  /// turns back (extension) by the smallest sampled angle at which Tail2Head from the moved root
-  /// finds a free chain whose motion is allowed and which clears the other fingers.
-  /// Hug rule: one step of closing finger m's root joint again after it opened (Tail2Head
+  /// Hug rule H5: finger m, which cannot follow the palm to new_eta otherwise, opens: its root
+  /// joint turns back (extension) by the smallest sampled angle at which Tail2Head from the moved
+  /// root finds a free chain (into `out`) whose motion is allowed and which clears the other
+  /// fingers. Returns false when no such angle exists.
+  bool open_step(int m, const Chain& old, double new_eta, const std::vector<Chain>& others, Chain& out);
+  /// Hug rule H5: one step of closing finger m's root joint again after it opened (Tail2Head
   /// clinging for the rest). Returns false when the finger moves less than epsilon.
   bool reclose_step(int m, Chain& chain) const;
-  bool open_step(int m, const Chain& old, double new_eta, const std::vector<Chain>& others, Chain& out);
   bool fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const;
   double link_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
   /// A lower bound of the gap of FROZEN finger m's link n (n == N: its root, as a sphere), exact
