@@ -21,8 +21,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import hugger  # noqa: E402
 from generation_common import auc, ranking_value  # noqa: E402
-from hugger.analysis import ESCAPE_REACH  # noqa: E402
-from hugger.search import ESCAPE_WEIGHT  # noqa: E402
+from hugger.search import firmness  # noqa: E402
 
 
 def main() -> int:
@@ -50,7 +49,7 @@ def main() -> int:
             links.append(int(z["links_in_contact"][i]))
             hug.append(h)
             slide.append(-float(z["escape"][i]))  # less is firmer
-            firm.append(float(z["epsilon"][i]) - ESCAPE_WEIGHT * float(z["escape"][i]) / ESCAPE_REACH)
+            firm.append(firmness(z["epsilon"][i], z["escape"][i]))
             key.append(ranking_value(z["force_closure"][i], firm[-1]))
             held.append(bool(z["held"][i]))
     out = {"grasps": len(held), "held": int(sum(held)), "objects_x_hands": shards,

@@ -96,8 +96,32 @@ def test_escape_distance_of_a_palm_resting_on_a_ball(hand):
     assert np.all(d2[up] <= 0.002)
     with pytest.raises(ValueError, match="step"):
         analysis.escape_distance(hand, ball, pose, far, step=0.0)
+    with pytest.raises(ValueError, match="samples"):
+        analysis.escape_distance(hand, ball, pose, far, step=1e-9)
+    with pytest.raises(ValueError, match="directions"):
+        analysis.escape_distance(hand, ball, pose, far, directions=0)
+    # the last sample is the reach itself, also when the reach is not a multiple of the step
+    far_palm = pose.copy()
+    far_palm[:3, 3] += [0.0, 0.0, 0.0095]  # 9.5 mm above the ball: blocked only by the reach's sample
+    d3 = analysis.escape_distance(hand, ball, far_palm, far, reach=0.0097, step=0.004)
+    assert d3[0] == 0.0097 and np.all(np.isinf(d3[down]))
     with pytest.raises(ValueError, match="joints"):
         analysis.escape_distance(hand, ball, pose, far[:2])
+
+
+def test_escape_distance_with_links_of_radius_zero():
+    """A link of radius 0 blocks the slide as soon as its axis crosses the surface."""
+    from hugger import analysis
+
+    thin = hugger.Hand(fingers=3, links=2, link_radius=0.0)
+    ball = hugger.objects.sphere(0.03)
+    pose = hugger.look_at([0.0, 0.5, 0.0], [0.0, 0.0, 0.0])  # the palm far away
+    joints = np.zeros((3, 3, 3)) + [0.0, 0.5, 0.0]
+    joints[0] = [[-0.03, 0.0, 0.0301], [0.0, 0.0, 0.0301], [0.03, 0.0, 0.0301]]  # a bar resting on top
+    d = analysis.escape_distance(thin, ball, pose, joints)
+    up = hugger.approach_directions(26)[:, 2] > 0.2
+    assert np.all(d[up] <= 0.004) and np.isinf(d).any()
+    assert analysis.escape(thin, ball, pose, joints) == analysis.ESCAPE_REACH
 
 
 def test_a_hugging_grasp_cages_its_object(hand):

@@ -41,7 +41,7 @@ def test_closest_within_a_distance_is_exact_there_and_skips_the_rest(fine_sphere
     assert np.array_equal(np.sign(near["distance"][skipped]), np.sign(full["distance"][skipped]))
     assert np.all(np.isnan(near["point"][skipped])) and np.all(np.isnan(near["normal"][skipped]))
     assert np.array_equal(near["distance"][~skipped], full["distance"][~skipped])
-    for bad in (-1.0, float("nan")):
+    for bad in (-1.0, float("nan"), None, "near"):
         with pytest.raises(ValueError, match="max_distance"):
             fine_sphere.closest(pts, max_distance=bad)
 

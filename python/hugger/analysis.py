@@ -20,6 +20,7 @@ hand penetrates the object (FCL's convention, docs/model.md).
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable, cast
 
@@ -38,6 +39,7 @@ __all__ = [
     "analyze",
     "contacts",
     "contacts_of",
+    "escape",
     "escape_distance",
     "grasp_quality",
     "primitive_wrenches",
@@ -58,6 +60,8 @@ ESCAPE_REACH = 0.05
 ESCAPE_STEP = 0.002
 #: A hand part penetrating the slid object by more than this (m) blocks the slide.
 _ESCAPE_PENETRATION = 1e-4
+#: At most this many samples per direction in :func:`escape_distance`.
+_MAX_ESCAPE_SAMPLES = 10000
 
 
 # --------------------------------------------------------------------------------------------
@@ -374,14 +378,15 @@ def escape_distance(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joint
     """How far (m) the object can slide away from the hand, held fixed, in each of ``directions``
     directions spread evenly over the sphere (:func:`hugger.approach_directions`): a caging figure.
 
-    The object is translated by t along each direction, t = ``step``, 2 ``step``, ... up to
-    ``reach``; the slide is blocked at the first t where a link capsule (as in
-    :func:`contacts_of`) penetrates the moved object by more than 0.1 mm, or the palm at all (its
-    gap is signed only to touching). Returns
-    ``(directions,)`` distances: that first blocked t, or ``inf`` where the object slides the whole
-    ``reach`` freely. A grasp that cages the object has small distances in every direction; a grasp
-    that holds it by friction alone has a free direction. Sampled: a part thinner than ``step``
-    may be passed between two samples. ``hand``, ``palm_pose`` and ``joints`` are as in
+    The object is translated by t along each direction, t = ``step``, 2 ``step``, ... and
+    ``reach`` last; the slide is blocked at the first t where a link capsule (as in
+    :func:`contacts_of`) penetrates the moved object by more than 0.1 mm or its axis crosses the
+    surface (so links of radius 0 block too), or the palm touches into it at all (its gap is
+    signed only to touching). Returns ``(directions,)`` distances: that first blocked t, or
+    ``inf`` where the object slides the whole ``reach`` freely. A grasp that cages the object has
+    small distances in every direction; a grasp that holds it by friction alone has a free
+    direction. Sampled: a part thinner than ``step`` may be passed between two samples; at most
+    10,000 samples per direction. ``hand``, ``palm_pose`` and ``joints`` are as in
     :func:`contacts_of`.
     """
     from .search import approach_directions
@@ -389,16 +394,22 @@ def escape_distance(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joint
     _, _, radius, palm_radius, palm_thickness, pose, j = _configuration(hand, obj, palm_pose, joints)
     reach = positive("reach", reach)
     step = positive("step", step)
-    dirs = approach_directions(directions)
+    samples = int(math.ceil(reach / step - 1e-9))
+    if samples > _MAX_ESCAPE_SAMPLES:
+        raise ValueError(f"reach / step must be at most {_MAX_ESCAPE_SAMPLES} samples, got {reach} / {step}")
+    if isinstance(directions, bool) or not isinstance(directions, numbers.Integral) or \
+            not 1 <= int(directions) <= 10000:
+        raise ValueError(f"directions must be a whole number from 1 to 10000, got {directions!r}")
+    dirs = approach_directions(int(directions))
     a, b = j[:, :-1].reshape(-1, 3), j[:, 1:].reshape(-1, 3)
     out = np.full(len(dirs), np.inf)
     alive = np.arange(len(dirs))  # the directions still sliding freely
-    for i in range(1, int(math.floor(reach / step + 1e-9)) + 1):
-        t = i * step
+    for i in range(1, samples + 1):
+        t = min(i * step, reach)
         shift = -t * dirs[alive]  # moving the object by +t d is moving the hand by -t d
-        gaps = obj.segment_distance((a[None] + shift[:, None]).reshape(-1, 3),
-                                    (b[None] + shift[:, None]).reshape(-1, 3)).reshape(len(alive), len(a)) - radius
-        blocked = (gaps < -_ESCAPE_PENETRATION).any(axis=1)
+        axis = obj.segment_distance((a[None] + shift[:, None]).reshape(-1, 3),
+                                    (b[None] + shift[:, None]).reshape(-1, 3)).reshape(len(alive), len(a))
+        blocked = ((axis < 0.0) | (axis - radius < -_ESCAPE_PENETRATION)).any(axis=1)
         for k in np.flatnonzero(~blocked):
             moved = pose.copy()
             moved[:3, 3] += shift[k]
@@ -408,6 +419,12 @@ def escape_distance(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joint
         if not len(alive):
             break
     return out
+
+
+def escape(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joints: Any) -> float:
+    """The search's *escape* (m): the largest of :func:`escape_distance`'s distances with its
+    defaults, at most ``ESCAPE_REACH`` (a free direction counts as the reach)."""
+    return float(min(escape_distance(hand, obj, palm_pose, joints).max(), ESCAPE_REACH))
 
 
 # --------------------------------------------------------------------------------------------

@@ -131,7 +131,8 @@ def make_shard(task: dict[str, Any]) -> bytes:
     gives the same bytes in any process."""
     from .hand import Hand
     from .scenarios import default_case
-    from .search import _escape, final_grasp_quality, search, torque_scale
+    from .analysis import escape
+    from .search import final_grasp_quality, search, torque_scale
 
     ob = task["object"]
     hand = Hand(**task["hand"]["kwargs"])
@@ -172,7 +173,8 @@ def make_shard(task: dict[str, Any]) -> bytes:
         a["links_in_contact"][i], a["palm_contact"][i] = cand.links_in_contact, cand.palm_contact
         found, q = final_grasp_quality(traj, hand, case.obj, case.target, scale)
         a["force_closure"][i], a["epsilon"][i] = q.force_closure, q.epsilon
-        a["escape"][i] = (cand if cand.escape is not None else _escape(cand, traj, hand, case.obj)).escape
+        a["escape"][i] = cand.escape if cand.escape is not None else escape(hand, case.obj, traj.palm_pose[-1],
+                                                                          traj.joints[-1])
         points.append(found.points)
         normals.append(found.normals)
         finger.append(found.finger)

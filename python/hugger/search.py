@@ -66,9 +66,9 @@ class Candidate:
     contacts: int | None = None  #: contact points (None: not judged, see the module docstring)
     force_closure: bool | None = None  #: force closure over all contacts (None: not judged)
     epsilon: float | None = None  #: Ferrari-Canny epsilon, mu = 0.5 (None: not judged)
-    escape: float | None = None
     #: the largest distance (m) the object slides freely from the fixed hand, at most ESCAPE_REACH
     #: (None: not judged, see the module docstring)
+    escape: float | None = None
     score: float | None = None  #: the custom score, when one was given
     held: bool | None = None  #: the six-direction physics verdict, when ``verify`` checked it
     robust: bool | None = None  #: held under every perturbation, when ``verify`` with ``robust`` checked it
@@ -77,7 +77,7 @@ class Candidate:
 
     @property
     def hug(self) -> int:
-        """Links in contact + 2 for the palm: the cheap ranking figure."""
+        """Links in contact + 2 for the palm: how much of the hand touches (not ranked on)."""
         return int(self.links_in_contact) + (2 if self.palm_contact else 0)
 
     @property
@@ -89,7 +89,7 @@ class Candidate:
         """epsilon - ESCAPE_WEIGHT x escape / ESCAPE_REACH: the ranking's figure (None: not judged)."""
         if self.epsilon is None or self.escape is None:
             return None
-        return self.epsilon - ESCAPE_WEIGHT * self.escape / ESCAPE_REACH
+        return firmness(self.epsilon, self.escape)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON types."""
@@ -179,14 +179,19 @@ def _judge(cand: Candidate, traj: Trajectory, hand: Hand, obj: Object, target: n
 
 def _escape(cand: Candidate, traj: Trajectory, hand: Hand, obj: Object) -> Candidate:
     """The candidate with its escape filled in."""
-    from .analysis import escape_distance
+    from .analysis import escape
 
-    e = escape_distance(hand, obj, traj.palm_pose[-1], traj.joints[-1])
-    return replace(cand, escape=float(min(e.max(), ESCAPE_REACH)))
+    return replace(cand, escape=escape(hand, obj, traj.palm_pose[-1], traj.joints[-1]))
+
+
+def firmness(epsilon: float, escape: float) -> float:
+    """The ranking's figure: epsilon - ESCAPE_WEIGHT x escape / ESCAPE_REACH."""
+    return float(epsilon) - ESCAPE_WEIGHT * float(escape) / ESCAPE_REACH
 
 
 def _default_key(c: Candidate) -> tuple[Any, ...]:
-    firm = c.firmness
+    # firmness, or epsilon where no escape is measured (rank without an escape function)
+    firm = c.firmness if c.firmness is not None else c.epsilon
     return (c.ok, bool(c.force_closure), firm if firm is not None else -math.inf, -c.index)
 
 
@@ -201,15 +206,15 @@ def rank(candidates: Sequence[Candidate], judge: Callable[[Candidate], Candidate
     """The index of the best candidate and the candidates, judged where it decides.
 
     ``judge(c)`` returns c with ``contacts``, ``force_closure`` and ``epsilon`` filled in;
-    ``escape(c)`` returns c with ``escape`` filled in (None: every escape counts as 0, so epsilon
-    alone ranks). Default ranking: see the module docstring; with ``score``, every working
+    ``escape(c)`` returns c with ``escape`` filled in (None: no escape is measured, and epsilon
+    ranks in firmness's place). Default ranking: see the module docstring; with ``score``, every working
     candidate is judged fully and the largest ``score(c)`` wins (ties: lowest index).
     """
     out = list(candidates)
     working = [c for c in out if c.ok]
     if not working:
         raise ValueError("no approach could be planned: " + "; ".join(f"{c.index}: {c.error}" for c in out))
-    caged = escape if escape is not None else (lambda c: replace(c, escape=0.0))
+    caged = escape if escape is not None else (lambda c: c)  # no escape: epsilon ranks
     for c in working:  # search judges as its plans end; judge the others
         out[c.index] = judge(c) if c.epsilon is None else c
     if score is not None:

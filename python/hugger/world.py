@@ -180,7 +180,11 @@ class Object:
         their distance is then +inf or -inf (the sign still says outside or inside), point and
         normal NaN, triangle -1."""
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-        return self._core.closest(p, float(max_distance))
+        try:
+            bound = float(max_distance)
+        except (TypeError, ValueError):
+            raise ValueError(f"max_distance must be a number >= 0 (inf: no bound), got {max_distance!r}") from None
+        return self._core.closest(p, bound)  # the core checks the value
 
     def segment_distance(self, a: Any, b: Any) -> np.ndarray:
         """Signed distance (n,) of segments [a_i, b_i] to O (<= 0 when crossing the surface)."""

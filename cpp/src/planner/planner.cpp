@@ -154,6 +154,7 @@ void Planner::plan_phase1(const Pose& start) {
   closing_.assign(hand_.fingers(), 0);
   closed_.assign(hand_.fingers(), 0);
   opened_.assign(hand_.fingers(), 0);
+  reclosing_.assign(hand_.fingers(), 0);
 }
 
 Vec2 Planner::root2d(int m, double eta) const {
@@ -417,13 +418,14 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
   return false;
 }
 
-bool Planner::reclose_step(int m, Chain& chain) const {
+bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others) const {
   const int N = hand_.links();
   const double s = params_.step;
   std::vector<double> a(N);
   HandModel::planar_angles(chain, a.data());
   double dist = 0.0;
   for (int n = 1; n <= N; ++n) dist = std::max(dist, (chain[n] - chain[0]).norm());
+  if (!(dist > 0.0)) return false;
   const double top = std::min(kMaxCloseFlexion, hand_.upper()(m, 0));
   const double inc = std::min(2.0 * s / dist, top - a[0]);
   if (!(inc > 1e-9)) return false;
@@ -434,6 +436,9 @@ bool Planner::reclose_step(int m, Chain& chain) const {
   double moved = 0.0;
   for (int n = 0; n <= N; ++n) moved = std::max(moved, (c[n] - chain[n]).norm());
   if (moved < params_.epsilon) return false;
+  // A step the motion rules or the other fingers would refuse ends the closing here, so that the
+  // ordinary rules move the finger in this same iteration.
+  if (!motion_ok(m, chain, c) || !fingers_clear(m, c, others)) return false;
   chain = std::move(c);
   return true;
 }
@@ -571,10 +576,12 @@ void Planner::phase2_iteration() {
       closing_[m] = 0;  // a link at the tip touches, or no joint can flex: the ordinary rules take over
     }
     touching[m] = 1;
-    if (hug && opened_[m] && palm_touched_) {
-      // Hug rule: a finger that opened to let the palm land closes its root joint again.
-      if (reclose_step(m, cand[m])) continue;
+    if (hug && opened_[m] && (palm_touched_ || reclosing_[m])) {
+      // Hug rule H5: a finger that opened to let the palm land closes its root joint again once
+      // the palm has landed, or once the hand is at rest without it.
+      if (reclose_step(m, cand[m], old)) continue;
       opened_[m] = 0;
+      reclosing_[m] = 0;
     }
     const Vec2 tip = old[m][N];
     Vec2 head = tip;
@@ -593,7 +600,7 @@ void Planner::phase2_iteration() {
       head = sensing_->follow_boundary(fr).head;
       // Hug rule H5: a tip whose slide would take it toward the palm (a face that faces the
       // palm, uphill) opens the finger instead while the palm advances.
-      prefer_open[m] = hug && head.y() < tip.y();
+      prefer_open[m] = hug && head.y() < tip.y() - 1e-3 * s;  // not by rounding on a face along p
     } else {
       RotateRequest rr;
       rr.plane = planes_[m];
@@ -766,7 +773,13 @@ void Planner::phase2_iteration() {
       rest = true;
     }
     if (!rest) continue;
-    if (hug && !closed_[m]) {
+    if (hug && opened_[m] && !reclosing_[m] && !palm_touched_) {
+      // Hug rule H5: an opened finger at rest with the palm off O closes again first.
+      reclosing_[m] = 1;
+      starts_closing = true;
+      stalled_[m] = 0;
+      anchors_[m] = next[m][N];
+    } else if (hug && !closed_[m]) {
       // Hug rule: before it is DONE, a finger closes the joints beyond its distal-most touching
       // link until they touch too (close-until-contact, clinging), once.
       closing_[m] = 1;

@@ -137,8 +137,9 @@ class Planner {
   /// fingers. Returns false when no such angle exists.
   bool open_step(int m, const Chain& old, double new_eta, const std::vector<Chain>& others, Chain& out);
   /// Hug rule H5: one step of closing finger m's root joint again after it opened (Tail2Head
-  /// clinging for the rest). Returns false when the finger moves less than epsilon.
-  bool reclose_step(int m, Chain& chain) const;
+  /// clinging for the rest). Returns false when the finger moves less than epsilon or the motion
+  /// rules or the `others` fingers refuse the step.
+  bool reclose_step(int m, Chain& chain, const std::vector<Chain>& others) const;
   bool fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const;
   double link_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
   /// A lower bound of the gap of FROZEN finger m's link n (n == N: its root, as a sphere), exact
@@ -171,6 +172,7 @@ class Planner {
   std::vector<char> closing_;  ///< hug rule: per finger, closing until contact
   std::vector<char> closed_;   ///< hug rule: per finger, has closed (or is closing) once
   std::vector<char> opened_;   ///< hug rule: per finger, opened to yield and not closed again yet
+  std::vector<char> reclosing_;  ///< hug rule: per finger, closing again at rest before palm contact
 };
 
 }  // namespace hugger
