@@ -20,7 +20,6 @@ hand penetrates the object (FCL's convention, docs/model.md).
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable, cast
 
@@ -389,7 +388,7 @@ def escape_distance(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joint
     10,000 samples per direction. ``hand``, ``palm_pose`` and ``joints`` are as in
     :func:`contacts_of`.
     """
-    from .search import approach_directions
+    from .search import _direction_count, approach_directions
 
     _, _, radius, palm_radius, palm_thickness, pose, j = _configuration(hand, obj, palm_pose, joints)
     reach = positive("reach", reach)
@@ -397,10 +396,7 @@ def escape_distance(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joint
     samples = int(math.ceil(reach / step - 1e-9))
     if samples > _MAX_ESCAPE_SAMPLES:
         raise ValueError(f"reach / step must be at most {_MAX_ESCAPE_SAMPLES} samples, got {reach} / {step}")
-    if isinstance(directions, bool) or not isinstance(directions, numbers.Integral) or \
-            not 1 <= int(directions) <= 10000:
-        raise ValueError(f"directions must be a whole number from 1 to 10000, got {directions!r}")
-    dirs = approach_directions(int(directions))
+    dirs = approach_directions(_direction_count("directions", directions))
     a, b = j[:, :-1].reshape(-1, 3), j[:, 1:].reshape(-1, 3)
     out = np.full(len(dirs), np.inf)
     alive = np.arange(len(dirs))  # the directions still sliding freely

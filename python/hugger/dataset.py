@@ -132,7 +132,7 @@ def make_shard(task: dict[str, Any]) -> bytes:
     from .hand import Hand
     from .scenarios import default_case
     from .analysis import escape
-    from .search import final_grasp_quality, search, torque_scale
+    from .search import search
 
     ob = task["object"]
     hand = Hand(**task["hand"]["kwargs"])
@@ -145,7 +145,6 @@ def make_shard(task: dict[str, Any]) -> bytes:
                     pole=pole, keep_all=True, **params)
     k = len(result.candidates)
     m, n = hand.fingers, hand.links
-    scale = torque_scale(case.obj, case.target)
     nan = np.nan
     a: dict[str, Any] = {
         "format_version": np.int64(SHARD_FORMAT), "task_sha256": np.str_(_task_key(task)),
@@ -163,7 +162,7 @@ def make_shard(task: dict[str, Any]) -> bytes:
     }
     points, normals, finger, link, offsets = [], [], [], [], [0]
     verdicts: list[dict[str, Any] | None] = []
-    for i, (cand, traj) in enumerate(zip(result.candidates, result.trajectories or ())):
+    for i, (cand, traj, found) in enumerate(zip(result.candidates, result.trajectories or (), result.contacts or ())):
         if traj is None:
             offsets.append(offsets[-1])
             verdicts.append(None)
@@ -171,8 +170,7 @@ def make_shard(task: dict[str, Any]) -> bytes:
         a["start_pose"][i], a["palm_pose"][i] = cand.start_pose, traj.palm_pose[-1]  # the pose given, exactly
         a["joints"][i], a["angles"][i], a["tip_state"][i] = traj.joints[-1], traj.angles[-1], traj.tip_state[-1]
         a["links_in_contact"][i], a["palm_contact"][i] = cand.links_in_contact, cand.palm_contact
-        found, q = final_grasp_quality(traj, hand, case.obj, case.target, scale)
-        a["force_closure"][i], a["epsilon"][i] = q.force_closure, q.epsilon
+        a["force_closure"][i], a["epsilon"][i] = cand.force_closure, cand.epsilon  # judged on `found`
         a["escape"][i] = cand.escape if cand.escape is not None else escape(hand, case.obj, traj.palm_pose[-1],
                                                                           traj.joints[-1])
         points.append(found.points)

@@ -112,6 +112,9 @@ class SearchResult:
     time_s: float  #: wall time of the whole search (s): planning and ranking
     trajectories: tuple[Trajectory | None, ...] | None = field(default=None, repr=False)
     #: every candidate's plan (None where planning failed) when ``keep_all``; else None
+    contacts: tuple[Any, ...] | None = field(default=None, repr=False)
+    #: every candidate's final contacts (:class:`hugger.analysis.Contacts`, those its force
+    #: closure and epsilon were computed from; None where planning failed) when ``keep_all``
     verified: tuple[int, ...] = ()  #: the candidates ``verify`` checked, in the order checked
 
     @property
@@ -124,6 +127,13 @@ class SearchResult:
         return np.stack([c.direction for c in self.candidates])
 
 
+def _direction_count(name: str, count: Any) -> int:
+    """``count`` as a number of directions, 1 to 10000; otherwise a ValueError naming ``name``."""
+    if isinstance(count, bool) or not isinstance(count, numbers.Integral) or not 1 <= int(count) <= 10000:
+        raise ValueError(f"{name} must be a whole number from 1 to 10000, got {count!r}")
+    return int(count)
+
+
 def approach_directions(count: int, pole: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
     """``count`` unit vectors (count, 3) spread evenly over the sphere, the first one ``pole``.
 
@@ -132,13 +142,11 @@ def approach_directions(count: int, pole: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
     about it from one to the next; the frame about the pole is that of :func:`hugger.look_at`
     (deterministic). ``count`` = 1 gives the pole alone (the default single approach).
     """
-    if isinstance(count, bool) or not isinstance(count, numbers.Integral) or not 1 <= int(count) <= 10000:
-        raise ValueError(f"approaches must be a whole number from 1 to 10000, got {count!r}")
+    n = _direction_count("approaches", count)
     p = np.asarray(pole, dtype=np.float64).reshape(3)
     if not np.all(np.isfinite(p)) or np.linalg.norm(p) == 0:
         raise ValueError(f"pole must be a finite non-zero 3-vector, got {pole!r}")
     p = p / np.linalg.norm(p)
-    n = int(count)
     if n == 1:
         return p[None].copy()
     from .planner import look_at
@@ -149,7 +157,7 @@ def approach_directions(count: int, pole: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
     r = np.sqrt(np.clip(1.0 - z * z, 0.0, None))
     phi = _GOLDEN_ANGLE * i
     local = np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
-    out = local @ frame.T
+    out: np.ndarray = local @ frame.T
     out /= np.linalg.norm(out, axis=1, keepdims=True)
     out[0] = p  # exactly the pole
     return out
@@ -171,10 +179,11 @@ def final_grasp_quality(traj: Trajectory, hand: Hand, obj: Object, target: np.nd
 
 
 def _judge(cand: Candidate, traj: Trajectory, hand: Hand, obj: Object, target: np.ndarray,
-           scale: float) -> Candidate:
-    """The candidate with its contacts, force closure and epsilon filled in."""
+           scale: float) -> tuple[Candidate, Any]:
+    """The candidate with its contacts, force closure and epsilon filled in, and its contacts
+    (a :class:`hugger.analysis.Contacts`)."""
     found, q = final_grasp_quality(traj, hand, obj, target, scale)
-    return replace(cand, contacts=len(found), force_closure=bool(q.force_closure), epsilon=float(q.epsilon))
+    return replace(cand, contacts=len(found), force_closure=bool(q.force_closure), epsilon=float(q.epsilon)), found
 
 
 def _escape(cand: Candidate, traj: Trajectory, hand: Hand, obj: Object) -> Candidate:
@@ -313,7 +322,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
     plan. ``rules`` is passed to :class:`hugger.Planner` when given (the Phase 2 rule set), as are
     ``params`` (``step``, ``epsilon``, ``contact_tolerance``, ``max_iterations``) and ``timeout``
     (seconds per plan). ``threads``: worker threads (default: the CPUs this process may use).
-    ``score``: see :func:`rank`. ``keep_all`` keeps every candidate's trajectory in the result.
+    ``score``: see :func:`rank`. ``keep_all`` keeps every candidate's trajectory and final contacts in the result.
     ``progress(done, total)`` is called as plans finish. Deterministic: the same input gives the
     same result on any number of threads.
 
@@ -374,16 +383,17 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
             traj = Planner(hand, obj, t, pose, **params).plan(limit)
         except (ValueError, RuntimeError) as exc:
             return Candidate(index=i, direction=d, status="error", start_pose=pose,
-                             error=f"{type(exc).__name__}: {exc}"), None
+                             error=f"{type(exc).__name__}: {exc}"), None, None
         elapsed = time.perf_counter() - t1
         s = traj.summary(obj=obj)
         cand = Candidate(index=i, direction=d, status=traj.status, start_pose=pose, configurations=len(traj),
                          plan_time_s=elapsed,
                          links_in_contact=int(s["links_in_contact"]), palm_contact=bool(s["palm_contact"]))
-        return _judge(cand, traj, hand, obj, t, scale), traj  # in this thread: the queries release the GIL
+        judged, found = _judge(cand, traj, hand, obj, t, scale)  # in this thread: the queries release the GIL
+        return judged, traj, found
 
     k = len(dirs)
-    results: list[tuple[Candidate, Trajectory | None]] = [None] * k
+    results: list[tuple[Candidate, Trajectory | None, Any]] = [None] * k
     if workers == 1 or k == 1:
         for i in range(k):
             results[i] = run(i)
@@ -399,7 +409,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
                 if progress is not None:
                     progress(done, k)
     trajs = [r[1] for r in results]
-    judge = lambda c: _judge(c, trajs[c.index], hand, obj, t, scale)  # noqa: E731
+    judge = lambda c: _judge(c, trajs[c.index], hand, obj, t, scale)[0]  # noqa: E731
     caged = lambda c: _escape(c, trajs[c.index], hand, obj)  # noqa: E731
     best, ranked = rank([r[0] for r in results], judge, score, caged)
     verified: tuple[int, ...] = ()
@@ -413,4 +423,4 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
         verified = tuple(c.index for c in checked)
     return SearchResult(best=best, trajectory=trajs[best], candidates=tuple(ranked), target=t,
                         time_s=time.perf_counter() - t0, trajectories=tuple(trajs) if keep_all else None,
-                        verified=verified)
+                        contacts=tuple(r[2] for r in results) if keep_all else None, verified=verified)

@@ -59,6 +59,20 @@ std::string fmt(double x) {
 /// A parameter checked by check_params: its value, or `fallback` for NaN (the default).
 double resolve(double value, double fallback) { return std::isnan(value) ? fallback : value; }
 
+/// The largest distance a joint moves from chain `a` to chain `b` (of the same size).
+double largest_move(const Chain& a, const Chain& b) {
+  double moved = 0.0;
+  for (std::size_t n = 0; n < a.size(); ++n) moved = std::max(moved, (b[n] - a[n]).norm());
+  return moved;
+}
+
+/// The distance of a chain's farthest joint from its root (joint 0).
+double farthest_joint(const Chain& c) {
+  double dist = 0.0;
+  for (std::size_t n = 1; n < c.size(); ++n) dist = std::max(dist, (c[n] - c[0]).norm());
+  return dist;
+}
+
 }  // namespace
 
 Planner::Planner(HandModel hand, std::shared_ptr<const Sensing> sensing, const Vec3& target, const Pose& palm_pose,
@@ -319,8 +333,7 @@ bool Planner::swept_link_ok(int m, const Vec2& a, const Vec2& b) const {
 bool Planner::motion_ok(int m, const Chain& old, const Chain& next) const {
   const int N = hand_.links();
   const double s = params_.step, r = hand_.link_radius();
-  for (int n = 0; n <= N; ++n)
-    if ((next[n] - old[n]).norm() > kMaxJointSteps * s) return false;
+  if (largest_move(old, next) > kMaxJointSteps * s) return false;
   std::vector<double> a0(N), a1(N), a(N);
   HandModel::planar_angles(old, a0.data());
   HandModel::planar_angles(next, a1.data());
@@ -397,8 +410,7 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
   HandModel::planar_angles(old, a.data());
   // The root joint may open to the palm's front plane and its lower limit.
   const double lowest = std::max(-kPi / 2.0, hand_.lower()(m, 0));
-  double dist = 0.0;  // the farthest joint from the root
-  for (int n = 1; n <= N; ++n) dist = std::max(dist, (old[n] - old[0]).norm());
+  const double dist = farthest_joint(old);
   if (!(dist > 0.0)) return false;
   const double d_eta = new_eta - old[0].y();
   const double budget = kMaxJointSteps * s - d_eta;  // a joint moves at most rotation + the root's step
@@ -423,8 +435,7 @@ bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others
   const double s = params_.step;
   std::vector<double> a(N);
   HandModel::planar_angles(chain, a.data());
-  double dist = 0.0;
-  for (int n = 1; n <= N; ++n) dist = std::max(dist, (chain[n] - chain[0]).norm());
+  const double dist = farthest_joint(chain);
   if (!(dist > 0.0)) return false;
   const double top = std::min(kMaxCloseFlexion, hand_.upper()(m, 0));
   const double inc = std::min(2.0 * s / dist, top - a[0]);
@@ -433,9 +444,7 @@ bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others
   b[0] += inc;
   Chain c = hand_.forward_planar(m, chain[0], b.data());
   if (!tail_to_head(*sensing_, snake_request(m, chain[0].y()), chain[0], c)) return false;
-  double moved = 0.0;
-  for (int n = 0; n <= N; ++n) moved = std::max(moved, (c[n] - chain[n]).norm());
-  if (moved < params_.epsilon) return false;
+  if (largest_move(chain, c) < params_.epsilon) return false;
   // A step the motion rules or the other fingers would refuse ends the closing here, so that the
   // ordinary rules move the finger in this same iteration.
   if (!motion_ok(m, chain, c) || !fingers_clear(m, c, others)) return false;
@@ -751,18 +760,14 @@ void Planner::phase2_iteration() {
   for (int m = 0; m < M; ++m) {
     if (next_states[m] != TipState::kContact) continue;
     if (closing_[m]) {  // a closing finger ends when it can flex no more (above)
-      double moved = 0.0;
-      for (int n = 0; n <= N; ++n) moved = std::max(moved, (next[m][n] - old[m][n]).norm());
-      if (moved >= 1e-3 * params_.epsilon) continue;
+      if (largest_move(old[m], next[m]) >= 1e-3 * params_.epsilon) continue;
       closing_[m] = 0;  // closing in steps this small is rounding, not motion: it has closed
       next_states[m] = TipState::kDone;
       continue;
     }
     // Paper: the tip moved less than epsilon. Hug: the hand is at rest (sigma = 0: while the
     // palm advances, no touching finger is done) and no joint of the finger moved epsilon.
-    double moved = (next[m][N] - old[m][N]).norm();
-    if (hug)
-      for (int n = 0; n < N; ++n) moved = std::max(moved, (next[m][n] - old[m][n]).norm());
+    const double moved = hug ? largest_move(old[m], next[m]) : (next[m][N] - old[m][N]).norm();
     bool rest = moved < params_.epsilon && !(hug && sigma > 0.0);
     // Overextension over a window: a tip that oscillates (pulled off by Tail2Head, swung back)
     // without getting farther than 2 s from where it was kStallWindow iterations ago is DONE.
