@@ -16,10 +16,6 @@ from .hand import _real_array, implausible_size
 #: georeferenced mesh to a local origin first.
 MAX_COORDINATE = 1e6
 
-#: A triangle is degenerate when twice its area is at most this fraction of its longest edge
-#: squared (a sliver whose height is 1e-12 of its length): its normal is numerical noise.
-DEGENERATE_AREA = 1e-12
-
 
 def _face_indices(faces: Any, nv: int) -> np.ndarray:
     """Faces as an (F, 3) int64 array of indices into nv vertices, checked before the cast so that
@@ -52,58 +48,6 @@ def _face_indices(faces: Any, nv: int) -> np.ndarray:
     return a.astype(np.int64)
 
 
-def _check_surface(v: np.ndarray, f: np.ndarray) -> None:
-    """Checks the engine leaves out, on a mesh it accepted (closed, every directed edge once,
-    enclosing a positive volume): degenerate (zero-area) triangles, the same triangle twice over
-    distinct but coincident vertices, and vertices where the surface touches itself (non-manifold
-    vertices)."""
-    nv, nf = len(v), len(f)
-    # Edges taken about the bounding box's centre: far from the origin raw coordinates lose digits.
-    centre = 0.5 * (v.min(axis=0) + v.max(axis=0))
-    a, b, c = v[f[:, 0]] - centre, v[f[:, 1]] - centre, v[f[:, 2]] - centre
-    ab, bc, ca = b - a, c - b, a - c
-    twice_area = np.sqrt(np.einsum("ij,ij->i", *(np.cross(ab, ca),) * 2))
-    longest = np.maximum(np.maximum(np.einsum("ij,ij->i", ab, ab), np.einsum("ij,ij->i", bc, bc)),
-                         np.einsum("ij,ij->i", ca, ca))
-    flat = np.flatnonzero(twice_area <= DEGENERATE_AREA * longest)
-    if flat.size:
-        i = int(flat[0])
-        raise ValueError(f"object face {i} {f[i].tolist()} is degenerate: zero area (its vertices are coincident "
-                         f"or collinear); {flat.size} such face(s)")
-    # Duplicate triangles: the same three positions, whatever the vertex indices and orientation.
-    p = v + 0.0  # makes -0.0 equal to 0.0
-    by_position = np.lexsort(p.T[::-1])
-    fresh = np.ones(nv, dtype=bool)
-    fresh[1:] = np.any(p[by_position[1:]] != p[by_position[:-1]], axis=1)
-    place = np.empty(nv, dtype=np.int64)
-    place[by_position] = np.cumsum(fresh) - 1
-    key = np.sort(place[f], axis=1)
-    order = np.lexsort(key.T[::-1])
-    same = np.flatnonzero(np.all(key[order[1:]] == key[order[:-1]], axis=1))
-    if same.size:
-        i, j = sorted((int(order[same[0]]), int(order[same[0] + 1])))
-        raise ValueError(f"object faces {i} and {j} are the same triangle (duplicate faces over coincident vertices)")
-    # Non-manifold vertices: around a vertex the corners (v, a, b) chain into cycles (the face
-    # across edge (b, v) holds the directed edge (v, b)); a manifold vertex has exactly one cycle.
-    hub = f.reshape(-1)  # the vertex of each corner
-    ahead = f[:, [1, 2, 0]].reshape(-1)
-    behind = f[:, [2, 0, 1]].reshape(-1)
-    keys = hub * nv + ahead  # every directed edge once (checked by the engine)
-    by_key = np.argsort(keys)
-    nxt = by_key[np.searchsorted(keys[by_key], hub * nv + behind)]
-    corners = np.arange(3 * nf)
-    label, span, valence = corners, 1, int(np.bincount(hub).max())
-    while span < valence:  # pointer doubling: each corner's label becomes the least of its cycle
-        label = np.minimum(label, label[nxt])
-        nxt = nxt[nxt]
-        span *= 2
-    fans = np.bincount(hub[label == corners], minlength=nv)
-    if np.any(fans > 1):
-        i = int(np.argmax(fans > 1))
-        raise ValueError(f"object mesh is not manifold at vertex {i}: {int(fans[i])} separate fans of faces meet "
-                         f"there (the surface touches itself at a point)")
-
-
 class Object:
     """A rigid, closed, consistently oriented (outward normals) triangle mesh in the world frame.
 
@@ -128,8 +72,7 @@ class Object:
             bad = int(np.argmax(np.abs(v).max(axis=1)))
             raise ValueError(f"object vertex {bad} = {v[bad].tolist()} lies beyond {MAX_COORDINATE:g} m of the "
                              f"origin: coordinates are in metres (move the mesh near the origin)")
-        self._core = _core.Object(v, f)
-        _check_surface(v, f)
+        self._core = _core.Object(v, f)  # the engine checks the surface (closed, manifold, ...)
         v.setflags(write=False)
         f.setflags(write=False)
         self._vertices, self._faces = v, f

@@ -1,4 +1,5 @@
 // The object's sensing queries (BVH, signs, inside, sections) against brute force and analytic shapes.
+#include <string>
 #include <gtest/gtest.h>
 
 #include <random>
@@ -91,7 +92,7 @@ TEST(Object, SignAgreesWithRayParityAndAnalyticEllipsoid) {
 
 TEST(Object, RejectsBadMeshes) {
   const auto mesh = test::icosphere(1);
-  auto expect_invalid = [](const PointsN3& v, const FacesN3& f, const char* what) {
+  auto expect_invalid = [](const PointsN3& v, const FacesN3& f, const std::string& what) {
     try {
       Object o(v, f);
       ADD_FAILURE() << "accepted: " << what;
@@ -114,6 +115,37 @@ TEST(Object, RejectsBadMeshes) {
   FacesN3 inward = mesh.faces;
   inward.col(1).swap(inward.col(2));
   expect_invalid(mesh.vertices, inward, "inward");
+  // A face of zero area: one vertex moved onto another.
+  PointsN3 flat = mesh.vertices;
+  flat.row(mesh.faces(0, 0)) = flat.row(mesh.faces(0, 1));
+  expect_invalid(flat, mesh.faces, "degenerate: zero area");
+  // The same triangle twice over three new coincident vertices (a zero-volume pillow).
+  {
+    const Eigen::Index n = mesh.vertices.rows(), m = mesh.faces.rows();
+    PointsN3 v(n + 3, 3);
+    v << mesh.vertices, mesh.vertices.row(mesh.faces(0, 0)), mesh.vertices.row(mesh.faces(0, 1)),
+        mesh.vertices.row(mesh.faces(0, 2));
+    FacesN3 f(m + 2, 3);
+    f << mesh.faces, n, n + 1, n + 2, n, n + 2, n + 1;
+    expect_invalid(v, f, "same triangle");
+  }
+  // Two spheres sharing one vertex: the surface touches itself there (two fans of faces).
+  {
+    const Eigen::Index n = mesh.vertices.rows(), m = mesh.faces.rows();
+    Eigen::Index i = 0, j = 0;
+    mesh.vertices.col(0).maxCoeff(&i);
+    mesh.vertices.col(0).minCoeff(&j);
+    PointsN3 v(2 * n, 3);
+    v.topRows(n) = mesh.vertices;
+    v.bottomRows(n) = mesh.vertices.rowwise() + (mesh.vertices.row(i) - mesh.vertices.row(j));
+    FacesN3 f(2 * m, 3);
+    f.topRows(m) = mesh.faces;
+    f.bottomRows(m) = mesh.faces.array() + n;
+    for (Eigen::Index r = m; r < 2 * m; ++r)
+      for (int k = 0; k < 3; ++k)
+        if (f(r, k) == j + n) f(r, k) = i;
+    expect_invalid(v, f, "not manifold at vertex " + std::to_string(i) + ": 2 separate fans");
+  }
 }
 
 TEST(Section, SphereSectionIsACircle) {

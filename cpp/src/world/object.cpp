@@ -1,6 +1,7 @@
 #include "hugger/world/object.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <unordered_map>
@@ -20,6 +21,120 @@ std::uint64_t edge_key(std::int64_t a, std::int64_t b) {
 
 namespace {
 std::atomic<std::uint64_t> next_serial{1};
+
+/// A directed edge leaving a vertex: its other end and the face holding it.
+struct OutEdge {
+  std::int64_t to, face;
+};
+
+/// A face's area is zero (coincident or collinear vertices) when twice its area is at most this
+/// times its longest edge squared (Python's hugger.world.DEGENERATE_AREA).
+constexpr double kDegenerateArea = 1e-12;
+
+/// The checks beyond closed, oriented and positive volume, on a mesh that passed those: no
+/// degenerate (zero-area) face, no triangle twice over distinct but coincident vertices, no
+/// vertex where the surface touches itself (a non-manifold vertex: more than one fan of faces).
+/// `row` and `out`: each vertex's outgoing directed edges, sorted by their other end.
+void check_surface(const PointsN3& V, const FacesN3& F, const std::vector<std::int64_t>& row,
+                   const std::vector<OutEdge>& out) {
+  const std::int64_t nv = V.rows(), nf = F.rows();
+  // Edges taken about the bounding box's centre: far from the origin raw coordinates lose digits.
+  const Vec3 centre = 0.5 * (V.colwise().minCoeff() + V.colwise().maxCoeff()).transpose();
+  std::int64_t flat = 0, first_flat = -1;
+  for (std::int64_t f = 0; f < nf; ++f) {
+    const Vec3 a = V.row(F(f, 0)).transpose() - centre, b = V.row(F(f, 1)).transpose() - centre,
+               c = V.row(F(f, 2)).transpose() - centre;
+    const Vec3 ab = b - a, bc = c - b, ca = a - c;
+    const double twice_area = ab.cross(ca).norm();
+    const double longest = std::max({ab.squaredNorm(), bc.squaredNorm(), ca.squaredNorm()});
+    if (twice_area <= kDegenerateArea * longest) {
+      if (first_flat < 0) first_flat = f;
+      ++flat;
+    }
+  }
+  HUGGER_CHECK_ARGUMENT(first_flat < 0, "object face " << first_flat << " [" << F(first_flat, 0) << ", "
+                                                       << F(first_flat, 1) << ", " << F(first_flat, 2)
+                                                       << "] is degenerate: zero area (its vertices are coincident "
+                                                          "or collinear); "
+                                                       << flat << " such face(s)");
+  // Duplicate triangles: the same three positions, whatever the vertex indices and orientation.
+  // Only possible where distinct vertices coincide: vertices sorted by position, each given the
+  // index of its position; faces compared by their sorted position triples only if some coincide.
+  std::vector<std::int64_t> by_position(static_cast<std::size_t>(nv));
+  for (std::int64_t i = 0; i < nv; ++i) by_position[i] = i;
+  auto position = [&](std::int64_t i) {
+    // + 0.0 makes -0.0 equal to 0.0
+    return std::array<double, 3>{V(i, 0) + 0.0, V(i, 1) + 0.0, V(i, 2) + 0.0};
+  };
+  std::sort(by_position.begin(), by_position.end(),
+            [&](std::int64_t x, std::int64_t y) { return position(x) < position(y) || (position(x) == position(y) && x < y); });
+  std::vector<std::int64_t> place(static_cast<std::size_t>(nv));
+  bool coincide = false;
+  std::int64_t id = 0;
+  for (std::int64_t k = 0; k < nv; ++k) {
+    if (k > 0 && position(by_position[k]) != position(by_position[k - 1])) ++id;
+    else if (k > 0) coincide = true;
+    place[by_position[k]] = id;
+  }
+  if (coincide) {
+    std::vector<std::array<std::int64_t, 4>> keys(static_cast<std::size_t>(nf));
+    for (std::int64_t f = 0; f < nf; ++f) {
+      std::array<std::int64_t, 3> k3 = {place[F(f, 0)], place[F(f, 1)], place[F(f, 2)]};
+      std::sort(k3.begin(), k3.end());
+      keys[f] = {k3[0], k3[1], k3[2], f};
+    }
+    std::sort(keys.begin(), keys.end());
+    for (std::size_t k = 1; k < keys.size(); ++k)
+      HUGGER_CHECK_ARGUMENT(!(keys[k][0] == keys[k - 1][0] && keys[k][1] == keys[k - 1][1] && keys[k][2] == keys[k - 1][2]),
+                            "object faces " << keys[k - 1][3] << " and " << keys[k][3]
+                                            << " are the same triangle (duplicate faces over coincident vertices)");
+  }
+  // Non-manifold vertices: around a vertex v the corners (v, a, b) of its faces chain into cycles
+  // (the next corner is in the face holding the directed edge (v, b)); a manifold vertex has one.
+  auto third = [&](std::int64_t f, std::int64_t v, std::int64_t a) {
+    for (int k = 0; k < 3; ++k)
+      if (F(f, k) != v && F(f, k) != a) return F(f, k);
+    return std::int64_t{-1};
+  };
+  const auto by_end = [](const OutEdge& x, std::int64_t to) { return x.to < to; };
+  for (std::int64_t v = 0; v < nv; ++v) {
+    const std::int64_t degree = row[v + 1] - row[v];
+    if (degree == 0) continue;
+    const OutEdge& start = out[row[v]];
+    std::int64_t face = start.face, ahead = start.to, steps = 0;
+    do {
+      const std::int64_t behind = third(face, v, ahead);
+      const auto first = out.begin() + row[v], last = out.begin() + row[v + 1];
+      const auto it = std::lower_bound(first, last, behind, by_end);
+      if (it == last || it->to != behind) break;  // cannot happen on a closed, oriented mesh
+      face = it->face;
+      ahead = behind;
+      ++steps;
+    } while (face != start.face && steps <= degree);
+    if (steps < degree) {
+      // How many fans: count the cycles among the vertex's corners.
+      std::vector<char> seen(static_cast<std::size_t>(degree), 0);
+      std::int64_t fans = 0;
+      for (std::int64_t s = 0; s < degree; ++s) {
+        if (seen[s]) continue;
+        ++fans;
+        std::int64_t e = s;
+        while (!seen[e]) {
+          seen[e] = 1;
+          const std::int64_t behind = third(out[row[v] + e].face, v, out[row[v] + e].to);
+          const auto first = out.begin() + row[v], last = out.begin() + row[v + 1];
+          const auto it = std::lower_bound(first, last, behind, by_end);
+          if (it == last || it->to != behind) break;
+          e = it - first;
+        }
+      }
+      HUGGER_CHECK_ARGUMENT(false, "object mesh is not manifold at vertex "
+                                       << v << ": " << fans
+                                       << " separate fans of faces meet there (the surface touches itself at a point)");
+    }
+  }
+}
+
 }  // namespace
 
 Object::Object(const PointsN3& vertices, const FacesN3& faces)
@@ -46,16 +161,13 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
   for (std::int64_t f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) ++row[static_cast<std::size_t>(faces_(f, k)) + 1];
   for (std::int64_t i = 0; i < nv; ++i) row[i + 1] += row[i];
-  struct Out {
-    std::int64_t to, face;
-  };
-  std::vector<Out> out(static_cast<std::size_t>(3 * nf));
+  std::vector<OutEdge> out(static_cast<std::size_t>(3 * nf));
   {
     std::vector<std::int64_t> fill(row.begin(), row.end() - 1);
     for (std::int64_t f = 0; f < nf; ++f)
       for (int k = 0; k < 3; ++k) out[fill[faces_(f, k)]++] = {faces_(f, (k + 1) % 3), f};
   }
-  const auto by_end = [](const Out& x, const Out& y) { return x.to < y.to || (x.to == y.to && x.face < y.face); };
+  const auto by_end = [](const OutEdge& x, const OutEdge& y) { return x.to < y.to || (x.to == y.to && x.face < y.face); };
   for (std::int64_t a = 0; a < nv; ++a) {
     const auto first = out.begin() + row[a], last = out.begin() + row[a + 1];
     std::sort(first, last, by_end);
@@ -68,7 +180,7 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
   // The face across directed edge (a, b): the one holding (b, a); -1 when there is none.
   const auto across = [&](std::int64_t a, std::int64_t b) -> std::int64_t {
     const auto first = out.begin() + row[b], last = out.begin() + row[b + 1];
-    const auto it = std::lower_bound(first, last, Out{a, -1}, by_end);
+    const auto it = std::lower_bound(first, last, OutEdge{a, -1}, by_end);
     return it != last && it->to == a ? it->face : -1;
   };
   edge_normals_.resize(nf);
@@ -100,6 +212,7 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
     }
   HUGGER_CHECK_ARGUMENT(volume_ > 0.0, "object mesh encloses a non-positive volume ("
                                            << volume_ << " m^3): its faces point inward (reverse the winding) or it is flat");
+  check_surface(vertices_, faces_, row, out);
   vertex_normals_.assign(nv, Vec3::Zero());
   for (std::int64_t f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) {

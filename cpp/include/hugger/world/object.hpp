@@ -24,8 +24,10 @@ struct SignedNearest {
 class Object {
  public:
   /// Validates and builds. Throws std::invalid_argument naming what is wrong: empty arrays,
-  /// non-finite vertices, indices out of range, degenerate (repeated-index) faces, a mesh that
-  /// is not closed or not consistently oriented, or one whose normals point inward.
+  /// non-finite vertices, indices out of range, degenerate faces (a repeated index, or zero
+  /// area: twice the area at most 1e-12 of the longest edge squared), a mesh that is not closed,
+  /// not consistently oriented or not manifold (at an edge or a vertex), the same triangle twice
+  /// over coincident vertices, or one whose normals point inward.
   Object(const PointsN3& vertices, const FacesN3& faces);
 
   const PointsN3& vertices() const { return vertices_; }
