@@ -164,6 +164,59 @@ PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane
   build_bvh();
   mark_crossings();
   drop_inner_segments();
+  build_cells();
+}
+
+void PlaneRegion::build_cells() {
+  cells_.clear();
+  if (segments_.empty()) return;
+  Vec2 lo = Vec2::Constant(kInf), hi = Vec2::Constant(-kInf);
+  for (const Segment& s : segments_) {
+    lo = lo.cwiseMin(s.a).cwiseMin(s.b);
+    hi = hi.cwiseMax(s.a).cwiseMax(s.b);
+  }
+  // About 64 cells along the longer side, one cell of padding all round (the outer cells lie
+  // outside every segment's box: they belong to the unbounded group, outside R).
+  constexpr int kCells = 64;
+  const double size = (hi - lo).maxCoeff();
+  if (!(size > 0.0) || !std::isfinite(size)) return;
+  cell_ = size / kCells;
+  cells_lo_ = lo - Vec2::Constant(cell_);
+  for (int a = 0; a < 2; ++a) cells_n_[a] = static_cast<int>(std::ceil((hi[a] - lo[a]) / cell_)) + 3;
+  const int nx = cells_n_[0], ny = cells_n_[1];
+  cells_.assign(static_cast<std::size_t>(nx) * ny, 2);  // 2: free, not yet labelled
+  // A segment marks every cell its box, grown by a margin for rounding, meets.
+  const double margin = 1e-9 * (1.0 + extent_);
+  auto clamp_cell = [&](double x, int a) {
+    return std::clamp(static_cast<int>(std::floor((x - cells_lo_[a]) / cell_)), 0, cells_n_[a] - 1);
+  };
+  for (const Segment& s : segments_) {
+    const Vec2 slo = s.a.cwiseMin(s.b).array() - margin, shi = s.a.cwiseMax(s.b).array() + margin;
+    const int i0 = clamp_cell(slo.x(), 0), i1 = clamp_cell(shi.x(), 0), j0 = clamp_cell(slo.y(), 1),
+              j1 = clamp_cell(shi.y(), 1);
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) cells_[static_cast<std::size_t>(j) * nx + i] = -1;
+  }
+  // Each group of free cells joined by shared sides holds no boundary: one test labels it.
+  std::vector<int> stack;
+  for (int start = 0; start < nx * ny; ++start) {
+    if (cells_[start] != 2) continue;
+    const Vec2 centre = cells_lo_ + cell_ * Vec2(start % nx + 0.5, start / nx + 0.5);
+    const signed char label = inside_from(nearest(centre, centre, kInf), centre) ? 1 : 0;
+    cells_[start] = label;
+    stack.assign(1, start);
+    while (!stack.empty()) {
+      const int c = stack.back();
+      stack.pop_back();
+      const int i = c % nx, j = c / nx;
+      const int next[4] = {i > 0 ? c - 1 : -1, i + 1 < nx ? c + 1 : -1, j > 0 ? c - nx : -1, j + 1 < ny ? c + nx : -1};
+      for (const int d : next)
+        if (d >= 0 && cells_[d] == 2) {
+          cells_[d] = label;
+          stack.push_back(d);
+        }
+    }
+  }
 }
 
 void PlaneRegion::drop_inner_segments() {
@@ -174,10 +227,13 @@ void PlaneRegion::drop_inner_segments() {
   auto inner = [&](const Vec2& x) {
     const Vec3 X = plane_.to_world(x);
     if (radius_ > 0.0) {
-      // Within r less a margin of O's surface, or inside O: strictly inside R.
+      // Within r less a margin of O's surface, or inside O: strictly inside R. One search for
+      // the nearest triangle within r answers the first; only a point with nothing within r
+      // (off the surface: the ray test is safe) needs the inside test.
       const double margin = std::max(1e-9, 1e-3 * radius_);
-      return O.bvh().any_within(X, X, radius_ - margin) ||
-             (!O.bvh().any_within(X, X, radius_) && O.inside_off_surface(X));
+      const NearestResult near = O.bvh().nearest(X, X, radius_);
+      if (near.triangle >= 0) return near.distance < radius_ - margin;
+      return O.inside_off_surface(X);
     }
     return O.inside(X);
   };
@@ -211,11 +267,13 @@ void PlaneRegion::drop_inner_segments() {
       from = to;
     }
   }
+  const bool changed = !cuts_.empty() || dropped_ > 0;
   cuts_.clear();
   cuts_.shrink_to_fit();
   segments_.swap(kept);
   for (auto& p : pieces_) p.crossed = false;  // resolved
-  build_bvh();
+  for (auto& s : segments_) s.crossed = false;
+  if (changed) build_bvh();  // else the same segments in the same order: the tree stands
 }
 
 void PlaneRegion::add_segment(const Vec2& a, const Vec2& b, const Vec2& outward, int piece) {
@@ -696,6 +754,14 @@ bool PlaneRegion::inside_from(const Near& near, const Vec2& x) const {
 
 bool PlaneRegion::inside(const Vec2& x) const {
   if (segments_.empty()) return false;  // the plane misses R: no boundary, nothing inside
+  if (!cells_.empty()) {
+    // A point in a cell no segment touches has its cell's label; beyond the grid, outside R
+    // (the label of the outer cells).
+    const Vec2 g = (x - cells_lo_) / cell_;
+    if (!(g.x() >= 0.0 && g.y() >= 0.0 && g.x() < cells_n_[0] && g.y() < cells_n_[1])) return cells_[0] == 1;
+    const signed char label = cells_[static_cast<std::size_t>(g.y()) * cells_n_[0] + static_cast<std::size_t>(g.x())];
+    if (label >= 0) return label == 1;
+  }
   return inside_from(nearest(x, x, kInf), x);
 }
 

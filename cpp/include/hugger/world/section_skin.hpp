@@ -96,6 +96,9 @@ class PlaneRegion {
   /// inside R (one 3D test at each part's middle).
   void drop_inner_segments();
   int build_node(int begin, int end, std::vector<Vec2>& centres, int depth);
+  /// The grid of cells that no segment touches, each labelled inside or outside R (one inside
+  /// test per connected group of such cells: no boundary separates two of its points).
+  void build_cells();
   /// Adds the arcs of x(t) = centre + U cos t + V sin t over the allowed intervals of `allowed`
   /// ([0, 2 pi), sorted, disjoint) as tangent polygons; `out3(t)`: the in-plane outward direction.
   template <class Outward>
@@ -114,6 +117,12 @@ class PlaneRegion {
   std::vector<std::array<Vec2, 2>> piece_ends_;  ///< while building: first and last point of each piece
   int depth_ = 0;
   double extent_ = 0.0;  ///< largest absolute coordinate of a segment's end (for rounding margins)
+  // The cell grid (build_cells): cell (i, j) spans lo + cell * [i, i + 1] x [j, j + 1]; cells_
+  // holds -1 where a segment's box (grown by a margin) meets the cell, else 1 inside R, 0 outside.
+  Vec2 cells_lo_ = Vec2::Zero();
+  double cell_ = 0.0;
+  int cells_n_[2] = {0, 0};
+  std::vector<signed char> cells_;
   long dropped_ = 0;
   mutable std::atomic<long> fallbacks_{0};
 };
