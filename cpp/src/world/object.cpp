@@ -4,6 +4,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <unordered_map>
 
 #include "hugger/check.hpp"
@@ -34,9 +35,10 @@ constexpr double kDegenerateArea = 1e-12;
 /// The checks beyond closed, oriented and positive volume, on a mesh that passed those: no
 /// degenerate (zero-area) face, no triangle twice over distinct but coincident vertices, no
 /// vertex where the surface touches itself (a non-manifold vertex: more than one fan of faces).
-/// `row` and `out`: each vertex's outgoing directed edges, sorted by their other end.
+/// `row` and `out`: each vertex's outgoing directed edges, sorted by their other end; `neighbors`:
+/// per face, the faces across its edges.
 void check_surface(const PointsN3& V, const FacesN3& F, const std::vector<std::int64_t>& row,
-                   const std::vector<OutEdge>& out) {
+                   const std::vector<OutEdge>& out, const std::vector<std::array<std::int64_t, 3>>& neighbors) {
   const std::int64_t nv = V.rows(), nf = F.rows();
   // Edges taken about the bounding box's centre: far from the origin raw coordinates lose digits.
   const Vec3 centre = 0.5 * (V.colwise().minCoeff() + V.colwise().maxCoeff()).transpose();
@@ -58,25 +60,55 @@ void check_surface(const PointsN3& V, const FacesN3& F, const std::vector<std::i
                                                           "or collinear); "
                                                        << flat << " such face(s)");
   // Duplicate triangles: the same three positions, whatever the vertex indices and orientation.
-  // Only possible where distinct vertices coincide: vertices sorted by position, each given the
-  // index of its position; faces compared by their sorted position triples only if some coincide.
-  std::vector<std::int64_t> by_position(static_cast<std::size_t>(nv));
-  for (std::int64_t i = 0; i < nv; ++i) by_position[i] = i;
-  auto position = [&](std::int64_t i) {
-    // + 0.0 makes -0.0 equal to 0.0
-    return std::array<double, 3>{V(i, 0) + 0.0, V(i, 1) + 0.0, V(i, 2) + 0.0};
+  // Only possible where distinct vertices coincide; then faces are compared by their sorted
+  // position triples.
+  // Do two distinct vertices coincide? An open-addressing hash of the positions' bits (+ 0.0
+  // makes -0 equal to 0): linear in the mesh.
+  auto bits = [&](std::int64_t i, int k) {
+    const double x = V(i, k) + 0.0;
+    std::uint64_t b;
+    std::memcpy(&b, &x, sizeof b);
+    return b;
   };
-  std::sort(by_position.begin(), by_position.end(),
-            [&](std::int64_t x, std::int64_t y) { return position(x) < position(y) || (position(x) == position(y) && x < y); });
-  std::vector<std::int64_t> place(static_cast<std::size_t>(nv));
+  std::size_t capacity = 16;
+  while (capacity < 2 * static_cast<std::size_t>(nv)) capacity *= 2;
+  std::vector<std::int64_t> table(capacity, -1);
   bool coincide = false;
-  std::int64_t id = 0;
-  for (std::int64_t k = 0; k < nv; ++k) {
-    if (k > 0 && position(by_position[k]) != position(by_position[k - 1])) ++id;
-    else if (k > 0) coincide = true;
-    place[by_position[k]] = id;
+  for (std::int64_t i = 0; i < nv && !coincide; ++i) {
+    std::uint64_t h = bits(i, 0) * 0x9E3779B97F4A7C15ull;
+    h ^= (bits(i, 1) + (h << 6) + (h >> 2)) * 0xC2B2AE3D27D4EB4Full;
+    h ^= (bits(i, 2) + (h << 6) + (h >> 2)) * 0x165667B19E3779F9ull;
+    for (std::size_t slot = (h ^ (h >> 29)) & (capacity - 1);; slot = (slot + 1) & (capacity - 1)) {
+      const std::int64_t j = table[slot];
+      if (j < 0) {
+        table[slot] = i;
+        break;
+      }
+      if (bits(i, 0) == bits(j, 0) && bits(i, 1) == bits(j, 1) && bits(i, 2) == bits(j, 2)) {
+        coincide = true;
+        break;
+      }
+    }
   }
   if (coincide) {
+    // Vertices sorted by position, each given the index of its position.
+    struct Position {
+      double x, y, z;
+      std::int64_t i;
+      bool operator<(const Position& o) const {
+        return x < o.x || (x == o.x && (y < o.y || (y == o.y && (z < o.z || (z == o.z && i < o.i)))));
+      }
+      bool same(const Position& o) const { return x == o.x && y == o.y && z == o.z; }
+    };
+    std::vector<Position> by_position(static_cast<std::size_t>(nv));
+    for (std::int64_t i = 0; i < nv; ++i) by_position[i] = {V(i, 0) + 0.0, V(i, 1) + 0.0, V(i, 2) + 0.0, i};
+    std::sort(by_position.begin(), by_position.end());
+    std::vector<std::int64_t> place(static_cast<std::size_t>(nv));
+    std::int64_t id = 0;
+    for (std::int64_t k = 0; k < nv; ++k) {
+      if (k > 0 && !by_position[k].same(by_position[k - 1])) ++id;
+      place[by_position[k].i] = id;
+    }
     std::vector<std::array<std::int64_t, 4>> keys(static_cast<std::size_t>(nf));
     for (std::int64_t f = 0; f < nf; ++f) {
       std::array<std::int64_t, 3> k3 = {place[F(f, 0)], place[F(f, 1)], place[F(f, 2)]};
@@ -89,49 +121,37 @@ void check_surface(const PointsN3& V, const FacesN3& F, const std::vector<std::i
                             "object faces " << keys[k - 1][3] << " and " << keys[k][3]
                                             << " are the same triangle (duplicate faces over coincident vertices)");
   }
-  // Non-manifold vertices: around a vertex v the corners (v, a, b) of its faces chain into cycles
-  // (the next corner is in the face holding the directed edge (v, b)); a manifold vertex has one.
-  auto third = [&](std::int64_t f, std::int64_t v, std::int64_t a) {
-    for (int k = 0; k < 3; ++k)
-      if (F(f, k) != v && F(f, k) != a) return F(f, k);
-    return std::int64_t{-1};
-  };
-  const auto by_end = [](const OutEdge& x, std::int64_t to) { return x.to < to; };
+  // Non-manifold vertices: around a vertex v the corners of its faces chain into cycles (from
+  // the corner at v of face f, whose edges leave v along k and arrive along k + 2, the next is
+  // the corner at v of the face across edge k + 2); a manifold vertex has one cycle.
+  auto corner = [&](std::int64_t f, std::int64_t v) { return F(f, 0) == v ? 0 : (F(f, 1) == v ? 1 : 2); };
   for (std::int64_t v = 0; v < nv; ++v) {
     const std::int64_t degree = row[v + 1] - row[v];
     if (degree == 0) continue;
-    const OutEdge& start = out[row[v]];
-    std::int64_t face = start.face, ahead = start.to, steps = 0;
+    const std::int64_t start = out[row[v]].face;
+    std::int64_t f = start, steps = 0;
     do {
-      const std::int64_t behind = third(face, v, ahead);
-      const auto first = out.begin() + row[v], last = out.begin() + row[v + 1];
-      const auto it = std::lower_bound(first, last, behind, by_end);
-      if (it == last || it->to != behind) break;  // cannot happen on a closed, oriented mesh
-      face = it->face;
-      ahead = behind;
+      f = neighbors[f][(corner(f, v) + 2) % 3];
       ++steps;
-    } while (face != start.face && steps <= degree);
-    if (steps < degree) {
-      // How many fans: count the cycles among the vertex's corners.
-      std::vector<char> seen(static_cast<std::size_t>(degree), 0);
-      std::int64_t fans = 0;
-      for (std::int64_t s = 0; s < degree; ++s) {
-        if (seen[s]) continue;
-        ++fans;
-        std::int64_t e = s;
-        while (!seen[e]) {
-          seen[e] = 1;
-          const std::int64_t behind = third(out[row[v] + e].face, v, out[row[v] + e].to);
-          const auto first = out.begin() + row[v], last = out.begin() + row[v + 1];
-          const auto it = std::lower_bound(first, last, behind, by_end);
-          if (it == last || it->to != behind) break;
-          e = it - first;
-        }
-      }
-      HUGGER_CHECK_ARGUMENT(false, "object mesh is not manifold at vertex "
-                                       << v << ": " << fans
-                                       << " separate fans of faces meet there (the surface touches itself at a point)");
+    } while (f != start && steps <= degree);
+    if (steps == degree) continue;
+    // How many fans: the cycles among the vertex's faces (its outgoing edges, in order).
+    std::vector<char> seen(static_cast<std::size_t>(degree), 0);
+    auto slot = [&](std::int64_t face) {
+      for (std::int64_t e = row[v]; e < row[v + 1]; ++e)
+        if (out[e].face == face) return e - row[v];
+      return std::int64_t{0};
+    };
+    std::int64_t fans = 0;
+    for (std::int64_t s = 0; s < degree; ++s) {
+      if (seen[s]) continue;
+      ++fans;
+      for (std::int64_t e = s; !seen[e]; e = slot(neighbors[out[row[v] + e].face][(corner(out[row[v] + e].face, v) + 2) % 3]))
+        seen[e] = 1;
     }
+    HUGGER_CHECK_ARGUMENT(false, "object mesh is not manifold at vertex "
+                                     << v << ": " << fans
+                                     << " separate fans of faces meet there (the surface touches itself at a point)");
   }
 }
 
@@ -212,7 +232,7 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
     }
   HUGGER_CHECK_ARGUMENT(volume_ > 0.0, "object mesh encloses a non-positive volume ("
                                            << volume_ << " m^3): its faces point inward (reverse the winding) or it is flat");
-  check_surface(vertices_, faces_, row, out);
+  check_surface(vertices_, faces_, row, out, neighbors_);
   vertex_normals_.assign(nv, Vec3::Zero());
   for (std::int64_t f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) {
