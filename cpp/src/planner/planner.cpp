@@ -300,9 +300,14 @@ bool Planner::swept_link_ok(int m, const Vec2& a, const Vec2& b) const {
   // point moves), at most kRefine halvings below 16 pieces.
   constexpr int kPieces = 16, kRefine = 6;
   const double length = (b - a).norm();
+  // The refinement reads the gaps, not only their sign, but a gap of at least a piece's length
+  // (length / 16, the longest piece) never asks for refinement: a piece with one end that far
+  // out needs none whatever the other end's gap (>= -allow, else the check has failed). So the
+  // gaps are asked exactly up to that cap, which prunes most of each query.
+  const double cap = length / kPieces;
   auto gap_at = [&](double u) {
     const Vec2 x = a + (b - a) * u;
-    return link_gap(m, x, x, kInf);  // uncapped: the refinement reads the gaps, not only their sign
+    return link_gap(m, x, x, cap);
   };
   struct Piece {
     double u0, u1, g0, g1;
