@@ -865,10 +865,12 @@ Touch SectionSkin::link(const FingerPlane& plane, const Vec2& a, const Vec2& b, 
 bool SectionSkin::link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                                  double below) const {
   // A piece of R's boundary closer than `below` to the axis: link() would find the nearest piece
-  // at most that close, and report a gap below `below` on either side of it.
+  // at most that close, and report a gap below `below` on either side of it. With none that
+  // close, link() reports a gap of at least `below` outside R and a negative one inside: the
+  // side of the axis (of its end a) decides.
   const PlaneRegion* R = below > 0.0 ? region(plane, radius) : nullptr;
-  if (R && R->any_within(a, b, std::nextafter(below, 0.0))) return true;
-  return link(plane, a, b, radius, below).gap < below;
+  if (!R) return link(plane, a, b, radius, below).gap < below;
+  return R->any_within(a, b, std::nextafter(below, 0.0)) || R->inside(a);
 }
 
 bool SectionSkin::link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
