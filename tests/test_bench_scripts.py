@@ -1,0 +1,62 @@
+"""The benchmark scripts of bench/ run and report sane figures (speed itself is never asserted)."""
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+import re
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+BENCH = ROOT / "bench"
+
+
+def _bench_module(name: str):
+    spec = importlib.util.spec_from_file_location(f"hugger_bench_{name}", BENCH / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.path.insert(0, str(BENCH))
+    try:
+        spec.loader.exec_module(mod)
+    finally:
+        sys.path.remove(str(BENCH))
+    return mod
+
+
+def test_plan_vs_baseline_reports_every_planner(tmp_path, capsys):
+    pytest.importorskip("mujoco", reason="the baseline needs the physics extra (pip install 'hugger[physics]')")
+    mod = _bench_module("plan_vs_baseline")
+    out = tmp_path / "speed.md"
+    assert mod.main(["--objects", "sphere", "--repeat", "1", "--out", str(out), "--json"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+
+    rows = {}
+    for line in out.read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if cells[0] == "sphere":
+            rows[cells[2]] = cells
+    assert sorted(rows) == ["baseline", "mesh", "section"]
+    for planner, cells in rows.items():
+        assert cells[3] == "done", (planner, cells)
+        setup, plan, total = (float(c) for c in cells[5:8])
+        assert all(math.isfinite(x) and x > 0 for x in (setup, plan, total)), (planner, cells)
+        assert total == pytest.approx(setup + plan, abs=0.15), (planner, cells)  # rounded to 0.1 ms
+
+    s = figures["summary"]
+    assert s["objects"] == ["sphere"]
+    for skin in ("mesh", "section"):
+        for key in ("plan", "with_setup"):
+            assert math.isfinite(s["ratios"][skin][key]) and s["ratios"][skin][key] > 0
+    assert figures["machine"]["cpu_count"] >= 1
+    assert re.search(r"load average \(1, 5, 15 min\)", out.read_text())
+
+
+@pytest.mark.parametrize("args", [["--repeat", "0"], ["--objects", "no-such-object"], ["--repeat", "x"]])
+def test_plan_vs_baseline_refuses_bad_arguments(args, capsys):
+    mod = _bench_module("plan_vs_baseline")
+    with pytest.raises(SystemExit) as exc:
+        mod.main(args)
+    assert exc.value.code == 2
+    assert "error:" in capsys.readouterr().err
