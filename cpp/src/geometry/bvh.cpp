@@ -8,17 +8,17 @@ namespace hugger {
 
 TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int leaf_size) {
   const int n = static_cast<int>(faces.rows());
-  std::vector<Vec3> centroids(n);
+  std::vector<BuildItem> items(n);
   std::vector<Aabb> boxes(n);
   for (int i = 0; i < n; ++i) {
     for (int k = 0; k < 3; ++k) boxes[i].grow(Vec3(vertices.row(faces(i, k)).transpose()));
-    centroids[i] = boxes[i].centre();
+    const Vec3 c = boxes[i].centre();
+    items[i] = {{c.x(), c.y(), c.z()}, i};
   }
-  std::vector<int> ids(n), order;
-  for (int i = 0; i < n; ++i) ids[i] = i;
+  std::vector<int> order;
   order.reserve(n);
   nodes_.reserve(2 * std::max(1, n / std::max(1, leaf_size)) + 1);
-  build(ids, 0, n, centroids, boxes, std::max(1, leaf_size), order, 0);
+  build(items, 0, n, boxes, std::max(1, leaf_size), order, 0);
   if (depth_ + 2 > kStackSize) throw std::length_error("TriangleBvh: tree too deep for the traversal stack");
   tris_.reserve(n);  // filled below, not zeroed first
   ids_ = order;
@@ -35,34 +35,43 @@ TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int lea
   }
 }
 
-int TriangleBvh::build(std::vector<int>& ids, int begin, int end, const std::vector<Vec3>& centroids,
-                       const std::vector<Aabb>& boxes, int leaf_size, std::vector<int>& order, int depth) {
+int TriangleBvh::build(std::vector<BuildItem>& items, int begin, int end, const std::vector<Aabb>& boxes,
+                       int leaf_size, std::vector<int>& order, int depth) {
   depth_ = std::max(depth_, depth);
   const int index = static_cast<int>(nodes_.size());
   nodes_.emplace_back();
   if (end - begin <= leaf_size) {
     Aabb box;
-    for (int i = begin; i < end; ++i) box.grow(boxes[ids[i]]);
+    for (int i = begin; i < end; ++i) box.grow(boxes[items[i].id]);
     nodes_[index].box = box;
     nodes_[index].centre = box.centre();
     nodes_[index].half = 0.5 * box.extent();
     nodes_[index].first = static_cast<int>(order.size());
     nodes_[index].count = end - begin;
-    for (int i = begin; i < end; ++i) order.push_back(ids[i]);
+    for (int i = begin; i < end; ++i) order.push_back(items[i].id);
     return index;
   }
   // An inner node's box is its children's union (the same box: min and max are exact), so only
   // the centroids' box is gathered here, for the split axis.
-  Aabb cbox;
-  for (int i = begin; i < end; ++i) cbox.grow(centroids[ids[i]]);
+  double lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+  for (int i = begin; i < end; ++i)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], items[i].c[k]);
+      hi[k] = std::max(hi[k], items[i].c[k]);
+    }
+  // The longest extent, the first axis on ties (as Eigen's maxCoeff).
   int axis = 0;
-  cbox.extent().maxCoeff(&axis);
+  for (int k = 1; k < 3; ++k)
+    if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
   const int mid = (begin + end) / 2;
-  std::nth_element(ids.begin() + begin, ids.begin() + mid, ids.begin() + end, [&](int x, int y) {
-    return centroids[x][axis] < centroids[y][axis] || (centroids[x][axis] == centroids[y][axis] && x < y);
-  });
-  const int left = build(ids, begin, mid, centroids, boxes, leaf_size, order, depth + 1);
-  const int right = build(ids, mid, end, centroids, boxes, leaf_size, order, depth + 1);
+  // The lower half by (centre, index): a strict total order, so the halves are the same sets
+  // whatever the order of the range.
+  std::nth_element(items.begin() + begin, items.begin() + mid, items.begin() + end,
+                   [axis](const BuildItem& x, const BuildItem& y) {
+                     return x.c[axis] < y.c[axis] || (x.c[axis] == y.c[axis] && x.id < y.id);
+                   });
+  const int left = build(items, begin, mid, boxes, leaf_size, order, depth + 1);
+  const int right = build(items, mid, end, boxes, leaf_size, order, depth + 1);
   nodes_[index].left = left;
   nodes_[index].right = right;
   Aabb box = nodes_[left].box;

@@ -116,8 +116,13 @@ class TriangleBvh {
     int left = -1, right = -1;  ///< children (internal node)
     int first = 0, count = 0;   ///< range in tris_ (leaf when count > 0)
   };
-  int build(std::vector<int>& ids, int begin, int end, const std::vector<Vec3>& centroids,
-            const std::vector<Aabb>& boxes, int leaf_size, std::vector<int>& order, int depth);
+  /// A triangle while building: its box's centre and its index (kept together, contiguous).
+  struct BuildItem {
+    double c[3];
+    int id;
+  };
+  int build(std::vector<BuildItem>& items, int begin, int end, const std::vector<Aabb>& boxes, int leaf_size,
+            std::vector<int>& order, int depth);
 
   /// Traversal stacks hold at most depth + 1 entries; the constructor checks the depth (a
   /// median split gives about log2(F / leaf_size), 18 at 1.3M triangles).
