@@ -20,6 +20,19 @@ SHARED = ROOT.parent / "shared"
 CHECKER = SHARED / "tools" / "check_trajectory.py"
 OBJECTS_DIR = SHARED / "data" / "objects"
 SHARED_MISSING = "../shared (checker and meshes beside the project root) is not present in this checkout"
+BENCH = ROOT / "bench"
+
+
+def bench_module(name: str):
+    """The benchmark script bench/<name>.py, imported as a module (with bench/ on the path)."""
+    spec = importlib.util.spec_from_file_location(f"hugger_bench_{name}", BENCH / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.path.insert(0, str(BENCH))
+    try:
+        spec.loader.exec_module(mod)
+    finally:
+        sys.path.remove(str(BENCH))
+    return mod
 
 
 def start(height=0.2):

@@ -1,33 +1,18 @@
 """The benchmark scripts of bench/ run and report sane figures (speed itself is never asserted)."""
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 import re
-import sys
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-BENCH = ROOT / "bench"
-
-
-def _bench_module(name: str):
-    spec = importlib.util.spec_from_file_location(f"hugger_bench_{name}", BENCH / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.path.insert(0, str(BENCH))
-    try:
-        spec.loader.exec_module(mod)
-    finally:
-        sys.path.remove(str(BENCH))
-    return mod
+from helpers import bench_module
 
 
 def test_plan_vs_baseline_reports_every_planner(tmp_path, capsys):
     pytest.importorskip("mujoco", reason="the baseline needs the physics extra (pip install 'hugger[physics]')")
-    mod = _bench_module("plan_vs_baseline")
+    mod = bench_module("plan_vs_baseline")
     out = tmp_path / "speed.md"
     assert mod.main(["--objects", "sphere", "--repeat", "1", "--out", str(out), "--json"]) == 0
     figures = json.loads(capsys.readouterr().out)
@@ -55,7 +40,7 @@ def test_plan_vs_baseline_reports_every_planner(tmp_path, capsys):
 
 @pytest.mark.parametrize("args", [["--repeat", "0"], ["--objects", "no-such-object"], ["--repeat", "x"]])
 def test_plan_vs_baseline_refuses_bad_arguments(args, capsys):
-    mod = _bench_module("plan_vs_baseline")
+    mod = bench_module("plan_vs_baseline")
     with pytest.raises(SystemExit) as exc:
         mod.main(args)
     assert exc.value.code == 2

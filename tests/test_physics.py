@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import json
 import sys
 from pathlib import Path
@@ -16,20 +15,7 @@ mujoco = pytest.importorskip("mujoco", reason="the physics extra is not installe
 
 from hugger import baselines, physics  # noqa: E402
 from hugger._rotation import quaternion_wxyz  # noqa: E402
-
-ROOT = Path(__file__).resolve().parents[1]
-BENCH = ROOT / "bench"
-
-
-def _bench_module(name: str):
-    spec = importlib.util.spec_from_file_location(f"hugger_bench_{name}", BENCH / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.path.insert(0, str(BENCH))
-    try:
-        spec.loader.exec_module(mod)
-    finally:
-        sys.path.remove(str(BENCH))
-    return mod
+from helpers import bench_module  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -320,7 +306,7 @@ def test_baseline_rejects_bad_starts(hand):
 
 def test_compare_script_writes_a_table(tmp_path, capsys):
     pytest.importorskip("scipy", reason="the comparison's grasp quality needs scipy (pip install 'hugger[analysis]')")
-    mod = _bench_module("compare_baseline")
+    mod = bench_module("compare_baseline")
     out = tmp_path / "table.md"
     assert mod.main(["--objects", "sphere", "--out", str(out), "--no-validate"]) == 0
     text = out.read_text()
