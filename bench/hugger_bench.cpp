@@ -24,6 +24,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <unordered_map>
 #include <vector>
 
@@ -214,12 +215,15 @@ Result run(const Scenario& sc, const std::string& skin, int repeats) {
       Planner planner(hand, sensing, target, start);
       const double t_planner = seconds_since(t1);
       if (skin == "section") {
-        // The finger planes' regions, built here (the skin would build them at its first query
-        // in each plane): the planes of Phase 2, where Phase 1 left the palm.
+        // The finger planes' regions, built here as the planner's first Phase 2 iteration would
+        // (SectionSkin::prepare: side by side, one thread per plane up to the hardware's): the
+        // planes of Phase 2, where Phase 1 left the palm.
         const auto* section = static_cast<const SectionSkin*>(sensing.get());
         const Pose palm2 = planner.history().back().palm;
+        std::vector<FingerPlane> planes;
+        for (int m = 0; m < hand.fingers(); ++m) planes.push_back(hand.plane(palm2, m));
         const auto ts = Clock::now();
-        for (int m = 0; m < hand.fingers(); ++m) section->region(hand.plane(palm2, m), hand.link_radius());
+        section->prepare(planes, hand.link_radius());
         sections_s.push_back(seconds_since(ts));
       }
       const auto t2 = Clock::now();
@@ -415,8 +419,9 @@ int main(int argc, char** argv) {
     for (const auto& s : all) todo.push_back(&s);
 
   FILE* table = json ? stderr : stdout;
-  std::fprintf(table, "hugger_bench: %s build, %d repeat(s), medians; load average %s\n",
-               kReleaseBuild ? "Release" : "DEBUG", repeats, load_average().c_str());
+  std::fprintf(table, "hugger_bench: %s build, %d repeat(s), medians; %u hardware threads; load average %s\n",
+               kReleaseBuild ? "Release" : "DEBUG", repeats, std::thread::hardware_concurrency(),
+               load_average().c_str());
   std::fprintf(table, "%-11s %-7s %8s %5s %6s %6s %8s %8s %8s %8s %8s %9s %7s %7s %7s %7s %7s %-14s\n", "scenario", "skin",
                "tris", "MxN", "confs", "iters", "obj ms", "plan1 ms", "sect ms", "phase2ms", "total ms", "conf/s",
                "p50 us", "p90 us", "p99 us", "max us", "RSS MiB", "status");

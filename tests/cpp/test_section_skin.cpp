@@ -281,3 +281,42 @@ TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
     EXPECT_GE(checked, 2000);
   }
 }
+
+// prepare() builds the regions of several planes side by side: the same regions, segment for
+// segment, as region() builds one at a time, and a plane given twice is built once; a plane that
+// cannot be built makes prepare() throw, and the skin still answers in the other planes.
+TEST(SectionSkin, PrepareBuildsTheSameRegionsSideBySide) {
+  const auto m = test::curvy(4);
+  const auto object = std::make_shared<Object>(m.vertices, m.faces);
+  std::mt19937 rng(11);
+  std::vector<FingerPlane> planes;
+  for (int k = 0; k < 6; ++k) {
+    FingerPlane pl;
+    pl.origin = object->bounds().centre();
+    pl.p = test::random_unit(rng);
+    pl.u = test::random_unit(rng).cross(pl.p).normalized();
+    planes.push_back(pl);
+  }
+  planes.push_back(planes[2]);
+  const double r = 0.004;
+  const SectionSkin together(object, kFlatten), alone(object, kFlatten);
+  together.prepare(planes, r);
+  for (std::size_t k = 0; k < planes.size(); ++k) {
+    const PlaneRegion* a = together.region(planes[k], r);
+    const PlaneRegion* b = alone.region(planes[k], r);
+    ASSERT_NE(a, nullptr);
+    ASSERT_NE(b, nullptr);
+    ASSERT_EQ(a->segments().size(), b->segments().size()) << "plane " << k;
+    for (std::size_t i = 0; i < a->segments().size(); ++i) {
+      EXPECT_EQ(a->segments()[i].a, b->segments()[i].a);
+      EXPECT_EQ(a->segments()[i].b, b->segments()[i].b);
+      EXPECT_EQ(a->segments()[i].normal, b->segments()[i].normal);
+    }
+  }
+  EXPECT_EQ(together.region(planes[2], r), together.region(planes[6], r));
+  FingerPlane bad = planes[0];
+  bad.u = bad.p;  // not a frame
+  const SectionSkin skin(object, kFlatten);
+  EXPECT_THROW(skin.prepare({planes[0], bad, planes[1]}, r), std::invalid_argument);
+  EXPECT_NE(skin.region(planes[1], r), nullptr);
+}

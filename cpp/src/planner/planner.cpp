@@ -534,6 +534,10 @@ void Planner::phase2_iteration() {
   const double r = hand_.link_radius();
   const bool hug = params_.rules == Rules::kHug;
   const long it = stats_.phase2_iterations;
+  if (!phase2_started_) {
+    sensing_->prepare(planes_, r);  // a hint: a skin may build its per-plane structures now
+    phase2_started_ = true;
+  }
   // A FROZEN finger becomes CONTACT (palm contact, or the hand blocked); under the hug rules it
   // never touched O, so it closes all its joints until it touches.
   auto release = [&](std::vector<TipState>& st, int m) {

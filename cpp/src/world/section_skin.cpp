@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <stdexcept>
 #include <string>
+#include <system_error>
+#include <thread>
 
 #include "hugger/check.hpp"
 #include "hugger/geometry/frame.hpp"
@@ -783,41 +786,107 @@ SectionSkin::SectionSkin(std::shared_ptr<const Object> object, double flatten)
 
 SectionSkin::~SectionSkin() = default;
 
-const PlaneRegion* SectionSkin::region(const FingerPlane& plane, double radius) const {
-  auto same = [&](const Entry* e) {
-    return e->radius == radius && e->plane.origin == plane.origin && e->plane.u == plane.u && e->plane.p == plane.p;
-  };
+namespace {
+
+bool same_plane(const FingerPlane& x, double rx, const FingerPlane& y, double ry) {
+  return rx == ry && x.origin == y.origin && x.u == y.u && x.p == y.p;
+}
+
+bool finite_plane(const FingerPlane& plane, double radius) {
+  return radius >= 0.0 && std::isfinite(radius) && plane.origin.allFinite() && plane.u.allFinite() &&
+         plane.p.allFinite();
+}
+
+}  // namespace
+
+const PlaneRegion* SectionSkin::find(const FingerPlane& plane, double radius) const {
   const int n = count_.load(std::memory_order_acquire);
   // Queries come in runs in one plane: try this thread's last hit first (a hint, checked like
   // every other slot; entries are unique, so any match is the one).
   thread_local int last = 0;
   if (last < n) {
     const Entry* e = slots_[last].load(std::memory_order_acquire);
-    if (same(e)) return &e->region;
+    if (same_plane(e->plane, e->radius, plane, radius)) return &e->region;
   }
   for (int i = 0; i < n; ++i) {
     const Entry* e = slots_[i].load(std::memory_order_acquire);
-    if (same(e)) {
+    if (same_plane(e->plane, e->radius, plane, radius)) {
       last = i;
       return &e->region;
     }
   }
-  if (!(radius >= 0.0) || !std::isfinite(radius) || !plane.origin.allFinite() || !plane.u.allFinite() ||
-      !plane.p.allFinite())
-    return nullptr;
+  return nullptr;
+}
+
+const PlaneRegion* SectionSkin::insert(std::unique_ptr<Entry> entry) const {
   std::lock_guard<std::mutex> lock(mutex_);
   const int m = count_.load(std::memory_order_relaxed);
-  for (int i = n; i < m; ++i) {
+  for (int i = 0; i < m; ++i) {
     const Entry* e = slots_[i].load(std::memory_order_relaxed);
-    if (same(e)) return &e->region;
+    if (same_plane(e->plane, e->radius, entry->plane, entry->radius)) return &e->region;
   }
   if (m >= kMaxRegions) return nullptr;
-  auto e = std::make_unique<Entry>(object_, plane, radius, flatten_);
-  const Entry* raw = e.get();
-  owned_.push_back(std::move(e));
+  const Entry* raw = entry.get();
+  owned_.push_back(std::move(entry));
   slots_[m].store(raw, std::memory_order_release);
   count_.store(m + 1, std::memory_order_release);
   return &raw->region;
+}
+
+const PlaneRegion* SectionSkin::region(const FingerPlane& plane, double radius) const {
+  if (const PlaneRegion* r = find(plane, radius)) return r;
+  if (!finite_plane(plane, radius)) return nullptr;
+  {
+    // Built under the lock, so that two threads asking for the same new plane build it once.
+    std::lock_guard<std::mutex> lock(build_mutex_);
+    if (const PlaneRegion* r = find(plane, radius)) return r;
+    if (count_.load(std::memory_order_acquire) >= kMaxRegions) return nullptr;
+    return insert(std::make_unique<Entry>(object_, plane, radius, flatten_));
+  }
+}
+
+void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius) const {
+  std::vector<const FingerPlane*> todo;
+  for (const FingerPlane& p : planes) {
+    if (!finite_plane(p, radius) || find(p, radius)) continue;
+    bool twice = false;
+    for (const FingerPlane* q : todo) twice = twice || same_plane(*q, radius, p, radius);
+    if (!twice) todo.push_back(&p);
+  }
+  const std::size_t room = static_cast<std::size_t>(std::max(0, kMaxRegions - count_.load(std::memory_order_acquire)));
+  if (todo.size() > room) todo.resize(room);
+  const unsigned hardware = std::thread::hardware_concurrency();
+  const std::size_t threads = std::min<std::size_t>(todo.size(), hardware > 1 ? hardware : 1);
+  if (threads < 2) {
+    for (const FingerPlane* p : todo) region(*p, radius);
+    return;
+  }
+  std::vector<std::unique_ptr<Entry>> built(todo.size());
+  std::vector<std::exception_ptr> errors(todo.size());
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t i; (i = next.fetch_add(1)) < todo.size();) {
+      try {
+        built[i] = std::make_unique<Entry>(object_, *todo[i], radius, flatten_);
+      } catch (...) {
+        errors[i] = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < threads; ++t) {
+    try {
+      pool.emplace_back(work);
+    } catch (const std::system_error&) {
+      break;  // no more threads to be had: this one builds the rest
+    }
+  }
+  work();
+  for (std::thread& t : pool) t.join();
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
+  // In the planes' order (an entry's slot never changes an answer).
+  for (std::unique_ptr<Entry>& e : built) insert(std::move(e));
 }
 
 Touch SectionSkin::link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap) const {

@@ -6,6 +6,8 @@
 /// implementation.
 #pragma once
 
+#include <vector>
+
 #include "hugger/hand/hand_model.hpp"
 #include "hugger/types.hpp"
 
@@ -94,6 +96,14 @@ class Sensing {
   /// world and asks capsule_clear).
   virtual bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
                          bool a_outside = false) const;
+
+  /// A hint, once at the start of Phase 2: link queries in these finger planes, for links of
+  /// `radius`, follow. A skin that builds a structure per plane (the section skin) may build them
+  /// now, side by side; the default does nothing. Answers never depend on it.
+  virtual void prepare(const std::vector<FingerPlane>& planes, double radius) const {
+    (void)planes;
+    (void)radius;
+  }
 
   /// Slide the fingertip along O's boundary in its plane, counter-clockwise (interior on the
   /// left), to the first point whose chord from the tip is `step`.

@@ -156,6 +156,10 @@ class SectionSkin final : public Sensing {
   bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                       double below) const override;
 
+  /// Builds the regions of these planes not built yet, on up to one thread per plane (at most
+  /// the hardware's threads; one region per plane whatever the thread count).
+  void prepare(const std::vector<FingerPlane>& planes, double radius) const override;
+
   /// The region of a plane and radius, built on first use; nullptr past kMaxRegions regions
   /// (queries in further planes then go to the mesh world).
   const PlaneRegion* region(const FingerPlane& plane, double radius) const;
@@ -166,10 +170,16 @@ class SectionSkin final : public Sensing {
 
  private:
   struct Entry;
+  /// The region of the plane and radius if built, else nullptr (no lock).
+  const PlaneRegion* find(const FingerPlane& plane, double radius) const;
+  /// Adds a built region unless one of its plane and radius is there (under the lock); returns
+  /// the region kept, or nullptr past kMaxRegions.
+  const PlaneRegion* insert(std::unique_ptr<Entry> entry) const;
   std::shared_ptr<const Object> object_;
   SimulatedWorld mesh_;
   double flatten_;
-  mutable std::mutex mutex_;
+  mutable std::mutex mutex_;        ///< guards owned_ and new slots
+  mutable std::mutex build_mutex_;  ///< region(): one thread builds a new plane's region at a time
   mutable std::vector<std::unique_ptr<Entry>> owned_;
   mutable std::array<std::atomic<const Entry*>, kMaxRegions> slots_{};
   mutable std::atomic<int> count_{0};
