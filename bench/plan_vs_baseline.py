@@ -196,7 +196,8 @@ def overall(per_object: dict[str, dict[str, dict[str, Any]]]) -> dict[str, Any]:
 
 
 def ms(x: float) -> str:
-    return f"{x * 1e3:.1f}" if x < 10 else f"{x * 1e3:.0f}"
+    """Seconds as milliseconds, one decimal."""
+    return f"{x * 1e3:.1f}"
 
 
 def markdown(result: dict[str, Any]) -> str:

@@ -10,8 +10,9 @@ import pytest
 from helpers import bench_module
 
 
-def test_plan_vs_baseline_reports_every_planner(tmp_path, capsys):
+def test_plan_vs_baseline_reports_every_planner(tmp_path, capsys, monkeypatch):
     pytest.importorskip("mujoco", reason="the baseline needs the physics extra (pip install 'hugger[physics]')")
+    monkeypatch.setenv("HUGGER_CACHE_DIR", str(tmp_path / "cache"))  # not the user's cache (sphere: convex, no CoACD)
     mod = bench_module("plan_vs_baseline")
     out = tmp_path / "speed.md"
     assert mod.main(["--objects", "sphere", "--repeat", "1", "--out", str(out), "--json"]) == 0
@@ -45,3 +46,18 @@ def test_plan_vs_baseline_refuses_bad_arguments(args, capsys):
         mod.main(args)
     assert exc.value.code == 2
     assert "error:" in capsys.readouterr().err
+
+
+def test_plan_digest_is_repeatable_and_tells_plans_apart(capsys):
+    mod = bench_module("plan_digest")
+    digests = []
+    for rules in ("hug", "hug", "paper"):
+        assert mod.main(["--objects", "box", "--skins", "section", "--rules", rules, "--json"]) == 0
+        out = json.loads(capsys.readouterr().out)
+        assert out["plans_per_skin"] == 4
+        digests.append(out["digests"]["section"])
+    assert digests[0] == digests[1]  # the same plans, bit for bit
+    assert digests[0] != digests[2]  # other plans: another digest
+    with pytest.raises(SystemExit) as bad:
+        mod.main(["--objects", "no-such-object"])
+    assert bad.value.code == 2

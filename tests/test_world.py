@@ -79,6 +79,26 @@ def _pillow(v, f):
     return np.vstack([v, v[f[0]]]), np.vstack([f, [[n, n + 1, n + 2], [n, n + 2, n + 1]]])
 
 
+def _pillow_apart(v, f):
+    """The sphere plus a pillow over three new vertices of their own (no coincident vertices):
+    the same triangle twice over the same indices, in opposite turns."""
+    n = len(v)
+    return np.vstack([v, 1.5 * v[f[0]]]), np.vstack([f, [[n, n + 1, n + 2], [n, n + 2, n + 1]]])
+
+
+def _pillow_on_the_sphere(v, f):
+    """A pillow over three pairwise non-adjacent vertices of the sphere itself."""
+    adjacent = {frozenset(e) for tri in f.tolist() for e in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0]))}
+    pick = [0]
+    for i in range(1, len(v)):
+        if all(frozenset((i, j)) not in adjacent for j in pick):
+            pick.append(i)
+        if len(pick) == 3:
+            break
+    a, b, c = pick
+    return v, np.vstack([f, [[a, b, c], [a, c, b]]])
+
+
 def _kissing_spheres(v, f):
     """Two spheres that share one vertex: a non-manifold vertex."""
     i, j = int(np.argmax(v[:, 0])), int(np.argmin(v[:, 0]))
@@ -137,6 +157,8 @@ def _move(v, f, i, where):
     # duplicate triangles
     (lambda v, f: (v, np.vstack([f, f[:1, [0, 2, 1]]])), "consistently oriented|manifold"),
     (_pillow, "same triangle"),
+    (_pillow_apart, "same triangle"),
+    (_pillow_on_the_sphere, "same triangle"),
     # open
     (lambda v, f: (v, f[1:-1]), "not closed"),
     (lambda v, f: (v[:3], [[0, 1, 2]]), "not closed"),

@@ -128,6 +128,9 @@ TEST(Object, RejectsBadMeshes) {
     FacesN3 f(m + 2, 3);
     f << mesh.faces, n, n + 1, n + 2, n, n + 2, n + 1;
     expect_invalid(v, f, "same triangle");
+    // The same over three new vertices of their own (nothing coincides): the same indices twice.
+    v.bottomRows(3) *= 1.5;
+    expect_invalid(v, f, "same triangle");
   }
   // Two spheres sharing one vertex: the surface touches itself there (two fans of faces).
   {

@@ -196,8 +196,12 @@ NearestResult TriangleBvh::nearest(const Vec3& a, const Vec3& b, double max_dist
          w.offer(a, b, on_seg, on_tri, d);
        },
        best_sq);
-  if (best.crosses) best.distance = 0.0;
-  else if (best.triangle >= 0) best.distance = std::sqrt(best_sq);
+  if (best.crosses) {
+    best.distance = best.squared_distance = 0.0;
+  } else if (best.triangle >= 0) {
+    best.squared_distance = best_sq;
+    best.distance = std::sqrt(best_sq);
+  }
   return best;
 }
 

@@ -60,8 +60,8 @@ void check_surface(const PointsN3& V, const FacesN3& F, const std::vector<std::i
                                                           "or collinear); "
                                                        << flat << " such face(s)");
   // Duplicate triangles: the same three positions, whatever the vertex indices and orientation.
-  // Only possible where distinct vertices coincide; then faces are compared by their sorted
-  // position triples.
+  // Possible where distinct vertices coincide, or over the same three vertices; then faces are
+  // compared by their sorted position triples.
   // Do two distinct vertices coincide? An open-addressing hash of the positions' bits (+ 0.0
   // makes -0 equal to 0): linear in the mesh.
   auto bits = [&](std::int64_t i, int k) {
@@ -73,7 +73,7 @@ void check_surface(const PointsN3& V, const FacesN3& F, const std::vector<std::i
   std::size_t capacity = 16;
   while (capacity < 2 * static_cast<std::size_t>(nv)) capacity *= 2;
   std::vector<std::int64_t> table(capacity, -1);
-  bool coincide = false;
+  bool coincide = false;  // (or the same three vertices twice: below)
   for (std::int64_t i = 0; i < nv && !coincide; ++i) {
     std::uint64_t h = bits(i, 0) * 0x9E3779B97F4A7C15ull;
     h ^= (bits(i, 1) + (h << 6) + (h >> 2)) * 0xC2B2AE3D27D4EB4Full;
@@ -89,6 +89,12 @@ void check_surface(const PointsN3& V, const FacesN3& F, const std::vector<std::i
         break;
       }
     }
+  }
+  // Or the same three vertices twice, in opposite turns (a zero-volume pillow, closed and
+  // oriented): then the face across a face's first edge holds its three vertices.
+  for (std::int64_t f = 0; f < nf && !coincide; ++f) {
+    const std::int64_t g = neighbors[f][0], third = F(f, 2);
+    coincide = F(g, 0) == third || F(g, 1) == third || F(g, 2) == third;
   }
   if (coincide) {
     // Vertices sorted by position, each given the index of its position.

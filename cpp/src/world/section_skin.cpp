@@ -231,11 +231,14 @@ void PlaneRegion::drop_inner_segments() {
     const Vec3 X = plane_.to_world(x);
     if (radius_ > 0.0) {
       // Within r less a margin of O's surface, or inside O: strictly inside R. One search for
-      // the nearest triangle within r answers the first; only a point with nothing within r
-      // (off the surface: the ray test is safe) needs the inside test.
+      // the nearest triangle within r answers the first; only a point with nothing closer than r
+      // (off the surface: the ray test is safe) needs the inside test. The comparisons are
+      // TriangleBvh::any_within's (squared, strict, or touching) at r less the margin and at r.
       const double margin = std::max(1e-9, 1e-3 * radius_);
       const NearestResult near = O.bvh().nearest(X, X, radius_);
-      if (near.triangle >= 0) return near.distance < radius_ - margin;
+      const double d2 = near.squared_distance, inner = radius_ - margin;
+      if (d2 < inner * inner || d2 == 0.0) return true;
+      if (d2 < radius_ * radius_) return false;
       return O.inside_off_surface(X);
     }
     return O.inside(X);
@@ -276,7 +279,9 @@ void PlaneRegion::drop_inner_segments() {
   segments_.swap(kept);
   for (auto& p : pieces_) p.crossed = false;  // resolved
   for (auto& s : segments_) s.crossed = false;
-  if (changed) build_bvh();  // else the same segments in the same order: the tree stands
+  // Else the same segments: the tree stands (a rebuild would make the same nodes, perhaps with
+  // the segments of a leaf in another order).
+  if (changed) build_bvh();
 }
 
 void PlaneRegion::add_segment(const Vec2& a, const Vec2& b, const Vec2& outward, int piece) {

@@ -37,6 +37,7 @@ struct Aabb {
 /// Result of a nearest-feature query: which triangle, which feature of it, both points.
 struct NearestResult {
   double distance = kInf;  ///< Euclidean distance (>= 0); 0 when the query touches or crosses the mesh
+  double squared_distance = kInf;  ///< its square as computed (distance is its square root)
   Vec3 on_query = Vec3::Zero();  ///< closest point of the query primitive
   Vec3 on_mesh = Vec3::Zero();   ///< closest point of the mesh
   int triangle = -1;             ///< index of the triangle in the input faces (-1: nothing within the bound)

@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""A digest of many plans, to check that a change of the engine plans bit for bit as before.
+
+    python bench/plan_digest.py [--skins mesh,section] [--rules paper,hug] [--objects sphere,box] [--json]
+
+Plans every built-in object (:func:`hugger.scenarios.default_case`) with the default hand and the
+presets ``barrett_bh8``, ``robotiq_3f`` and ``parallel_3link``, under each rule set and each skin
+(by default 7 x 4 x 2 x 2 = 112 plans), and prints one SHA-256 digest per skin over every emitted
+configuration (palm pose, joints, angles, tip states, iteration, phase) and each plan's summary. A
+pure speed-up must leave every digest unchanged: run it before and after, and compare.
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import sys
+
+import numpy as np
+
+import hugger
+from hugger import scenarios
+
+HANDS = (None, "barrett_bh8", "robotiq_3f", "parallel_3link")
+FIELDS = ("palm_pose", "joints", "angles", "tip_state", "iteration", "phase")
+
+
+def digest(skin: str, rules: list[str], objects: list[str]) -> str:
+    """The digest of the plans of every object, hand and rule set with this skin."""
+    h = hashlib.sha256()
+    for name in objects:
+        for preset in HANDS:
+            hand = None if preset is None else hugger.hands.preset(preset)
+            case = scenarios.default_case(name, hand=hand)
+            for rule in rules:
+                traj = hugger.plan(case.hand, case.obj, case.target, case.palm_pose, rules=rule, skin=skin)
+                for k in range(len(traj)):
+                    c = traj.configuration(k)
+                    for field in FIELDS:
+                        h.update(np.ascontiguousarray(getattr(c, field)).tobytes())
+                h.update(repr(traj.summary()).encode())
+    return h.hexdigest()
+
+
+def names(text: str, allowed: list[str], what: str) -> list[str]:
+    chosen = [s for s in text.split(",") if s]
+    unknown = [s for s in chosen if s not in allowed]
+    if unknown or not chosen:
+        raise argparse.ArgumentTypeError(f"unknown {what}: {', '.join(unknown) or '(none)'} (choose from {', '.join(allowed)})")
+    return chosen
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    builtins = list(hugger.objects.names())
+    parser.add_argument("--skins", type=lambda t: names(t, ["mesh", "section"], "skins"), default=["mesh", "section"])
+    parser.add_argument("--rules", type=lambda t: names(t, ["paper", "hug"], "rule sets"), default=["paper", "hug"])
+    parser.add_argument("--objects", type=lambda t: names(t, builtins, "objects"), default=builtins)
+    parser.add_argument("--json", action="store_true", help="print JSON")
+    args = parser.parse_args(argv)
+    plans = len(args.objects) * len(HANDS) * len(args.rules)
+    result = {skin: digest(skin, args.rules, args.objects) for skin in args.skins}
+    if args.json:
+        print(json.dumps({"plans_per_skin": plans, "digests": result}))
+    else:
+        for skin, d in result.items():
+            print(f"{skin:8s} {d}  ({plans} plans)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
