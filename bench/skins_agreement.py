@@ -21,7 +21,7 @@ import numpy as np  # noqa: E402
 import hugger  # noqa: E402
 from hugger._files import write_atomic  # noqa: E402
 from helpers import CHECKER, load_checker  # noqa: E402
-from test_skins import HAND, _agreement  # noqa: E402
+from test_skins import _agreement  # noqa: E402
 
 
 def main() -> int:
@@ -35,7 +35,7 @@ def main() -> int:
         print("the checker (../shared/tools/check_trajectory.py) is missing", file=sys.stderr)
         return 2
     checker = load_checker()
-    hand = hugger.Hand(**HAND)
+    hand = hugger.Hand()  # the paper's hand (tests/conftest.py's)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for kind in args.kinds:

@@ -7,6 +7,7 @@ import re
 
 import pytest
 
+import helpers
 from helpers import bench_module
 
 
@@ -61,3 +62,20 @@ def test_plan_digest_is_repeatable_and_tells_plans_apart(capsys):
     with pytest.raises(SystemExit) as bad:
         mod.main(["--objects", "no-such-object"])
     assert bad.value.code == 2
+
+
+OPTIONAL = {"mujoco", "ray", "viser", "matplotlib", "coacd", "trimesh", "yourdfpy", "imageio", "imageio_ffmpeg", "fcl"}
+
+
+@pytest.mark.parametrize("script", sorted(p.stem for p in (helpers.ROOT / "bench").glob("*.py")))
+def test_every_bench_script_imports(script):
+    """A bench script that imports what no longer exists (a test helper renamed, say) fails here,
+    not when someone next re-measures a table."""
+    try:
+        mod = bench_module(script)
+    except ModuleNotFoundError as e:
+        if e.name and e.name.split(".")[0] in OPTIONAL:
+            pytest.skip(f"bench/{script}.py needs {e.name}, an optional extra not installed here")
+        raise
+    if "__main__" in (helpers.ROOT / "bench" / f"{script}.py").read_text():  # a script, not a shared module
+        assert callable(getattr(mod, "main", None)), f"bench/{script}.py has no main()"
