@@ -75,3 +75,41 @@ def test_cli_rules(tmp_path):
     r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--rules", "nope", "--out", str(out)],
                        capture_output=True, text=True)
     assert r.returncode == 2 and "--rules" in r.stderr
+
+
+def _root_angles(traj: hugger.Trajectory) -> np.ndarray:
+    """(K, M): each finger's root joint angle (flexion positive) at every configuration."""
+    return np.array([np.asarray(traj.configuration(k).angles)[:, 0] for k in range(len(traj))])
+
+
+def test_h5_fingers_open_then_close_again_after_palm_contact(checker, tmp_path):
+    """Hug rule H5 on a random fitting case (a sphere, 5 fingers): fingers turn their root
+    joints back (open) before the palm lands, and after palm contact the same fingers close
+    their root joints again; the paper's rules open none. The plan passes the checker, motion
+    included."""
+    kind, hand, obj, target, pose = hug_metrics.random_case(25)
+    planner = hugger.Planner(hand, obj, target, pose)
+    traj = planner.plan()
+    stats = planner.stats
+    assert stats["fingers_opened"] > 0 and stats["palm_contact_iteration"] >= 0 and stats["reclose_steps"] > 0, stats
+    roots = _root_angles(traj)
+    delta = traj.params["contact_tolerance"]
+    first = next(k for k in range(len(traj)) if traj.palm_gap(k) <= delta)  # the palm lands
+    opened = np.max(roots[: first + 1], axis=0) - roots[first]  # how far each root turned back before
+    closed = np.max(roots[first:], axis=0) - roots[first]  # how far it closed again after
+    both = (opened > 0.3) & (closed > 0.15)
+    assert both.sum() >= 3, (opened, closed)
+    helpers.save_and_check(checker, traj, tmp_path / "h5.npz", motion=True)
+    paper = hugger.Planner(hand, obj, target, pose, rules="paper")
+    paper.plan()
+    assert paper.stats["fingers_opened"] == 0 and paper.stats["reclose_steps"] == 0
+
+
+def test_h5_fingers_close_again_at_rest_without_palm_contact():
+    """Hug rule H5 on the default box case: the palm never lands, and the opened fingers close
+    their root joints again once the hand is at rest."""
+    case = hugger.scenarios.default_case("box")
+    planner = hugger.Planner(case.hand, case.obj, case.target, case.palm_pose)
+    planner.plan()
+    stats = planner.stats
+    assert stats["palm_contact_iteration"] == -1 and stats["fingers_opened"] > 0 and stats["reclose_steps"] > 0, stats

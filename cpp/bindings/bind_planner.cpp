@@ -165,7 +165,11 @@ void bind_planner(py::module_& m) {
       .def_readonly("motion_rejections", &PlannerStats::motion_rejections,
                     "Finger moves refused: a joint would move > 4 s, or the swept motion collides")
       .def_readonly("approach_configurations", &PlannerStats::approach_configurations,
-                    "Configurations emitted by the approach before the first contact");
+                    "Configurations emitted by the approach before the first contact")
+      .def_readonly("fingers_opened", &PlannerStats::fingers_opened,
+                    "Hug rule H5: iterations in which a finger turned its root joint back to let the palm land")
+      .def_readonly("reclose_steps", &PlannerStats::reclose_steps,
+                    "Hug rule H5: steps closing an opened finger's root joint again");
 
   py::class_<Configuration>(m, "Configuration", "One hand configuration of a plan (docs/model.md).")
       .def_property_readonly("palm_pose", [](const Configuration& c) { return from_pose(c.palm); }, "(4, 4) T_WP")

@@ -597,7 +597,10 @@ void Planner::phase2_iteration() {
     if (hug && opened_[m] && (palm_touched_ || reclosing_[m])) {
       // Hug rule H5: a finger that opened to let the palm land closes its root joint again once
       // the palm has landed, or once the hand is at rest without it.
-      if (reclose_step(m, cand[m], old)) continue;
+      if (reclose_step(m, cand[m], old)) {
+        ++stats_.reclose_steps;
+        continue;
+      }
       opened_[m] = 0;
       reclosing_[m] = 0;
     }
@@ -764,7 +767,10 @@ void Planner::phase2_iteration() {
     attempt(0.0, next, next_states);
   }
   for (int m = 0; m < M; ++m)
-    if (opened_now[m]) opened_[m] = 1;
+    if (opened_now[m]) {
+      opened_[m] = 1;
+      ++stats_.fingers_opened;
+    }
   bool starts_closing = false;  // a finger starts closing: the next iteration moves it
   for (int m = 0; m < M; ++m) {
     if (next_states[m] != TipState::kContact) continue;

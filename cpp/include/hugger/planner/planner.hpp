@@ -73,6 +73,8 @@ struct PlannerStats {
   long clinging_failures = 0;         ///< fingers stopped because no free link position was found
   long motion_rejections = 0;         ///< finger moves refused: a joint would move > 4 s, or the swept motion collides
   long approach_configurations = 0;   ///< configurations emitted by the approach before the first contact
+  long fingers_opened = 0;            ///< hug rule H5: iterations in which a finger turned its root joint back
+  long reclose_steps = 0;             ///< hug rule H5: steps closing an opened finger's root joint again
 };
 
 class Planner {
