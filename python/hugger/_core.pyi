@@ -283,6 +283,16 @@ class PlannerStats:
         """
         Configurations emitted by the approach before the first contact
         """
+    @property
+    def fingers_opened(self) -> int:
+        """
+        Hug rule H5: iterations in which a finger turned its root joint back to let the palm land
+        """
+    @property
+    def reclose_steps(self) -> int:
+        """
+        Hug rule H5: steps closing an opened finger's root joint again
+        """
 class Configuration:
     """
     One hand configuration of a plan (docs/model.md).
