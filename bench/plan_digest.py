@@ -15,6 +15,7 @@ import argparse
 import hashlib
 import json
 import sys
+from typing import Any
 
 import numpy as np
 
@@ -25,6 +26,15 @@ HANDS = (None, "barrett_bh8", "robotiq_3f", "parallel_3link")
 FIELDS = ("palm_pose", "joints", "angles", "tip_state", "iteration", "phase")
 
 
+def update(h: Any, traj: hugger.Trajectory) -> None:
+    """Feed one plan to the hash ``h``: every configuration's fields, bit for bit, and its summary."""
+    for k in range(len(traj)):
+        c = traj.configuration(k)
+        for field in FIELDS:
+            h.update(np.ascontiguousarray(getattr(c, field)).tobytes())
+    h.update(repr(traj.summary()).encode())
+
+
 def digest(skin: str, rules: list[str], objects: list[str]) -> str:
     """The digest of the plans of every object, hand and rule set with this skin."""
     h = hashlib.sha256()
@@ -33,12 +43,7 @@ def digest(skin: str, rules: list[str], objects: list[str]) -> str:
             hand = None if preset is None else hugger.hands.preset(preset)
             case = scenarios.default_case(name, hand=hand)
             for rule in rules:
-                traj = hugger.plan(case.hand, case.obj, case.target, case.palm_pose, rules=rule, skin=skin)
-                for k in range(len(traj)):
-                    c = traj.configuration(k)
-                    for field in FIELDS:
-                        h.update(np.ascontiguousarray(getattr(c, field)).tobytes())
-                h.update(repr(traj.summary()).encode())
+                update(h, hugger.plan(case.hand, case.obj, case.target, case.palm_pose, rules=rule, skin=skin))
     return h.hexdigest()
 
 

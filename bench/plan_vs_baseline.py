@@ -59,8 +59,12 @@ import hugger
 from hugger import baselines, scenarios
 from hugger._files import write_atomic
 
-ROOT = Path(__file__).resolve().parents[1]
-CHECKER = ROOT.parent / "shared" / "tools" / "check_trajectory.py"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+import plan_digest  # noqa: E402
+from helpers import CHECKER, load_checker  # noqa: E402
+
+_checker = functools.lru_cache(maxsize=None)(load_checker)  # loaded once, not once per plan
 SKINS = ("mesh", "section")
 PLANNERS = (*SKINS, "baseline")
 
@@ -83,20 +87,10 @@ def load_average() -> list[float] | None:
 
 
 def digest(traj: hugger.Trajectory) -> str:
-    """SHA-256 of the plan's palm poses and joint angles (bit for bit): the same plan, the same digest."""
+    """A plan's digest (plan_digest.py's, bit for bit): the same plan, the same digest."""
     h = hashlib.sha256()
-    h.update(np.ascontiguousarray(traj.palm_pose, dtype="<f8").tobytes())
-    h.update(np.ascontiguousarray(traj.angles, dtype="<f8").tobytes())
+    plan_digest.update(h, traj)
     return h.hexdigest()[:16]
-
-
-@functools.lru_cache(maxsize=None)
-def _checker() -> Any:  # loaded once, not once per plan
-    spec = importlib.util.spec_from_file_location("check_trajectory", CHECKER)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def check_unavailable() -> str | None:

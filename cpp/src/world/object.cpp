@@ -29,7 +29,8 @@ struct OutEdge {
 };
 
 /// A face's area is zero (coincident or collinear vertices) when twice its area is at most this
-/// times its longest edge squared (Python's hugger.world.DEGENERATE_AREA).
+/// times its longest edge squared (a sliver whose height is 1e-12 of its length: its normal is
+/// numerical noise).
 constexpr double kDegenerateArea = 1e-12;
 
 /// The checks beyond closed, oriented and positive volume, on a mesh that passed those: no
@@ -130,14 +131,17 @@ void check_surface(const PointsN3& V, const FacesN3& F, const std::vector<std::i
   // Non-manifold vertices: around a vertex v the corners of its faces chain into cycles (from
   // the corner at v of face f, whose edges leave v along k and arrive along k + 2, the next is
   // the corner at v of the face across edge k + 2); a manifold vertex has one cycle.
-  auto corner = [&](std::int64_t f, std::int64_t v) { return F(f, 0) == v ? 0 : (F(f, 1) == v ? 1 : 2); };
+  auto next_face = [&](std::int64_t f, std::int64_t v) {
+    const int corner = F(f, 0) == v ? 0 : (F(f, 1) == v ? 1 : 2);
+    return neighbors[f][(corner + 2) % 3];
+  };
   for (std::int64_t v = 0; v < nv; ++v) {
     const std::int64_t degree = row[v + 1] - row[v];
     if (degree == 0) continue;
     const std::int64_t start = out[row[v]].face;
     std::int64_t f = start, steps = 0;
     do {
-      f = neighbors[f][(corner(f, v) + 2) % 3];
+      f = next_face(f, v);
       ++steps;
     } while (f != start && steps <= degree);
     if (steps == degree) continue;
@@ -152,8 +156,7 @@ void check_surface(const PointsN3& V, const FacesN3& F, const std::vector<std::i
     for (std::int64_t s = 0; s < degree; ++s) {
       if (seen[s]) continue;
       ++fans;
-      for (std::int64_t e = s; !seen[e]; e = slot(neighbors[out[row[v] + e].face][(corner(out[row[v] + e].face, v) + 2) % 3]))
-        seen[e] = 1;
+      for (std::int64_t e = s; !seen[e]; e = slot(next_face(out[row[v] + e].face, v))) seen[e] = 1;
     }
     HUGGER_CHECK_ARGUMENT(false, "object mesh is not manifold at vertex "
                                      << v << ": " << fans

@@ -173,11 +173,7 @@ PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane
 void PlaneRegion::build_cells() {
   cells_.clear();
   if (segments_.empty()) return;
-  Vec2 lo = Vec2::Constant(kInf), hi = Vec2::Constant(-kInf);
-  for (const Segment& s : segments_) {
-    lo = lo.cwiseMin(s.a).cwiseMin(s.b);
-    hi = hi.cwiseMax(s.a).cwiseMax(s.b);
-  }
+  const Vec2 lo(nodes_[0].lo[0], nodes_[0].lo[1]), hi(nodes_[0].hi[0], nodes_[0].hi[1]);  // the segments' box
   // About 64 cells along the longer side, one cell of padding all round (the outer cells lie
   // outside every segment's box: they belong to the unbounded group, outside R).
   constexpr int kCells = 64;
@@ -267,7 +263,6 @@ void PlaneRegion::drop_inner_segments() {
         Segment part = s;
         part.a = from;
         part.b = to;
-        part.crossed = false;
         kept.push_back(part);
       }
       from = to;
@@ -278,7 +273,6 @@ void PlaneRegion::drop_inner_segments() {
   cuts_.shrink_to_fit();
   segments_.swap(kept);
   for (auto& p : pieces_) p.crossed = false;  // resolved
-  for (auto& s : segments_) s.crossed = false;
   // Else the same segments: the tree stands (a rebuild would make the same nodes, perhaps with
   // the segments of a leaf in another order).
   if (changed) build_bvh();
@@ -605,7 +599,6 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
         if (!found || d < best - kTie) {
           found = true;
           out.normal_sum = s.normal;
-          out.crossed = s.crossed;
           out.ties = 1;
           out.at_end = (c2 - s.a).squaredNorm() <= kJoin * kJoin || (c2 - s.b).squaredNorm() <= kJoin * kJoin;
           best = d;
@@ -614,7 +607,6 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
           out.on_region = c2;
         } else {
           out.normal_sum += s.normal;
-          out.crossed = out.crossed || s.crossed;
           ++out.ties;
           if (d < best) {
             best = d;
@@ -732,8 +724,6 @@ void PlaneRegion::mark_crossings() {
         if (x > ex && x < 1.0 - ex && y > ey && y < 1.0 - ey) {
           pieces_[s.piece].crossed = true;
           pieces_[t.piece].crossed = true;
-          segments_[i].crossed = true;
-          segments_[j].crossed = true;
           cuts_.push_back({static_cast<int>(i), x});
           cuts_.push_back({j, y});
         }

@@ -37,7 +37,6 @@ class PlaneRegion {
     Vec2 a = Vec2::Zero(), b = Vec2::Zero();
     Vec2 normal = Vec2::UnitX();
     int piece = 0;  ///< index of the feature's piece (one polyline per face, edge or vertex arc)
-    bool crossed = false;  ///< while building: another piece crosses it
   };
   enum class Kind : std::uint8_t { kFace, kEdge, kVertex };
   struct Piece {
@@ -51,7 +50,6 @@ class PlaneRegion {
     Vec2 on_query = Vec2::Zero();    ///< nearest point of the query
     Vec2 on_region = Vec2::Zero();   ///< nearest point of the boundary pieces
     Vec2 normal_sum = Vec2::Zero();  ///< sum of the outward normals of the pieces nearest (ties)
-    bool crossed = false;            ///< a nearest piece is crossed by another (side test unsafe)
     int ties = 0;                    ///< how many segments are nearest (several at a shared end point)
     bool at_end = false;             ///< the nearest point is an end point of the (first) nearest segment
   };
@@ -65,8 +63,9 @@ class PlaneRegion {
   Near nearest(const Vec2& a, const Vec2& b, double cap = kInf) const;
   /// True when some boundary piece comes within `distance` of segment [a, b] (or touches it).
   bool any_within(const Vec2& a, const Vec2& b, double distance) const;
-  /// True when x lies in R (closed). From the side of the nearest piece; where that is unsafe
-  /// (a crossed piece, a side test too close to call) from one 3D query.
+  /// True when x lies in R (closed). From its cell's label where no segment touches the cell,
+  /// else from the side of the nearest piece; where that is unsafe (a loose end, a side test too
+  /// close to call) from one 3D query.
   bool inside(const Vec2& x) const;
   /// Whether a point at the `near` answer of a query (not crossing) lies in R.
   bool inside_from(const Near& near, const Vec2& x) const;
