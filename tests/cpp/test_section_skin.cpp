@@ -320,3 +320,77 @@ TEST(SectionSkin, PrepareBuildsTheSameRegionsSideBySide) {
   EXPECT_THROW(skin.prepare({planes[0], bad, planes[1]}, r), std::invalid_argument);
   EXPECT_NE(skin.region(planes[1], r), nullptr);
 }
+
+// rotate_until_free in closed form: against a brute-force sweep of fine angles both ways (the
+// section skin's own clearance test), on random colliding links in random planes, with and
+// without a front plane: the result is free, never nearer than the smallest free angle, at most
+// half the tolerance of end motion beyond it, and rests on R (gap at most the tolerance).
+TEST(SectionSkin, RotateUntilFreeIsTheSmallestFreeingRotation) {
+  for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::curvy(4)}) {
+    const auto object = std::make_shared<Object>(m.vertices, m.faces);
+    const SectionSkin skin(object, kFlatten);
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    const Vec3 c = object->bounds().centre();
+    const double size = object->bounds().extent().maxCoeff();
+    int checked = 0, fronts = 0;
+    std::vector<FingerPlane> planes(16);  // a skin keeps at most kMaxRegions regions
+    for (FingerPlane& pl : planes) {
+      pl.origin = c;
+      pl.p = test::random_unit(rng);
+      pl.u = test::random_unit(rng).cross(pl.p).normalized();
+    }
+    for (int trial = 0; trial < 400; ++trial) {
+      const FingerPlane& pl = planes[trial % planes.size()];
+      const double r = (trial / planes.size()) % 2 * 0.004;
+      // a pivot outside R near it: along a random ray from the centre, just past the boundary
+      const double a = 2 * kPi * U(rng);
+      const Vec2 dir(std::cos(a), std::sin(a));
+      double t = 0.0;
+      while (t < 2 * size && !skin.link_free(pl, t * dir, t * dir, r, -kInf)) t += 1e-3;
+      const Vec2 pivot = (t + 1e-4 * U(rng)) * dir;
+      if (!skin.link_free(pl, pivot, pivot, r, -kInf)) continue;
+      const double len = (0.2 + 0.3 * U(rng)) * size, b = 2 * kPi * U(rng);
+      const Vec2 end = pivot + len * Vec2(std::cos(b), std::sin(b));
+      const double front = trial % 3 == 0 ? pivot.y() - 0.5 * len * U(rng) : -kInf;
+      fronts += std::isfinite(front);
+      if (skin.link_free(pl, pivot, end, r, front)) continue;
+      RotateRequest rr;
+      rr.plane = pl;
+      rr.pivot = pivot;
+      rr.end = end;
+      rr.radius = r;
+      rr.front = front;
+      rr.max_angle = trial % 4 == 0 ? 0.4 : kPi;
+      rr.tolerance = 1e-5;
+      rr.sample_angle = 0.025;
+      const RotateResult res = skin.rotate_until_free(rr);
+      const Vec2 arm = end - pivot;
+      auto free_at = [&](double ang) {
+        const Vec2 e = pivot + Vec2(std::cos(ang) * arm.x() - std::sin(ang) * arm.y(),
+                                    std::sin(ang) * arm.x() + std::cos(ang) * arm.y());
+        return skin.link_free(pl, pivot, e, r, front);
+      };
+      constexpr double kGrid = 1e-4;
+      double brute = kInf;
+      for (int k = 1; k * kGrid <= rr.max_angle && !std::isfinite(brute); ++k)
+        for (double sgn : {1.0, -1.0})
+          if (!std::isfinite(brute) && free_at(sgn * kGrid * k)) brute = kGrid * k;
+      if (std::isfinite(brute)) EXPECT_TRUE(res.ok) << "trial " << trial;
+      if (!res.ok) continue;
+      ++checked;
+      EXPECT_NEAR((res.end - pivot).norm(), len, 1e-12);
+      EXPECT_TRUE(skin.link_free(pl, pivot, res.end, r, front)) << "trial " << trial;
+      // resting on R, unless the front stopped it (its end then rests on the front)
+      const double gap = skin.link(pl, pivot, res.end, r).gap;
+      EXPECT_GE(gap, 0.0) << "trial " << trial;
+      if (res.end.y() > front + rr.tolerance) EXPECT_LE(gap, rr.tolerance) << "trial " << trial;
+      EXPECT_LE(std::abs(res.angle), rr.max_angle + 1e-15);
+      if (!std::isfinite(brute)) continue;  // a window narrower than the grid: found, and free
+      EXPECT_GE(std::abs(res.angle), brute - kGrid - 1e-12) << "trial " << trial;
+      EXPECT_LE(std::abs(res.angle), brute + std::asin(0.5 * rr.tolerance / len) + 1e-12) << "trial " << trial;
+    }
+    EXPECT_GE(checked, 150);
+    EXPECT_GE(fronts, 50);
+  }
+}

@@ -22,6 +22,12 @@ constexpr double kTouch = 1e-12;
 constexpr double kTie = 1e-10;
 /// End points of two pieces this close are joined (rounding of the same point computed twice).
 constexpr double kJoin = 1e-10;
+/// Spans of directions (pseudo-angles) overlapping or closer than this are one blocked run: no
+/// link fits through a narrower window.
+constexpr double kSpanJoin = 1e-9;
+/// A link found free in closed form with at least this clearance (metres) at the blocked run's
+/// end needs no check: far above the rounding of the spans.
+constexpr double kCertain = 1e-9;
 
 inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
@@ -659,6 +665,103 @@ bool PlaneRegion::any_within(const Vec2& a, const Vec2& b, double distance) cons
   return false;
 }
 
+double PlaneRegion::pseudo_angle(const Vec2& u, const Vec2& v) {
+  // In u's frame: y / (|x| + |y|) runs from -1 to 1 over the half-plane ahead (x >= 0); behind,
+  // it is reflected onto (1, 2] and [-2, -1). Monotone in the true angle, and v and -v differ by
+  // exactly 2: a span shorter than pi is shorter than 2.
+  const double x = u.x() * v.x() + u.y() * v.y(), y = u.x() * v.y() - u.y() * v.x();
+  const double r = y / (std::abs(x) + std::abs(y));
+  if (x >= 0.0) return r;
+  return y >= 0.0 ? 2.0 - r : -2.0 - r;
+}
+
+bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double within,
+                        std::vector<Span>* out) const {
+  if (nodes_.empty()) return true;
+  const double slack = 1e-12 * (extent_ + pivot.cwiseAbs().maxCoeff());
+  const double reach = length + slack, l2 = length * length;
+  const Vec2 behind = -length * u;  // the point at pseudo-angle +-2, for spans cut there
+  // The wedge of directions within `within` of u: spans wholly outside it are left out, and
+  // where it is convex (within <= pi/2) so are nodes wholly outside one of its two sides.
+  const double pm = within >= kPi ? 2.0 : pseudo_angle(Vec2::UnitX(), Vec2(std::cos(within), std::sin(within)));
+  const bool wedge = within <= 0.5 * kPi;
+  const Vec2 e_plus(std::cos(within) * u.x() - std::sin(within) * u.y(), std::sin(within) * u.x() + std::cos(within) * u.y());
+  const Vec2 e_minus(std::cos(within) * u.x() + std::sin(within) * u.y(), -std::sin(within) * u.x() + std::cos(within) * u.y());
+  auto add = [&](const Vec2& q0, const Vec2& q1) {
+    double p0 = pseudo_angle(u, q0), p1 = pseudo_angle(u, q1);
+    const Vec2 *v0 = &q0, *v1 = &q1;
+    if (p1 < p0) {
+      std::swap(p0, p1);
+      std::swap(v0, v1);
+    }
+    // A piece not through the pivot spans less than pi: less than 2; the longer way round wraps.
+    if (p1 - p0 <= 2.0) {
+      if (p1 < -pm || p0 > pm) return;
+      // Neighbours along R's boundary come in turn (a leaf holds neighbours) and share an end
+      // point: one span for both, which keeps the list short.
+      if (!out->empty()) {
+        Span& last = out->back();
+        if (p0 <= last.hi + kSpanJoin && last.lo <= p1 + kSpanJoin) {
+          if (p0 < last.lo) {
+            last.lo = p0;
+            last.v_lo = *v0;
+          }
+          if (p1 > last.hi) {
+            last.hi = p1;
+            last.v_hi = *v1;
+          }
+          return;
+        }
+      }
+      out->push_back({p0, p1, *v0, *v1});
+    } else {
+      if (p1 <= pm) out->push_back({p1, 2.0, *v1, behind});
+      if (p0 >= -pm) out->push_back({-2.0, p0, behind, *v0});
+    }
+  };
+  int stack[96];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& nd = nodes_[stack[--top]];
+    const double dx = std::max({nd.lo[0] - pivot.x(), pivot.x() - nd.hi[0], 0.0});
+    const double dy = std::max({nd.lo[1] - pivot.y(), pivot.y() - nd.hi[1], 0.0});
+    if (dx * dx + dy * dy > reach * reach) continue;
+    if (wedge) {
+      // cross(e, x - pivot) over the box: its value at the centre -+ the box's half extent.
+      const double cx = nd.c[0] - pivot.x(), cy = nd.c[1] - pivot.y();
+      const double r_plus = std::abs(e_plus.x()) * nd.h[1] + std::abs(e_plus.y()) * nd.h[0];
+      const double r_minus = std::abs(e_minus.x()) * nd.h[1] + std::abs(e_minus.y()) * nd.h[0];
+      if (e_plus.x() * cy - e_plus.y() * cx - r_plus > slack) continue;     // beyond +within
+      if (e_minus.x() * cy - e_minus.y() * cx + r_minus < -slack) continue;  // beyond -within
+    }
+    if (nd.count == 0) {
+      stack[top++] = nd.right;
+      stack[top++] = nd.left;
+      continue;
+    }
+    for (int i = nd.first; i < nd.first + nd.count; ++i) {
+      const Segment& s = segments_[i];
+      const Vec2 w0 = s.a - pivot, w1 = s.b - pivot, d = s.b - s.a;
+      const double a = d.squaredNorm(), b = w0.dot(d), c0 = w0.squaredNorm() - l2, c1 = w1.squaredNorm() - l2;
+      const double t_near = a > 0.0 ? std::clamp(-b / a, 0.0, 1.0) : 0.0;
+      if ((w0 + t_near * d).squaredNorm() <= kTouch * kTouch) return false;
+      // The part within the disk: a t^2 + 2 b t + c0 <= 0 on [0, 1] (ends inside kept exactly).
+      double t0 = 0.0, t1 = 1.0;
+      if (c0 > 0.0 || c1 > 0.0) {
+        const double disc = b * b - a * c0;
+        if (!(a > 0.0) || disc < 0.0) continue;
+        const double sq = std::sqrt(disc);
+        if (c0 > 0.0) t0 = (-b - sq) / a;
+        if (c1 > 0.0) t1 = (-b + sq) / a;
+        if (t0 < 0.0 || t1 > 1.0 || t0 > t1) continue;  // the segment's line meets the disk off it
+      }
+      add(t0 == 0.0 ? w0 : Vec2(w0 + t0 * d), t1 == 1.0 ? w1 : Vec2(w0 + t1 * d));
+    }
+  }
+  return true;
+}
+
 void PlaneRegion::mark_crossings() {
   // R's boundary is closed curves: every end of a piece on it is the end of another piece (or of
   // itself, a closed circle). A piece with a loose end lies (in part) inside R: flag it.
@@ -935,6 +1038,142 @@ bool SectionSkin::link_gap_below(const FingerPlane& plane, const Vec2& a, const 
   const PlaneRegion* R = below > 0.0 ? region(plane, radius) : nullptr;
   if (!R) return link(plane, a, b, radius, below).gap < below;
   return R->any_within(a, b, std::nextafter(below, 0.0)) || R->inside(a);
+}
+
+namespace {
+
+Vec2 rotated(const Vec2& v, double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  return Vec2(c * v.x() - s * v.y(), s * v.x() + c * v.y());
+}
+
+/// Signed angle from u to v (radians, in [-pi, pi]).
+double angle_between(const Vec2& u, const Vec2& v) { return std::atan2(cross2(u, v), u.dot(v)); }
+
+}  // namespace
+
+RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
+  constexpr double kSlack = 1e-12;  // as link_free
+  const Vec2 arm = req.end - req.pivot;
+  const double len = arm.norm();
+  const PlaneRegion* R = len > 0.0 ? region(req.plane, req.radius) : nullptr;
+  if (!R) return Sensing::rotate_until_free(req);
+  RotateResult out;
+  out.end = req.end;
+  if (req.pivot.y() < req.front - kSlack) return out;  // behind the palm: no rotation frees it
+  const Vec2 u = arm / len;
+  // The end may not pass behind the front: blocked where its height pivot.y + len sin(phi) falls
+  // below front, the directions counter-clockwise from (-c, k) to (c, k), c = sqrt(1 - k^2).
+  const double k = (req.front - kSlack - req.pivot.y()) / len;
+  const double c = std::sqrt(std::max(0.0, 1.0 - k * k));
+  const Vec2 f0 = len * Vec2(-c, k), f1 = len * Vec2(c, k);
+  // Most links free within a few sample angles: the spans of a narrow wedge about the link are
+  // asked first, and those of the whole search range only where a run leaves that wedge.
+  const double narrow = std::min(req.max_angle, 4.0 * req.sample_angle);
+  thread_local std::vector<PlaneRegion::Span> spans;
+  bool unsure = false;
+  for (int pass = 0; pass < 2; ++pass) {
+    const double within = pass == 0 ? narrow : req.max_angle;
+    spans.clear();
+    if (!R->spans(req.pivot, u, len, within, &spans)) return out;  // touches the pivot: all blocked
+    if (pass == 0 && R->inside(req.pivot)) return out;
+    if (k > -1.0) {
+      const double p0 = PlaneRegion::pseudo_angle(u, f0), p1 = PlaneRegion::pseudo_angle(u, f1);
+      if (p0 <= p1) {
+        spans.push_back({p0, p1, f0, f1});
+      } else {
+        spans.push_back({p0, 2.0, f0, -arm});
+        spans.push_back({-2.0, p1, -arm, f1});
+      }
+    }
+    std::sort(spans.begin(), spans.end(), [](const PlaneRegion::Span& x, const PlaneRegion::Span& y) {
+      return x.lo < y.lo || (x.lo == y.lo && x.hi < y.hi);
+    });
+    // The runs (unions of spans; windows narrower than kSpanJoin count as blocked) in increasing
+    // order, up to the one through 0: its two ends, and where the neighbouring runs start.
+    struct Side {
+      double reach = 0.0;        ///< pseudo-angle where the run ends
+      Vec2 edge = Vec2::Zero();  ///< the boundary point that ends it
+      bool has_next = false;     ///< a run follows beyond the window (within the wedge)
+      Vec2 next = Vec2::Zero();  ///< the boundary point where it starts
+    };
+    Side plus, minus;
+    bool through_zero = false;
+    bool has_prev = false;
+    Vec2 prev_hi = Vec2::Zero();
+    for (std::size_t i = 0; i < spans.size();) {
+      PlaneRegion::Span run = spans[i++];
+      for (; i < spans.size() && spans[i].lo <= run.hi + kSpanJoin; ++i) {
+        if (spans[i].hi > run.hi) {
+          run.hi = spans[i].hi;
+          run.v_hi = spans[i].v_hi;
+        }
+      }
+      if (run.lo > kSpanJoin) break;  // past 0: no run through it
+      if (run.hi >= 0.0) {
+        through_zero = true;
+        minus = {run.lo, run.v_lo, has_prev, prev_hi};
+        plus = {run.hi, run.v_hi, i < spans.size(), i < spans.size() ? spans[i].v_lo : Vec2::Zero()};
+        break;
+      }
+      has_prev = true;
+      prev_hi = run.v_hi;
+    }
+    if (!through_zero) return Sensing::rotate_until_free(req);  // free where it is: the generic answer
+    // A run end inside the wedge is final (spans left out lie wholly beyond the wedge); one that
+    // reaches its edge may go on. Each final end gives a candidate: its true angle plus a margin
+    // that moves the link's end half the tolerance on (at most half the free window beyond),
+    // within max_angle.
+    const double pm = within >= kPi ? 2.0 : PlaneRegion::pseudo_angle(Vec2::UnitX(), Vec2(std::cos(within), std::sin(within)));
+    const bool plus_final = plus.reach < pm - kSpanJoin, minus_final = minus.reach > -pm + kSpanJoin;
+    struct Candidate {
+      double angle = 0.0;
+      double clearance = 0.0;  ///< how far the boundary point at the run's end is from the link
+    };
+    auto candidate = [&](const Side& side, int sign, Candidate* cand) {
+      const double edge = std::max(0.0, sign * angle_between(u, side.edge));
+      if (!(edge < req.max_angle)) return false;
+      const double window = side.has_next ? sign * angle_between(side.edge, side.next) : within - edge;
+      const double turn = std::min({edge + std::asin(std::min(1.0, 0.5 * req.tolerance / len)),
+                                    edge + 0.5 * window, req.max_angle});
+      cand->angle = sign * turn;
+      cand->clearance = side.edge.norm() * std::sin(turn - edge);
+      return turn > edge;
+    };
+    Candidate c_plus, c_minus;
+    const bool has_plus = plus_final && candidate(plus, 1, &c_plus);
+    const bool has_minus = minus_final && candidate(minus, -1, &c_minus);
+    // The smaller rotation first (ties: flexion). A side still open in the narrow wedge turns at
+    // least as far as the wedge: a final side's candidate is the smaller.
+    const Candidate* order[2];
+    int n = 0;
+    if (has_plus && (!has_minus || c_plus.angle <= -c_minus.angle)) {
+      order[n++] = &c_plus;
+      if (has_minus) order[n++] = &c_minus;
+    } else if (has_minus) {
+      order[n++] = &c_minus;
+      if (has_plus) order[n++] = &c_plus;
+    }
+    for (int i = 0; i < n; ++i) {
+      const Vec2 end = req.pivot + rotated(arm, order[i]->angle);
+      // The spans are exact up to rounding: a link that clears the run's end by more than
+      // kCertain is free; a closer one (a narrow window) is checked.
+      if (order[i]->clearance < kCertain && !link_free(req.plane, req.pivot, end, req.radius, req.front, true)) {
+        unsure = true;
+        continue;
+      }
+      out.ok = true;
+      out.angle = order[i]->angle;
+      out.end = end;
+      out.gap = 0.0;  // not measured: a lower bound
+      return out;
+    }
+    if ((plus_final && minus_final) || within >= req.max_angle) break;  // nothing more to learn
+  }
+  // No rotation within max_angle frees the link, unless a window too narrow to trust was refused:
+  // the generic search decides those.
+  if (unsure) return Sensing::rotate_until_free(req);
+  return out;
 }
 
 bool SectionSkin::link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,

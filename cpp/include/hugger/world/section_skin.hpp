@@ -63,6 +63,21 @@ class PlaneRegion {
   Near nearest(const Vec2& a, const Vec2& b, double cap = kInf) const;
   /// True when some boundary piece comes within `distance` of segment [a, b] (or touches it).
   bool any_within(const Vec2& a, const Vec2& b, double distance) const;
+  /// The directions, seen from a pivot, in which a segment of a given length starting there
+  /// meets a boundary piece: one span per piece part within the length of the pivot, from its
+  /// clockwise end to its counter-clockwise end. Angles are pseudo-angles (monotone in the true
+  /// angle, in [-2, 2], 0 along `u`, +-2 opposite it); a span across +-2 is split in two.
+  struct Span {
+    double lo = 0.0, hi = 0.0;                 ///< pseudo-angles, lo <= hi
+    Vec2 v_lo = Vec2::Zero(), v_hi = Vec2::Zero();  ///< the piece's points at lo and hi, minus the pivot
+  };
+  /// Appends to `out` the spans of the boundary pieces within `length` of `pivot` (u: a unit
+  /// direction) that reach directions within `within` radians of u (others may be left out).
+  /// False when a piece comes within touching distance of the pivot (every direction is blocked;
+  /// `out` is then incomplete).
+  bool spans(const Vec2& pivot, const Vec2& u, double length, double within, std::vector<Span>* out) const;
+  /// The pseudo-angle of v (non-zero) relative to the unit direction u (see Span).
+  static double pseudo_angle(const Vec2& u, const Vec2& v);
   /// True when x lies in R (closed). From its cell's label where no segment touches the cell,
   /// else from the side of the nearest piece; where that is unsafe (a loose end, a side test too
   /// close to call) from one 3D query.
@@ -154,6 +169,12 @@ class SectionSkin final : public Sensing {
   /// As link(...).gap < below, stopping at the first boundary piece closer than `below`.
   bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                       double below) const override;
+  /// In closed form: the directions in which the link meets R are the union of the spans of R's
+  /// boundary pieces seen from the pivot (and, for the end, the half-plane behind the front);
+  /// the smallest rotation out of the blocked run containing the link's direction, plus a
+  /// margin that leaves the link resting within `tolerance` of R, is checked with one link
+  /// query. Falls back to the generic search where the plane has no region or the check fails.
+  RotateResult rotate_until_free(const RotateRequest& req) const override;
 
   /// Builds the regions of these planes not built yet, on up to one thread per plane (at most
   /// the hardware's threads; one region per plane whatever the thread count).
