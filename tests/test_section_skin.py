@@ -17,7 +17,10 @@ def test_skin_choice_is_recorded_and_checked():
         traj = hugger.Planner(hand, obj, [0, 0, 0], start, skin=skin).plan()
         assert traj.status == "done"
         assert json.loads(traj.params_json)["skin"] == skin
-    assert json.loads(hugger.Planner(hand, obj, [0, 0, 0], start).plan().params_json)["skin"] == "mesh"
+    # the default: the section skin, also when the engine's binding is called directly
+    assert hugger.planner.DEFAULT_SKIN == "section"
+    assert json.loads(hugger.Planner(hand, obj, [0, 0, 0], start).plan().params_json)["skin"] == "section"
+    assert hugger._core.Planner(hand._core, obj._core, np.zeros(3), start).skin == "section"
     # not a skin's name, or not a string (an array equal to "mesh" included): ValueError
     for bad in ("voxels", b"mesh", 3, np.array("mesh"), np.array(["mesh"])):
         with pytest.raises(ValueError, match="skin must be one of 'mesh', 'section'"):

@@ -25,7 +25,7 @@ namespace {
 struct PyPlanner {
   std::unique_ptr<Planner> planner;
   py::object source;  ///< the Object or Sensing given: keeps a Python skin (and its overrides) alive
-  std::string skin = "mesh";  ///< how an Object is sensed: "mesh" (3D queries on the BVH) or "section" (2D per finger plane)
+  std::string skin = "section";  ///< how an Object is sensed: "mesh" (3D queries on the BVH) or "section" (2D per finger plane)
   std::mutex busy;
   /// An exception left the planner in the middle of an iteration (a skin's callback raised): the
   /// plan has ended with status "error"; history() holds every configuration completed before.
@@ -229,7 +229,7 @@ void bind_planner(py::module_& m) {
              return out;
            }),
            py::arg("hand"), py::arg("sensing"), py::arg("target"), py::arg("palm_pose"),
-           py::arg("params") = PlannerParams(), py::arg("skin") = "mesh")
+           py::arg("params") = PlannerParams(), py::arg("skin") = "section")
       .def(
           "step",
           [](PyPlanner& p) -> std::optional<Configuration> {

@@ -89,7 +89,7 @@ def _planner_options(p: argparse.ArgumentParser) -> None:
                    help="Phase 2 rule set: 'hug' (default; the paper's rules plus extensions for firmer "
                         "grasps) or 'paper' (the 1994 method with the documented decisions only)")
     g.add_argument("--skin", choices=SKINS,
-                   help="sensing skin: mesh (exact 3D queries, the default) or section (2D per finger plane)")
+                   help="sensing skin: section (2D per finger plane, the default) or mesh (exact 3D queries, the reference)")
     g.add_argument("--timeout", type=float, metavar="SECONDS",
                    help="stop planning after this long, with status 'timeout' and a valid partial plan")
 

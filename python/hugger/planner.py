@@ -41,7 +41,7 @@ MIN_RELATIVE_TOLERANCE = 1e-10
 #: The sensing skins a plan can use: ``section`` answers Phase 2 in each finger plane by exact 2D
 #: geometry (docs/performance.md), ``mesh`` by 3D queries on the mesh (the reference).
 SKINS: tuple[str, ...] = _core.SKINS
-DEFAULT_SKIN = "mesh"
+DEFAULT_SKIN = "section"
 
 
 def _timeout(value: Any) -> float | None:
@@ -68,9 +68,9 @@ class Planner:
     ``palm_pose`` (4, 4) is the initial palm pose T_WP (fingers extended). Defaults:
     ``step`` = shortest link / 20, ``epsilon`` = step / 10, ``contact_tolerance`` = 1e-4 m,
     ``max_iterations`` = 20000 Phase 2 iterations, ``rules`` = ``"hug"`` (``"paper"``: the 1994
-    method with the documented decisions only; see docs/algorithm.md), ``skin`` = ``"mesh"``
-    (how an Object is sensed: exact 3D queries, the reference) or ``"section"`` (2D per finger
-    plane, faster; see docs/performance.md). Raises ``ValueError`` for bad input, T
+    method with the documented decisions only; see docs/algorithm.md), ``skin`` = ``"section"``
+    (how an Object is sensed: exact 2D geometry in each finger plane; see docs/performance.md)
+    or ``"mesh"`` (exact 3D queries, the reference, slower). Raises ``ValueError`` for bad input, T
     outside O, or a hand that touches O at the start or while turning in Phase 1.
 
     ``step()`` returns the next :class:`Configuration` (or None at the end), so a plan can
