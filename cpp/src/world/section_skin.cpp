@@ -665,16 +665,6 @@ bool PlaneRegion::any_within(const Vec2& a, const Vec2& b, double distance) cons
   return false;
 }
 
-double PlaneRegion::pseudo_angle(const Vec2& u, const Vec2& v) {
-  // In u's frame: y / (|x| + |y|) runs from -1 to 1 over the half-plane ahead (x >= 0); behind,
-  // it is reflected onto (1, 2] and [-2, -1). Monotone in the true angle, and v and -v differ by
-  // exactly 2: a span shorter than pi is shorter than 2.
-  const double x = u.x() * v.x() + u.y() * v.y(), y = u.x() * v.y() - u.y() * v.x();
-  const double r = y / (std::abs(x) + std::abs(y));
-  if (x >= 0.0) return r;
-  return y >= 0.0 ? 2.0 - r : -2.0 - r;
-}
-
 bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double within,
                         std::vector<Span>* out) const {
   if (nodes_.empty()) return true;
@@ -687,8 +677,12 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
   const bool wedge = within <= 0.5 * kPi;
   const Vec2 e_plus(std::cos(within) * u.x() - std::sin(within) * u.y(), std::sin(within) * u.x() + std::cos(within) * u.y());
   const Vec2 e_minus(std::cos(within) * u.x() + std::sin(within) * u.y(), -std::sin(within) * u.x() + std::cos(within) * u.y());
+  Vec2 last_q(kInf, kInf);  // the last end point seen and its pseudo-angle (neighbours share ends)
+  double last_p = 0.0;
   auto add = [&](const Vec2& q0, const Vec2& q1) {
-    double p0 = pseudo_angle(u, q0), p1 = pseudo_angle(u, q1);
+    double p0 = q0 == last_q ? last_p : pseudo_angle(u, q0), p1 = pseudo_angle(u, q1);
+    last_q = q1;
+    last_p = p1;
     const Vec2 *v0 = &q0, *v1 = &q1;
     if (p1 < p0) {
       std::swap(p0, p1);
@@ -744,8 +738,12 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
       const Segment& s = segments_[i];
       const Vec2 w0 = s.a - pivot, w1 = s.b - pivot, d = s.b - s.a;
       const double a = d.squaredNorm(), b = w0.dot(d), c0 = w0.squaredNorm() - l2, c1 = w1.squaredNorm() - l2;
-      const double t_near = a > 0.0 ? std::clamp(-b / a, 0.0, 1.0) : 0.0;
-      if ((w0 + t_near * d).squaredNorm() <= kTouch * kTouch) return false;
+      // Touching the pivot: only where the segment's line passes that close (no division else).
+      const double cr = cross2(w0, d);
+      if (cr * cr <= kTouch * kTouch * a) {
+        const double t_near = a > 0.0 ? std::clamp(-b / a, 0.0, 1.0) : 0.0;
+        if ((w0 + t_near * d).squaredNorm() <= kTouch * kTouch) return false;
+      }
       // The part within the disk: a t^2 + 2 b t + c0 <= 0 on [0, 1] (ends inside kept exactly).
       double t0 = 0.0, t1 = 1.0;
       if (c0 > 0.0 || c1 > 0.0) {

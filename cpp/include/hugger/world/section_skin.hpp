@@ -16,6 +16,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <atomic>
 #include <memory>
 #include <mutex>
@@ -77,7 +78,15 @@ class PlaneRegion {
   /// `out` is then incomplete).
   bool spans(const Vec2& pivot, const Vec2& u, double length, double within, std::vector<Span>* out) const;
   /// The pseudo-angle of v (non-zero) relative to the unit direction u (see Span).
-  static double pseudo_angle(const Vec2& u, const Vec2& v);
+  static double pseudo_angle(const Vec2& u, const Vec2& v) {
+    // In u's frame: y / (|x| + |y|) runs from -1 to 1 over the half-plane ahead (x >= 0); behind,
+    // it is reflected onto (1, 2] and [-2, -1). Monotone in the true angle, and v and -v differ
+    // by exactly 2: a span shorter than pi is shorter than 2.
+    const double x = u.x() * v.x() + u.y() * v.y(), y = u.x() * v.y() - u.y() * v.x();
+    const double r = y / (std::abs(x) + std::abs(y));
+    if (x >= 0.0) return r;
+    return y >= 0.0 ? 2.0 - r : -2.0 - r;
+  }
   /// True when x lies in R (closed). From its cell's label where no segment touches the cell,
   /// else from the side of the nearest piece; where that is unsafe (a loose end, a side test too
   /// close to call) from one 3D query.
