@@ -394,3 +394,49 @@ TEST(SectionSkin, RotateUntilFreeIsTheSmallestFreeingRotation) {
     EXPECT_GE(fronts, 50);
   }
 }
+
+// PlaneRegion::depth_within (the exact swept-link test): against the depth sampled densely along
+// the segment (a point's depth in R changes no faster than the point moves), on chords across
+// R's boundary at depths about the allowance, in random planes.
+TEST(SectionSkin, DepthWithinMatchesDenseSampling) {
+  for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::curvy(4)}) {
+    const auto object = std::make_shared<Object>(m.vertices, m.faces);
+    const SectionSkin skin(object, kFlatten);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    const Vec3 c = object->bounds().centre();
+    int yes = 0, no = 0;
+    for (int k = 0; k < 16; ++k) {
+      FingerPlane pl;
+      pl.origin = c;
+      pl.p = test::random_unit(rng);
+      pl.u = test::random_unit(rng).cross(pl.p).normalized();
+      const PlaneRegion* R = skin.region(pl, (k % 2) * 0.004);
+      ASSERT_NE(R, nullptr);
+      if (R->segments().empty()) continue;
+      for (int q = 0; q < 40; ++q) {
+        const double allow = q % 2 ? 2e-5 : 1e-3;
+        const auto& s = R->segments()[static_cast<std::size_t>(U(rng) * R->segments().size()) % R->segments().size()];
+        const Vec2 p = s.a + U(rng) * (s.b - s.a), t(-s.normal.y(), s.normal.x());
+        const double h = (4.0 * U(rng) - 1.0) * allow, len = 0.002 + 0.03 * U(rng), tilt = 0.2 * (U(rng) - 0.5);
+        const Vec2 dir = std::cos(tilt) * t + std::sin(tilt) * s.normal, mid = p - h * s.normal;
+        const Vec2 a = mid - 0.5 * len * dir, b = mid + 0.5 * len * dir;
+        constexpr int kSamples = 4000;
+        double deepest = -kInf;
+        for (int i = 0; i <= kSamples; ++i) {
+          const Vec2 x = a + (b - a) * (static_cast<double>(i) / kSamples);
+          const PlaneRegion::Near nr = R->nearest(x, x);
+          deepest = std::max(deepest, R->inside(x) ? nr.distance : -nr.distance);
+        }
+        const bool within = R->depth_within(a, b, allow);
+        (within ? yes : no)++;
+        if (within)
+          EXPECT_LE(deepest, allow + 1e-12) << "plane " << k << " query " << q;
+        else
+          EXPECT_GT(deepest, allow - len / kSamples - 1e-12) << "plane " << k << " query " << q;
+      }
+    }
+    EXPECT_GE(yes, 100);
+    EXPECT_GE(no, 100);
+  }
+}

@@ -287,54 +287,11 @@ double Planner::translation_free(int m, const Chain& chain, double sigma) const 
 }
 
 bool Planner::swept_link_ok(int m, const Vec2& a, const Vec2& b) const {
-  const double r = hand_.link_radius();
   // A straight line in joint space between two configurations that rest on O dips into it by
   // a sagitta of micrometres; a quarter of the collision tolerance (docs/validation.md:
   // max(2% of r, 0.05 mm)) is allowed there, and no more.
-  const double allow = 0.25 * std::max(0.02 * r, 5e-5);
-  // Most sampled links are clear: the plain clearance test settles them, cheaper than a gap.
-  if (sensing_->link_free(planes_[m], a, b, r, -kInf)) return true;
-  const double g = link_gap(m, a, b, allow);
-  if (g >= 0.0) return true;
-  if (g > -r) return g >= -allow;  // the axis is outside O: the depth is measured
-  // The axis crosses O (depth not measured): points along it, refined where the depth between
-  // two of them could exceed twice the allowance (a point's gap changes no faster than the
-  // point moves), at most kRefine halvings below 16 pieces.
-  constexpr int kPieces = 16, kRefine = 6;
-  const double length = (b - a).norm();
-  // The refinement reads the gaps, not only their sign, but a gap of at least a piece's length
-  // (length / 16, the longest piece) never asks for refinement: a piece with one end that far
-  // out needs none whatever the other end's gap (>= -allow, else the check has failed). So the
-  // gaps are asked exactly up to that cap, which prunes most of each query.
-  const double cap = length / kPieces;
-  auto gap_at = [&](double u) {
-    const Vec2 x = a + (b - a) * u;
-    return link_gap(m, x, x, cap);
-  };
-  struct Piece {
-    double u0, u1, g0, g1;
-    int level;
-  };
-  std::vector<Piece> todo;
-  double u_prev = 0.0, g_prev = gap_at(0.0);
-  if (g_prev < -allow) return false;
-  for (int i = 1; i <= kPieces; ++i) {
-    const double u = static_cast<double>(i) / kPieces, g = gap_at(u);
-    if (g < -allow) return false;
-    todo.push_back({u_prev, u, g_prev, g, 0});
-    u_prev = u;
-    g_prev = g;
-  }
-  while (!todo.empty()) {
-    const Piece p = todo.back();
-    todo.pop_back();
-    if (0.5 * (p.g0 + p.g1 - (p.u1 - p.u0) * length) >= -2.0 * allow || p.level >= kRefine) continue;
-    const double u = 0.5 * (p.u0 + p.u1), g = gap_at(u);
-    if (g < -allow) return false;
-    todo.push_back({p.u0, u, p.g0, g, p.level + 1});
-    todo.push_back({u, p.u1, g, p.g1, p.level + 1});
-  }
-  return true;
+  const double r = hand_.link_radius();
+  return sensing_->link_depth_within(planes_[m], a, b, r, 0.25 * std::max(0.02 * r, 5e-5));
 }
 
 bool Planner::motion_ok(int m, const Chain& old, const Chain& next) const {

@@ -665,6 +665,88 @@ bool PlaneRegion::any_within(const Vec2& a, const Vec2& b, double distance) cons
   return false;
 }
 
+bool PlaneRegion::depth_within(const Vec2& a, const Vec2& b, double allow) const {
+  if (nodes_.empty()) return true;  // no boundary: R is empty
+  const Query q(a, b);
+  const Vec2 d = b - a;
+  const double dd = d.squaredNorm(), a2 = allow * allow;
+  const double limit = allow + q.slack(extent_);
+  // The parameters t in [0, 1] of the axis points within `allow` of each boundary piece: the
+  // axis meets the capsule of radius `allow` about the piece (convex) in one interval, the hull
+  // of its meetings with the two end disks and the slab between them.
+  thread_local std::vector<std::array<double, 2>> near;
+  near.clear();
+  auto disk = [&](const Vec2& c, double* lo, double* hi) {
+    const Vec2 w = a - c;
+    const double B = d.dot(w), C = w.squaredNorm() - a2, disc = B * B - dd * C;
+    if (disc < 0.0) return;
+    const double sq = std::sqrt(disc);
+    *lo = std::min(*lo, (-B - sq) / dd);
+    *hi = std::max(*hi, (-B + sq) / dd);
+  };
+  int stack[96];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& nd = nodes_[stack[--top]];
+    if (node_bound(nd, q) > limit) continue;
+    if (nd.count == 0) {
+      stack[top++] = nd.right;
+      stack[top++] = nd.left;
+      continue;
+    }
+    for (int i = nd.first; i < nd.first + nd.count; ++i) {
+      const Segment& s = segments_[i];
+      if (farther_than(q, s.a, s.b, s.normal, limit)) continue;
+      if (!(dd > 0.0)) {  // a point: within `allow` of a piece, or not
+        Vec2 c1, c2;
+        if (segment_distance(a, a, s.a, s.b, &c1, &c2) <= allow) return true;
+        continue;
+      }
+      double lo = kInf, hi = -kInf;
+      disk(s.a, &lo, &hi);
+      disk(s.b, &lo, &hi);
+      const Vec2 e = s.b - s.a;
+      const double len = e.norm();
+      if (len > 0.0) {
+        // The slab: 0 <= e.(x - s.a) <= len and |n.(x - s.a)| <= allow, each linear in t.
+        const Vec2 u = e / len, n(-u.y(), u.x());
+        double t0 = -kInf, t1 = kInf;
+        auto clip = [&](double alpha, double beta, double l, double h) {
+          // l <= alpha + beta t <= h
+          if (beta == 0.0) {
+            if (alpha < l || alpha > h) t0 = kInf;
+            return;
+          }
+          double x = (l - alpha) / beta, y = (h - alpha) / beta;
+          if (x > y) std::swap(x, y);
+          t0 = std::max(t0, x);
+          t1 = std::min(t1, y);
+        };
+        const Vec2 w = a - s.a;
+        clip(u.dot(w), u.dot(d), 0.0, len);
+        clip(n.dot(w), n.dot(d), -allow, allow);
+        if (t0 <= t1) {
+          lo = std::min(lo, t0);
+          hi = std::max(hi, t1);
+        }
+      }
+      lo = std::max(lo, 0.0);
+      hi = std::min(hi, 1.0);
+      if (lo <= hi) near.push_back({lo, hi});
+    }
+  }
+  if (!(dd > 0.0)) return !inside(a);
+  // The stretches no piece comes within `allow` of: each wholly inside R (too deep) or outside.
+  std::sort(near.begin(), near.end());
+  double covered = 0.0;  // the stretches before `covered` are settled
+  for (const auto& iv : near) {
+    if (iv[0] > covered && inside(a + 0.5 * (covered + iv[0]) * d)) return false;
+    covered = std::max(covered, iv[1]);
+  }
+  return !(covered < 1.0 && inside(a + 0.5 * (covered + 1.0) * d));
+}
+
 bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double within,
                         std::vector<Span>* out) const {
   if (nodes_.empty()) return true;
@@ -1172,6 +1254,15 @@ RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
   // the generic search decides those.
   if (unsure) return Sensing::rotate_until_free(req);
   return out;
+}
+
+bool SectionSkin::link_depth_within(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                                    double allow) const {
+  const PlaneRegion* R = allow > 0.0 ? region(plane, radius) : nullptr;
+  if (!R) return Sensing::link_depth_within(plane, a, b, radius, allow);
+  // Most links asked are clear: the plain clearance test settles them, cheaper than the depth.
+  if (!R->any_within(a, b, kTouch) && !R->inside(a)) return true;
+  return R->depth_within(a, b, allow);
 }
 
 bool SectionSkin::link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,

@@ -98,6 +98,14 @@ class Sensing {
   virtual bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
                          bool a_outside = false) const;
 
+  /// True when the link penetrates O by at most `allow` (> 0): its gap, as `link` measures it, is
+  /// at least -allow, and where the axis crosses O (the depth is not measured), every point of
+  /// the axis is within `allow` of leaving O. The default samples points along a crossing axis
+  /// (16 pieces, refined where the depth between two could exceed twice the allowance); a skin
+  /// that knows the plane answers exactly.
+  virtual bool link_depth_within(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                                 double allow) const;
+
   /// A hint, once at the start of Phase 2: link queries in these finger planes, for links of
   /// `radius`, follow. A skin that builds a structure per plane (the section skin) may build them
   /// now, side by side; the default does nothing. Answers never depend on it.

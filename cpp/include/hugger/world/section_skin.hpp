@@ -64,6 +64,11 @@ class PlaneRegion {
   Near nearest(const Vec2& a, const Vec2& b, double cap = kInf) const;
   /// True when some boundary piece comes within `distance` of segment [a, b] (or touches it).
   bool any_within(const Vec2& a, const Vec2& b, double distance) const;
+  /// True when no point of segment [a, b] lies in R deeper than `allow` (> 0) from its boundary:
+  /// the points within `allow` of a boundary piece (an interval of the segment per piece) are
+  /// that shallow, and each stretch between them lies wholly outside R or wholly inside (one
+  /// inside test each).
+  bool depth_within(const Vec2& a, const Vec2& b, double allow) const;
   /// The directions, seen from a pivot, in which a segment of a given length starting there
   /// meets a boundary piece: one span per piece part within the length of the pivot, from its
   /// clockwise end to its counter-clockwise end. Angles are pseudo-angles (monotone in the true
@@ -178,6 +183,9 @@ class SectionSkin final : public Sensing {
   /// As link(...).gap < below, stopping at the first boundary piece closer than `below`.
   bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                       double below) const override;
+  /// Exactly, by PlaneRegion::depth_within: no point of the axis deeper in R than `allow`.
+  bool link_depth_within(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                         double allow) const override;
   /// In closed form: the directions in which the link meets R are the union of the spans of R's
   /// boundary pieces seen from the pivot (and, for the end, the half-plane behind the front);
   /// the smallest rotation out of the blocked run containing the link's direction, plus a
