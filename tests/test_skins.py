@@ -247,7 +247,7 @@ def _agreement(hand, checker, tmp_path, seed, kind):
     skin, target, pose = _case(rng, kind)
     mesh = skin.mesh()
     a = hugger.Planner(hand, skin, target, pose, record_object=mesh, max_iterations=AGREEMENT_ITERATIONS).plan()
-    m = hugger.Planner(hand, mesh, target, pose, max_iterations=AGREEMENT_ITERATIONS).plan()
+    m = hugger.Planner(hand, mesh, target, pose, max_iterations=AGREEMENT_ITERATIONS, skin="mesh").plan()
     path = tmp_path / f"{kind}-{seed}.npz"
     a.save(path)
     _, fail_a, _ = check_file(checker, path, every=2, motion=True, swept_every=2)
@@ -267,7 +267,7 @@ def _agreement(hand, checker, tmp_path, seed, kind):
         # mesh plan as well, the outcome hangs on micrometres (a discrete rule flips), not on the skin.
         for level in (5, 7) if kind != "box" else (2, 7):
             other = skin.mesh(level) if kind != "box" else skin.mesh(divisions=level)
-            o = hugger.Planner(hand, other, target, pose, max_iterations=AGREEMENT_ITERATIONS).plan()
+            o = hugger.Planner(hand, other, target, pose, max_iterations=AGREEMENT_ITERATIONS, skin="mesh").plan()
             if not _agree(dict(status=(o.status, m.status), links=_links(o, m, mesh), palm=_palm(o, m))):
                 r["mesh_unstable"] = True
                 break
