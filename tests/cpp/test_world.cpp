@@ -68,6 +68,19 @@ TEST(Object, ClearanceQueriesMatchLinearScan) {
   EXPECT_GT(outside, 200);
 }
 
+// The tree built on two threads is the tree built on one (node for node, leaves in the same
+// order), on meshes of several sizes and shapes; a different tree is told apart.
+TEST(TriangleBvh, TwoThreadsBuildTheSameTree) {
+  for (const test::Mesh& m : {test::icosphere(2, Vec3(0.05, 0.04, 0.03)), test::icosphere(5, Vec3(0.05, 0.04, 0.03)),
+                              test::curvy(4)}) {
+    const TriangleBvh one(m.vertices, m.faces, 8, 1), two(m.vertices, m.faces, 8, 2), chosen(m.vertices, m.faces);
+    EXPECT_TRUE(one.same_tree(two)) << m.faces.rows() << " triangles";
+    EXPECT_TRUE(one.same_tree(chosen)) << m.faces.rows() << " triangles";
+    const TriangleBvh coarser(m.vertices, m.faces, 4, 2);
+    EXPECT_FALSE(one.same_tree(coarser));
+  }
+}
+
 TEST(Object, SignAgreesWithRayParityAndAnalyticEllipsoid) {
   const Vec3 radii(0.05, 0.04, 0.03);
   const auto mesh = test::icosphere(4, radii);

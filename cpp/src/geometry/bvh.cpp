@@ -2,12 +2,22 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <stdexcept>
+#include <thread>
 
 namespace hugger {
 
-TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int leaf_size) {
+namespace {
+
+/// Meshes at least this large build their tree's two halves on two threads.
+constexpr int kParallelBuild = 16384;
+
+}  // namespace
+
+TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int leaf_size, int threads) {
   const int n = static_cast<int>(faces.rows());
+  leaf_size = std::max(1, leaf_size);
   std::vector<BuildItem> items(n);
   std::vector<Aabb> boxes(n);
   for (int i = 0; i < n; ++i) {
@@ -15,11 +25,57 @@ TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int lea
     const Vec3 c = boxes[i].centre();
     items[i] = {{c.x(), c.y(), c.z()}, i};
   }
-  std::vector<int> order;
-  order.reserve(n);
-  nodes_.reserve(2 * std::max(1, n / std::max(1, leaf_size)) + 1);
-  build(items, 0, n, boxes, std::max(1, leaf_size), order, 0);
+  const std::size_t capacity = 2 * std::max(1, n / leaf_size) + 1;
+  BuildOut out;
+  if (threads == 0) threads = n >= kParallelBuild && std::thread::hardware_concurrency() >= 2 ? 2 : 1;
+  if (threads >= 2 && n > leaf_size) {
+    // The root's halves side by side, then laid out as the single-threaded build lays them out
+    // (root, the left subtree, the right subtree; leaves in the same order): the same tree.
+    const int mid = split(items, 0, n);
+    BuildOut left, right;
+    left.nodes.reserve(capacity / 2 + 1);
+    right.nodes.reserve(capacity / 2 + 1);
+    auto half = std::async(std::launch::async, [&] { build(items, 0, mid, boxes, leaf_size, left, 1); });
+    build(items, mid, n, boxes, leaf_size, right, 1);
+    half.get();
+    const int nl = static_cast<int>(left.nodes.size()), first_right = static_cast<int>(left.order.size());
+    out.nodes.reserve(1 + left.nodes.size() + right.nodes.size());
+    out.nodes.emplace_back();
+    for (Node nd : left.nodes) {
+      if (nd.count == 0) {
+        nd.left += 1;
+        nd.right += 1;
+      }
+      out.nodes.push_back(nd);
+    }
+    for (Node nd : right.nodes) {
+      if (nd.count == 0) {
+        nd.left += 1 + nl;
+        nd.right += 1 + nl;
+      } else {
+        nd.first += first_right;
+      }
+      out.nodes.push_back(nd);
+    }
+    Node& root = out.nodes[0];
+    root.left = 1;
+    root.right = 1 + nl;
+    root.box = out.nodes[1].box;
+    root.box.grow(out.nodes[1 + nl].box);
+    root.centre = root.box.centre();
+    root.half = 0.5 * root.box.extent();
+    out.order = std::move(left.order);
+    out.order.insert(out.order.end(), right.order.begin(), right.order.end());
+    out.depth = std::max(left.depth, right.depth);
+  } else {
+    out.nodes.reserve(capacity);
+    out.order.reserve(n);
+    build(items, 0, n, boxes, leaf_size, out, 0);
+  }
+  nodes_ = std::move(out.nodes);
+  depth_ = out.depth;
   if (depth_ + 2 > kStackSize) throw std::length_error("TriangleBvh: tree too deep for the traversal stack");
+  const std::vector<int>& order = out.order;
   tris_.reserve(n);  // filled below, not zeroed first
   ids_ = order;
   planes_.resize(n);
@@ -35,22 +91,18 @@ TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int lea
   }
 }
 
-int TriangleBvh::build(std::vector<BuildItem>& items, int begin, int end, const std::vector<Aabb>& boxes,
-                       int leaf_size, std::vector<int>& order, int depth) {
-  depth_ = std::max(depth_, depth);
-  const int index = static_cast<int>(nodes_.size());
-  nodes_.emplace_back();
-  if (end - begin <= leaf_size) {
-    Aabb box;
-    for (int i = begin; i < end; ++i) box.grow(boxes[items[i].id]);
-    nodes_[index].box = box;
-    nodes_[index].centre = box.centre();
-    nodes_[index].half = 0.5 * box.extent();
-    nodes_[index].first = static_cast<int>(order.size());
-    nodes_[index].count = end - begin;
-    for (int i = begin; i < end; ++i) order.push_back(items[i].id);
-    return index;
+bool TriangleBvh::same_tree(const TriangleBvh& other) const {
+  if (nodes_.size() != other.nodes_.size() || ids_ != other.ids_ || depth_ != other.depth_) return false;
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    const Node &x = nodes_[i], &y = other.nodes_[i];
+    if (x.box.lo != y.box.lo || x.box.hi != y.box.hi || x.left != y.left || x.right != y.right ||
+        x.first != y.first || x.count != y.count)
+      return false;
   }
+  return true;
+}
+
+int TriangleBvh::split(std::vector<BuildItem>& items, int begin, int end) {
   // An inner node's box is its children's union (the same box: min and max are exact), so only
   // the centroids' box is gathered here, for the split axis.
   double lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
@@ -70,15 +122,37 @@ int TriangleBvh::build(std::vector<BuildItem>& items, int begin, int end, const 
                    [axis](const BuildItem& x, const BuildItem& y) {
                      return x.c[axis] < y.c[axis] || (x.c[axis] == y.c[axis] && x.id < y.id);
                    });
-  const int left = build(items, begin, mid, boxes, leaf_size, order, depth + 1);
-  const int right = build(items, mid, end, boxes, leaf_size, order, depth + 1);
-  nodes_[index].left = left;
-  nodes_[index].right = right;
-  Aabb box = nodes_[left].box;
-  box.grow(nodes_[right].box);
-  nodes_[index].box = box;
-  nodes_[index].centre = box.centre();
-  nodes_[index].half = 0.5 * box.extent();
+  return mid;
+}
+
+int TriangleBvh::build(std::vector<BuildItem>& items, int begin, int end, const std::vector<Aabb>& boxes,
+                       int leaf_size, BuildOut& out, int depth) {
+  out.depth = std::max(out.depth, depth);
+  const int index = static_cast<int>(out.nodes.size());
+  out.nodes.emplace_back();
+  if (end - begin <= leaf_size) {
+    Aabb box;
+    for (int i = begin; i < end; ++i) box.grow(boxes[items[i].id]);
+    Node& nd = out.nodes[index];
+    nd.box = box;
+    nd.centre = box.centre();
+    nd.half = 0.5 * box.extent();
+    nd.first = static_cast<int>(out.order.size());
+    nd.count = end - begin;
+    for (int i = begin; i < end; ++i) out.order.push_back(items[i].id);
+    return index;
+  }
+  const int mid = split(items, begin, end);
+  const int left = build(items, begin, mid, boxes, leaf_size, out, depth + 1);
+  const int right = build(items, mid, end, boxes, leaf_size, out, depth + 1);
+  Node& nd = out.nodes[index];
+  nd.left = left;
+  nd.right = right;
+  Aabb box = out.nodes[left].box;
+  box.grow(out.nodes[right].box);
+  nd.box = box;
+  nd.centre = box.centre();
+  nd.half = 0.5 * box.extent();
   return index;
 }
 

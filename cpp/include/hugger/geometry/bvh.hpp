@@ -48,8 +48,11 @@ struct NearestResult {
 class TriangleBvh {
  public:
   TriangleBvh() = default;
-  /// Builds over triangles `faces` of `vertices` (indices already validated).
-  TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int leaf_size = 8);
+  /// Builds over triangles `faces` of `vertices` (indices already validated). `threads`: 1
+  /// builds on this thread; 2 or more builds the root's two halves side by side; 0 chooses (two
+  /// for meshes of 16,384 triangles or more, where the hardware has two threads). The tree is the
+  /// same whatever the choice.
+  TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int leaf_size = 8, int threads = 0);
 
   /// Nearest mesh point to segment [a, b] (a == b: a point query). Triangles farther than
   /// `max_distance` may be skipped; then `triangle` is -1 and `distance` is infinite.
@@ -70,6 +73,10 @@ class TriangleBvh {
     walk([&](const Node& n) { return node_bound(n.box); }, [](const Node&) { return false; },
          [&](int i) { leaf(tris_[i], ids_[i]); }, bound);
   }
+
+  /// True when `other` is the same tree: the same nodes (boxes, children, leaf ranges) and the
+  /// triangles in the same leaf order.
+  bool same_tree(const TriangleBvh& other) const;
 
   const Aabb& bounds() const { return nodes_.front().box; }
   std::size_t size() const { return tris_.size(); }
@@ -122,8 +129,19 @@ class TriangleBvh {
     double c[3];
     int id;
   };
-  int build(std::vector<BuildItem>& items, int begin, int end, const std::vector<Aabb>& boxes, int leaf_size,
-            std::vector<int>& order, int depth);
+  /// Where a build writes: its nodes (children by index into `nodes`), the triangles of its
+  /// leaves in leaf order, and the deepest level reached.
+  struct BuildOut {
+    std::vector<Node> nodes;
+    std::vector<int> order;
+    int depth = 0;
+  };
+  /// Builds the subtree of items [begin, end) at `depth` into `out`; returns its root's index.
+  static int build(std::vector<BuildItem>& items, int begin, int end, const std::vector<Aabb>& boxes,
+                   int leaf_size, BuildOut& out, int depth);
+  /// Orders items [begin, end) about their median along the longest axis of their centres' box
+  /// (a strict total order: the same halves whatever the range's order); returns the middle.
+  static int split(std::vector<BuildItem>& items, int begin, int end);
 
   /// Traversal stacks hold at most depth + 1 entries; the constructor checks the depth (a
   /// median split gives about log2(F / leaf_size), 18 at 1.3M triangles).
