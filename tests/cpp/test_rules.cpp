@@ -178,26 +178,10 @@ TEST(Rules, SmallestFreeingRotationMatchesBruteForce) {
         const double b = kPi * U(rng);
         const Vec2 end = pivot + 0.02 * Vec2(std::cos(b), std::sin(b));
         if (world->link_free(plane, pivot, end, radius, -kInf)) continue;
-        RotateRequest rr;
-        rr.plane = plane;
-        rr.pivot = pivot;
-        rr.end = end;
-        rr.radius = radius;
-        rr.max_angle = kPi;
-        rr.tolerance = 1e-5;
-        rr.sample_angle = 0.025;
+        const RotateRequest rr = test::rotate_request(plane, pivot, end, radius, -kInf, kPi);
         const RotateResult res = world->rotate_until_free(rr);
         // brute force: the smallest |angle| on a grid of 1e-4 rad at which the link is free
-        auto free_at = [&](double ang) {
-          const Vec2 arm = end - pivot;
-          const Vec2 e = pivot + Vec2(std::cos(ang) * arm.x() - std::sin(ang) * arm.y(),
-                                      std::sin(ang) * arm.x() + std::cos(ang) * arm.y());
-          return world->link_free(plane, pivot, e, radius, -kInf);
-        };
-        double brute = kInf;
-        for (int k = 1; k <= 31416 && !std::isfinite(brute); ++k)
-          for (double sgn : {1.0, -1.0})
-            if (!std::isfinite(brute) && free_at(sgn * 1e-4 * k)) brute = 1e-4 * k;
+        const double brute = test::smallest_free_angle(*world, rr, 1e-4);
         ASSERT_EQ(res.ok, std::isfinite(brute));
         if (!res.ok) continue;
         ++checked;

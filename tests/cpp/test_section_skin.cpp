@@ -13,6 +13,7 @@
 #include "hugger/world/section_skin.hpp"
 #include "hugger/world/simulated_world.hpp"
 #include "meshes.hpp"
+#include "scenes.hpp"
 
 using namespace hugger;
 
@@ -355,27 +356,10 @@ TEST(SectionSkin, RotateUntilFreeIsTheSmallestFreeingRotation) {
       const double front = trial % 3 == 0 ? pivot.y() - 0.5 * len * U(rng) : -kInf;
       fronts += std::isfinite(front);
       if (skin.link_free(pl, pivot, end, r, front)) continue;
-      RotateRequest rr;
-      rr.plane = pl;
-      rr.pivot = pivot;
-      rr.end = end;
-      rr.radius = r;
-      rr.front = front;
-      rr.max_angle = trial % 4 == 0 ? 0.4 : kPi;
-      rr.tolerance = 1e-5;
-      rr.sample_angle = 0.025;
+      const RotateRequest rr = test::rotate_request(pl, pivot, end, r, front, trial % 4 == 0 ? 0.4 : kPi);
       const RotateResult res = skin.rotate_until_free(rr);
-      const Vec2 arm = end - pivot;
-      auto free_at = [&](double ang) {
-        const Vec2 e = pivot + Vec2(std::cos(ang) * arm.x() - std::sin(ang) * arm.y(),
-                                    std::sin(ang) * arm.x() + std::cos(ang) * arm.y());
-        return skin.link_free(pl, pivot, e, r, front);
-      };
       constexpr double kGrid = 1e-4;
-      double brute = kInf;
-      for (int k = 1; k * kGrid <= rr.max_angle && !std::isfinite(brute); ++k)
-        for (double sgn : {1.0, -1.0})
-          if (!std::isfinite(brute) && free_at(sgn * kGrid * k)) brute = kGrid * k;
+      const double brute = test::smallest_free_angle(skin, rr, kGrid);
       if (std::isfinite(brute)) EXPECT_TRUE(res.ok) << "trial " << trial;
       if (!res.ok) continue;
       ++checked;

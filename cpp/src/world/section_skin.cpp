@@ -577,6 +577,26 @@ inline double node_bound(const Node& nd, const Query& q) {
 
 }  // namespace
 
+template <class Skip, class Visit>
+bool PlaneRegion::visit_segments(Skip&& skip, Visit&& visit) const {
+  if (nodes_.empty()) return false;
+  int stack[96];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& nd = nodes_[stack[--top]];
+    if (skip(nd)) continue;
+    if (nd.count == 0) {
+      stack[top++] = nd.right;
+      stack[top++] = nd.left;
+      continue;
+    }
+    for (int i = nd.first; i < nd.first + nd.count; ++i)
+      if (visit(i)) return true;
+  }
+  return false;
+}
+
 PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap) const {
   Near out;
   if (nodes_.empty()) return out;
@@ -642,101 +662,87 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
 }
 
 bool PlaneRegion::any_within(const Vec2& a, const Vec2& b, double distance) const {
-  if (nodes_.empty()) return false;
   const Query q(a, b);
   const double limit = distance + q.slack(extent_);
-  int stack[96];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const Node& nd = nodes_[stack[--top]];
-    if (node_bound(nd, q) > distance) continue;
-    if (nd.count > 0) {
-      for (int i = nd.first; i < nd.first + nd.count; ++i) {
-        if (farther_than(q, segments_[i].a, segments_[i].b, segments_[i].normal, limit)) continue;
-        Vec2 c1, c2;
-        if (segment_distance(a, b, segments_[i].a, segments_[i].b, &c1, &c2) <= distance) return true;
-      }
-      continue;
-    }
-    stack[top++] = nd.right;
-    stack[top++] = nd.left;
-  }
-  return false;
+  return visit_segments([&](const Node& nd) { return node_bound(nd, q) > distance; },
+                        [&](int i) {
+                          const Segment& s = segments_[i];
+                          if (farther_than(q, s.a, s.b, s.normal, limit)) return false;
+                          Vec2 c1, c2;
+                          return segment_distance(a, b, s.a, s.b, &c1, &c2) <= distance;
+                        });
 }
+
+namespace {
+
+/// The parameters t in [0, 1] of the points a + t d (d != 0) within r of segment [p, q]: the line
+/// meets the capsule of radius r about the segment (convex) in one interval, the hull of its
+/// meetings with the two end disks and the slab between them. False when none is.
+bool capsule_interval(const Vec2& a, const Vec2& d, const Vec2& p, const Vec2& q, double r, double* t0, double* t1) {
+  const double dd = d.squaredNorm();
+  double lo = kInf, hi = -kInf;
+  for (const Vec2* c : {&p, &q}) {
+    const Vec2 w = a - *c;
+    const double B = d.dot(w), disc = B * B - dd * (w.squaredNorm() - r * r);
+    if (disc < 0.0) continue;
+    const double sq = std::sqrt(disc);
+    lo = std::min(lo, (-B - sq) / dd);
+    hi = std::max(hi, (-B + sq) / dd);
+  }
+  const Vec2 e = q - p;
+  const double len = e.norm();
+  if (len > 0.0) {
+    // The slab: 0 <= u.(x - p) <= len and |n.(x - p)| <= r, each linear in t.
+    const Vec2 u = e / len, n(-u.y(), u.x()), w = a - p;
+    double s0 = -kInf, s1 = kInf;
+    auto clip = [&](double alpha, double beta, double l, double h) {  // l <= alpha + beta t <= h
+      if (beta == 0.0) {
+        if (alpha < l || alpha > h) s0 = kInf;
+        return;
+      }
+      double x = (l - alpha) / beta, y = (h - alpha) / beta;
+      if (x > y) std::swap(x, y);
+      s0 = std::max(s0, x);
+      s1 = std::min(s1, y);
+    };
+    clip(u.dot(w), u.dot(d), 0.0, len);
+    clip(n.dot(w), n.dot(d), -r, r);
+    if (s0 <= s1) {
+      lo = std::min(lo, s0);
+      hi = std::max(hi, s1);
+    }
+  }
+  *t0 = std::max(lo, 0.0);
+  *t1 = std::min(hi, 1.0);
+  return *t0 <= *t1;
+}
+
+}  // namespace
 
 bool PlaneRegion::depth_within(const Vec2& a, const Vec2& b, double allow) const {
   if (nodes_.empty()) return true;  // no boundary: R is empty
   const Query q(a, b);
   const Vec2 d = b - a;
-  const double dd = d.squaredNorm(), a2 = allow * allow;
+  const bool point = !(d.squaredNorm() > 0.0);
   const double limit = allow + q.slack(extent_);
-  // The parameters t in [0, 1] of the axis points within `allow` of each boundary piece: the
-  // axis meets the capsule of radius `allow` about the piece (convex) in one interval, the hull
-  // of its meetings with the two end disks and the slab between them.
+  // The axis points within `allow` of each boundary piece: an interval of the axis per piece.
   thread_local std::vector<std::array<double, 2>> near;
   near.clear();
-  auto disk = [&](const Vec2& c, double* lo, double* hi) {
-    const Vec2 w = a - c;
-    const double B = d.dot(w), C = w.squaredNorm() - a2, disc = B * B - dd * C;
-    if (disc < 0.0) return;
-    const double sq = std::sqrt(disc);
-    *lo = std::min(*lo, (-B - sq) / dd);
-    *hi = std::max(*hi, (-B + sq) / dd);
-  };
-  int stack[96];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const Node& nd = nodes_[stack[--top]];
-    if (node_bound(nd, q) > limit) continue;
-    if (nd.count == 0) {
-      stack[top++] = nd.right;
-      stack[top++] = nd.left;
-      continue;
-    }
-    for (int i = nd.first; i < nd.first + nd.count; ++i) {
-      const Segment& s = segments_[i];
-      if (farther_than(q, s.a, s.b, s.normal, limit)) continue;
-      if (!(dd > 0.0)) {  // a point: within `allow` of a piece, or not
-        Vec2 c1, c2;
-        if (segment_distance(a, a, s.a, s.b, &c1, &c2) <= allow) return true;
-        continue;
-      }
-      double lo = kInf, hi = -kInf;
-      disk(s.a, &lo, &hi);
-      disk(s.b, &lo, &hi);
-      const Vec2 e = s.b - s.a;
-      const double len = e.norm();
-      if (len > 0.0) {
-        // The slab: 0 <= e.(x - s.a) <= len and |n.(x - s.a)| <= allow, each linear in t.
-        const Vec2 u = e / len, n(-u.y(), u.x());
-        double t0 = -kInf, t1 = kInf;
-        auto clip = [&](double alpha, double beta, double l, double h) {
-          // l <= alpha + beta t <= h
-          if (beta == 0.0) {
-            if (alpha < l || alpha > h) t0 = kInf;
-            return;
-          }
-          double x = (l - alpha) / beta, y = (h - alpha) / beta;
-          if (x > y) std::swap(x, y);
-          t0 = std::max(t0, x);
-          t1 = std::min(t1, y);
-        };
-        const Vec2 w = a - s.a;
-        clip(u.dot(w), u.dot(d), 0.0, len);
-        clip(n.dot(w), n.dot(d), -allow, allow);
-        if (t0 <= t1) {
-          lo = std::min(lo, t0);
-          hi = std::max(hi, t1);
-        }
-      }
-      lo = std::max(lo, 0.0);
-      hi = std::min(hi, 1.0);
-      if (lo <= hi) near.push_back({lo, hi});
-    }
-  }
-  if (!(dd > 0.0)) return !inside(a);
+  const bool shallow_point =
+      visit_segments([&](const Node& nd) { return node_bound(nd, q) > limit; },
+                     [&](int i) {
+                       const Segment& s = segments_[i];
+                       if (farther_than(q, s.a, s.b, s.normal, limit)) return false;
+                       if (point) {  // a point: within `allow` of a piece, or not
+                         Vec2 c1, c2;
+                         return segment_distance(a, a, s.a, s.b, &c1, &c2) <= allow;
+                       }
+                       double t0, t1;
+                       if (capsule_interval(a, d, s.a, s.b, allow, &t0, &t1)) near.push_back({t0, t1});
+                       return false;
+                     });
+  if (shallow_point) return true;
+  if (point) return !inside(a);
   // The stretches no piece comes within `allow` of: each wholly inside R (too deep) or outside.
   std::sort(near.begin(), near.end());
   double covered = 0.0;  // the stretches before `covered` are settled
@@ -795,51 +801,43 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
       if (p0 >= -pm) out->push_back({-2.0, p0, behind, *v0});
     }
   };
-  int stack[96];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const Node& nd = nodes_[stack[--top]];
+  auto skip = [&](const Node& nd) {
     const double dx = std::max({nd.lo[0] - pivot.x(), pivot.x() - nd.hi[0], 0.0});
     const double dy = std::max({nd.lo[1] - pivot.y(), pivot.y() - nd.hi[1], 0.0});
-    if (dx * dx + dy * dy > reach * reach) continue;
-    if (wedge) {
-      // cross(e, x - pivot) over the box: its value at the centre -+ the box's half extent.
-      const double cx = nd.c[0] - pivot.x(), cy = nd.c[1] - pivot.y();
-      const double r_plus = std::abs(e_plus.x()) * nd.h[1] + std::abs(e_plus.y()) * nd.h[0];
-      const double r_minus = std::abs(e_minus.x()) * nd.h[1] + std::abs(e_minus.y()) * nd.h[0];
-      if (e_plus.x() * cy - e_plus.y() * cx - r_plus > slack) continue;     // beyond +within
-      if (e_minus.x() * cy - e_minus.y() * cx + r_minus < -slack) continue;  // beyond -within
+    if (dx * dx + dy * dy > reach * reach) return true;
+    if (!wedge) return false;
+    // cross(e, x - pivot) over the box: its value at the centre -+ the box's half extent.
+    const double cx = nd.c[0] - pivot.x(), cy = nd.c[1] - pivot.y();
+    const double r_plus = std::abs(e_plus.x()) * nd.h[1] + std::abs(e_plus.y()) * nd.h[0];
+    const double r_minus = std::abs(e_minus.x()) * nd.h[1] + std::abs(e_minus.y()) * nd.h[0];
+    return e_plus.x() * cy - e_plus.y() * cx - r_plus > slack ||   // beyond +within
+           e_minus.x() * cy - e_minus.y() * cx + r_minus < -slack;  // beyond -within
+  };
+  // Stops (true) at a segment touching the pivot.
+  const bool touching = visit_segments(skip, [&](int i) {
+    const Segment& s = segments_[i];
+    const Vec2 w0 = s.a - pivot, w1 = s.b - pivot, d = s.b - s.a;
+    const double a = d.squaredNorm(), b = w0.dot(d), c0 = w0.squaredNorm() - l2, c1 = w1.squaredNorm() - l2;
+    // Touching the pivot: only where the segment's line passes that close (no division else).
+    const double cr = cross2(w0, d);
+    if (cr * cr <= kTouch * kTouch * a) {
+      const double t_near = a > 0.0 ? std::clamp(-b / a, 0.0, 1.0) : 0.0;
+      if ((w0 + t_near * d).squaredNorm() <= kTouch * kTouch) return true;
     }
-    if (nd.count == 0) {
-      stack[top++] = nd.right;
-      stack[top++] = nd.left;
-      continue;
+    // The part within the disk: a t^2 + 2 b t + c0 <= 0 on [0, 1] (ends inside kept exactly).
+    double t0 = 0.0, t1 = 1.0;
+    if (c0 > 0.0 || c1 > 0.0) {
+      const double disc = b * b - a * c0;
+      if (!(a > 0.0) || disc < 0.0) return false;
+      const double sq = std::sqrt(disc);
+      if (c0 > 0.0) t0 = (-b - sq) / a;
+      if (c1 > 0.0) t1 = (-b + sq) / a;
+      if (t0 < 0.0 || t1 > 1.0 || t0 > t1) return false;  // the segment's line meets the disk off it
     }
-    for (int i = nd.first; i < nd.first + nd.count; ++i) {
-      const Segment& s = segments_[i];
-      const Vec2 w0 = s.a - pivot, w1 = s.b - pivot, d = s.b - s.a;
-      const double a = d.squaredNorm(), b = w0.dot(d), c0 = w0.squaredNorm() - l2, c1 = w1.squaredNorm() - l2;
-      // Touching the pivot: only where the segment's line passes that close (no division else).
-      const double cr = cross2(w0, d);
-      if (cr * cr <= kTouch * kTouch * a) {
-        const double t_near = a > 0.0 ? std::clamp(-b / a, 0.0, 1.0) : 0.0;
-        if ((w0 + t_near * d).squaredNorm() <= kTouch * kTouch) return false;
-      }
-      // The part within the disk: a t^2 + 2 b t + c0 <= 0 on [0, 1] (ends inside kept exactly).
-      double t0 = 0.0, t1 = 1.0;
-      if (c0 > 0.0 || c1 > 0.0) {
-        const double disc = b * b - a * c0;
-        if (!(a > 0.0) || disc < 0.0) continue;
-        const double sq = std::sqrt(disc);
-        if (c0 > 0.0) t0 = (-b - sq) / a;
-        if (c1 > 0.0) t1 = (-b + sq) / a;
-        if (t0 < 0.0 || t1 > 1.0 || t0 > t1) continue;  // the segment's line meets the disk off it
-      }
-      add(t0 == 0.0 ? w0 : Vec2(w0 + t0 * d), t1 == 1.0 ? w1 : Vec2(w0 + t1 * d));
-    }
-  }
-  return true;
+    add(t0 == 0.0 ? w0 : Vec2(w0 + t0 * d), t1 == 1.0 ? w1 : Vec2(w0 + t1 * d));
+    return false;
+  });
+  return !touching;
 }
 
 void PlaneRegion::mark_crossings() {
@@ -884,34 +882,24 @@ void PlaneRegion::mark_crossings() {
   for (std::size_t i = 0; i < n; ++i) {
     const Segment& s = segments_[i];
     const Query q(s.a, s.b);
-    int stack[96];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const Node& nd = nodes_[stack[--top]];
-      if (node_bound(nd, q) > kTouch) continue;
-      if (nd.count == 0) {
-        stack[top++] = nd.right;
-        stack[top++] = nd.left;
-        continue;
-      }
-      for (int j = nd.first; j < nd.first + nd.count; ++j) {
-        if (static_cast<std::size_t>(j) <= i) continue;  // each pair once
-        const Segment& t = segments_[j];
-        if (t.piece == s.piece) continue;
-        const Vec2 d1 = s.b - s.a, d2 = t.b - t.a, w = t.a - s.a;
-        const double denom = cross2(d1, d2);
-        if (std::abs(denom) <= 1e-9 * d1.norm() * d2.norm()) continue;  // parallel: a junction
-        const double x = cross2(w, d2) / denom, y = cross2(w, d1) / denom;
-        const double ex = 1e-9, ey = 1e-9;
-        if (x > ex && x < 1.0 - ex && y > ey && y < 1.0 - ey) {
-          pieces_[s.piece].crossed = true;
-          pieces_[t.piece].crossed = true;
-          cuts_.push_back({static_cast<int>(i), x});
-          cuts_.push_back({j, y});
-        }
-      }
-    }
+    visit_segments([&](const Node& nd) { return node_bound(nd, q) > kTouch; },
+                   [&](int j) {
+                     if (static_cast<std::size_t>(j) <= i) return false;  // each pair once
+                     const Segment& t = segments_[j];
+                     if (t.piece == s.piece) return false;
+                     const Vec2 d1 = s.b - s.a, d2 = t.b - t.a, w = t.a - s.a;
+                     const double denom = cross2(d1, d2);
+                     if (std::abs(denom) <= 1e-9 * d1.norm() * d2.norm()) return false;  // parallel: a junction
+                     const double x = cross2(w, d2) / denom, y = cross2(w, d1) / denom;
+                     const double ex = 1e-9, ey = 1e-9;
+                     if (x > ex && x < 1.0 - ex && y > ey && y < 1.0 - ey) {
+                       pieces_[s.piece].crossed = true;
+                       pieces_[t.piece].crossed = true;
+                       cuts_.push_back({static_cast<int>(i), x});
+                       cuts_.push_back({j, y});
+                     }
+                     return false;
+                   });
   }
 }
 

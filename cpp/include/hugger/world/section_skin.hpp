@@ -117,6 +117,11 @@ class PlaneRegion {
     int left = -1, right = -1;
     int first = 0, count = 0;
   };
+  /// Depth first over the 2D tree (left before right): skips every node `skip(node)` is true of
+  /// and calls `visit(i)` on each segment of the leaves reached, stopping when `visit` returns
+  /// true. Returns whether it stopped.
+  template <class Skip, class Visit>
+  bool visit_segments(Skip&& skip, Visit&& visit) const;
   void build_pieces();
   void build_bvh();
   void mark_crossings();
