@@ -364,7 +364,7 @@ class Planner:
     """
     The Hugger planner (docs/algorithm.md) over a simulated world.
     """
-    def __init__(self, hand: HandModel, sensing: Sensing | Object, target: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], palm_pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], params: PlannerParams = ..., skin: str = 'mesh') -> None:
+    def __init__(self, hand: HandModel, sensing: Sensing | Object, target: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], palm_pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], params: PlannerParams = ..., skin: str = 'section') -> None:
         ...
     def history(self, start: typing.SupportsInt | typing.SupportsIndex = 0, stop: typing.SupportsInt | typing.SupportsIndex = ...) -> History:
         """

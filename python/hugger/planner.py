@@ -57,13 +57,13 @@ def _fields(record: Any) -> dict[str, Any]:
 class Planner:
     """Plans a hugging grasp of ``obj`` by ``hand``, told only the point ``target`` inside it.
 
-    ``obj`` is a :class:`hugger.Object` (the planner senses it through the simulated mesh world)
-    or any skin, a :class:`hugger.skins.Sensing` (docs/skins.md): an analytic shape, a sensor
-    model, a simulator, a real tactile hand. A skin need not have a mesh; ``record_object`` (a
-    :class:`hugger.Object`) is then the mesh saved with the plan for the record and the checker
-    (without it the trajectory is object-free). An exception raised by a skin reaches the caller
-    of ``step()``/``plan()`` unchanged and ends the plan (status ``error``; the configurations
-    completed before it stay valid).
+    ``obj`` is a :class:`hugger.Object` (the planner senses it through the section skin, or with
+    ``skin="mesh"`` the simulated mesh world) or any skin, a :class:`hugger.skins.Sensing`
+    (docs/skins.md): an analytic shape, a sensor model, a simulator, a real tactile hand. A skin
+    need not have a mesh; ``record_object`` (a :class:`hugger.Object`) is then the mesh saved
+    with the plan for the record and the checker (without it the trajectory is object-free). An
+    exception raised by a skin reaches the caller of ``step()``/``plan()`` unchanged and ends the
+    plan (status ``error``; the configurations completed before it stay valid).
 
     ``palm_pose`` (4, 4) is the initial palm pose T_WP (fingers extended). Defaults:
     ``step`` = shortest link / 20, ``epsilon`` = step / 10, ``contact_tolerance`` = 1e-4 m,

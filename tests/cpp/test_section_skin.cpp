@@ -424,3 +424,34 @@ TEST(SectionSkin, DepthWithinMatchesDenseSampling) {
     EXPECT_GE(no, 100);
   }
 }
+
+// Clinging into a window narrower than the margin: two boxes 4 um apart, a link of 5 cm from a
+// pivot on the slit's midline, turned 0.01 rad into one box. The free directions through the slit
+// are +-40 urad wide, less than the margin of half the tolerance of end motion (100 urad): the
+// link turns to the middle of the window (half of it beyond the run's end) and is free there.
+TEST(SectionSkin, RotateUntilFreeFitsANarrowWindow) {
+  constexpr double w = 4e-6;
+  test::Mesh left = test::box(Vec3(0.01, 0.02, 0.02), Vec3(-0.01 - 0.5 * w, 0, 0));
+  const test::Mesh right = test::box(Vec3(0.01, 0.02, 0.02), Vec3(0.01 + 0.5 * w, 0, 0));
+  const Eigen::Index nv = left.vertices.rows(), nf = left.faces.rows();
+  PointsN3 V(nv + right.vertices.rows(), 3);
+  FacesN3 F(nf + right.faces.rows(), 3);
+  V << left.vertices, right.vertices;
+  F << left.faces, right.faces.array() + nv;
+  const SectionSkin skin(std::make_shared<Object>(V, F), kFlatten);
+  FingerPlane pl;  // z = 0: x along the boxes, y along the slit
+  pl.u = Vec3::UnitX();
+  pl.p = Vec3::UnitY();
+  const Vec2 pivot(0.0, 0.03);
+  for (double side : {1.0, -1.0}) {
+    const double start = side * 0.01;  // turned into one box, then the other
+    const Vec2 end = pivot + 0.05 * Vec2(std::sin(start), -std::cos(start));
+    ASSERT_FALSE(skin.link_free(pl, pivot, end, 0.0, -kInf));
+    const RotateRequest rr = test::rotate_request(pl, pivot, end, 0.0, -kInf, kPi);
+    const RotateResult res = skin.rotate_until_free(rr);
+    ASSERT_TRUE(res.ok);
+    EXPECT_TRUE(skin.link_free(pl, pivot, res.end, 0.0, -kInf));
+    EXPECT_LT(std::abs(res.end.x()), 0.5 * w);           // through the slit
+    EXPECT_NEAR(res.angle, -start, 0.5 * w / 0.05 + 1e-9);  // the smallest rotation, into the window
+  }
+}

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <future>
 #include <stdexcept>
+#include <system_error>
 #include <thread>
 
 namespace hugger {
@@ -35,9 +36,16 @@ TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int lea
     BuildOut left, right;
     left.nodes.reserve(capacity / 2 + 1);
     right.nodes.reserve(capacity / 2 + 1);
-    auto half = std::async(std::launch::async, [&] { build(items, 0, mid, boxes, leaf_size, left, 1); });
+    std::future<void> half;
+    try {
+      half = std::async(std::launch::async, [&] { build(items, 0, mid, boxes, leaf_size, left, 1); });
+    } catch (const std::system_error&) {  // no thread to be had: this one builds both halves
+    }
     build(items, mid, n, boxes, leaf_size, right, 1);
-    half.get();
+    if (half.valid())
+      half.get();
+    else
+      build(items, 0, mid, boxes, leaf_size, left, 1);
     const int nl = static_cast<int>(left.nodes.size()), first_right = static_cast<int>(left.order.size());
     out.nodes.reserve(1 + left.nodes.size() + right.nodes.size());
     out.nodes.emplace_back();

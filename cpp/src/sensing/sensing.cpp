@@ -61,8 +61,6 @@ bool Sensing::link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, 
 
 bool Sensing::link_depth_within(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                                 double allow) const {
-  // Most links asked are clear: the plain clearance test settles them, cheaper than a gap.
-  if (link_free(plane, a, b, radius, -kInf)) return true;
   const double g = link(plane, a, b, radius, allow).gap;
   if (g >= 0.0) return true;
   if (g > -radius) return g >= -allow;  // the axis is outside O: the depth is measured

@@ -806,12 +806,14 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
     const double dy = std::max({nd.lo[1] - pivot.y(), pivot.y() - nd.hi[1], 0.0});
     if (dx * dx + dy * dy > reach * reach) return true;
     if (!wedge) return false;
-    // cross(e, x - pivot) over the box: its value at the centre -+ the box's half extent.
+    // cross(e, x - pivot) over the box: its value at the centre -+ the box's half extent; a box
+    // within touching distance of the pivot is kept (its segments may touch the pivot).
     const double cx = nd.c[0] - pivot.x(), cy = nd.c[1] - pivot.y();
     const double r_plus = std::abs(e_plus.x()) * nd.h[1] + std::abs(e_plus.y()) * nd.h[0];
     const double r_minus = std::abs(e_minus.x()) * nd.h[1] + std::abs(e_minus.y()) * nd.h[0];
-    return e_plus.x() * cy - e_plus.y() * cx - r_plus > slack ||   // beyond +within
-           e_minus.x() * cy - e_minus.y() * cx + r_minus < -slack;  // beyond -within
+    const double margin = slack + kTouch;
+    return e_plus.x() * cy - e_plus.y() * cx - r_plus > margin ||   // beyond +within
+           e_minus.x() * cy - e_minus.y() * cx + r_minus < -margin;  // beyond -within
   };
   // Stops (true) at a segment touching the pivot.
   const bool touching = visit_segments(skip, [&](int i) {
@@ -1124,7 +1126,8 @@ RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
   constexpr double kSlack = 1e-12;  // as link_free
   const Vec2 arm = req.end - req.pivot;
   const double len = arm.norm();
-  const PlaneRegion* R = len > 0.0 ? region(req.plane, req.radius) : nullptr;
+  // A search range beyond pi (the planner's is at most pi) goes round onto itself: generic.
+  const PlaneRegion* R = len > 0.0 && req.max_angle <= kPi ? region(req.plane, req.radius) : nullptr;
   if (!R) return Sensing::rotate_until_free(req);
   RotateResult out;
   out.end = req.end;

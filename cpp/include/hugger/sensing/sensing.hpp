@@ -57,9 +57,9 @@ struct RotateResult {
   bool ok = false;         ///< a free position was found (until_free) / the link touched (until_touch)
   Vec2 end = Vec2::Zero(); ///< the link's new free end
   double angle = 0.0;      ///< signed rotation, counter-clockwise positive (= flexion)
-  double gap = kInf;       ///< gap of the link at its new position; rotate_until_free: a lower bound
-                           ///< (the generic search: the gap, exact up to 4 tolerance, beyond that
-                           ///< any larger value; the section skin does not measure it: 0)
+  double gap = kInf;       ///< gap of the link at its new position; rotate_until_free: the generic
+                           ///< search's is exact up to 4 tolerance (beyond that any larger value);
+                           ///< the section skin does not measure it and reports 0, a lower bound
 };
 
 class Sensing {

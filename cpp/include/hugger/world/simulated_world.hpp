@@ -22,6 +22,12 @@ class SimulatedWorld final : public Sensing {
   /// As link(...).gap < below, stopping at the first triangle clearly closer than that.
   bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                       double below) const override;
+  /// The generic answer, after a clearance test that settles the links that are clear (most of
+  /// those asked), cheaper than their gap.
+  bool link_depth_within(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                         double allow) const override {
+    return link_free(plane, a, b, radius, -kInf) || Sensing::link_depth_within(plane, a, b, radius, allow);
+  }
 
   const Object& object() const { return *object_; }
 
