@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <memory>
+#include <random>
 
 #include "hugger/world/simulated_world.hpp"
 #include "meshes.hpp"
@@ -21,6 +22,15 @@ inline Pose facing_down(double height) {
   p.linear() = Eigen::AngleAxisd(kPi, Vec3::UnitX()).toRotationMatrix();
   p.translation() = Vec3(0, 0, height);
   return p;
+}
+
+/// A finger plane through `origin` with a random orientation.
+inline FingerPlane random_plane(std::mt19937& rng, const Vec3& origin) {
+  FingerPlane pl;
+  pl.origin = origin;
+  pl.p = random_unit(rng);
+  pl.u = random_unit(rng).cross(pl.p).normalized();
+  return pl;
 }
 
 /// A request to turn link [pivot, end] about pivot (RotateRequest), with the tolerance and sample

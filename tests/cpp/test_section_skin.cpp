@@ -70,10 +70,8 @@ void compare(const std::shared_ptr<const Object>& object, unsigned seed, int pla
   const double size = ext.maxCoeff();
   const double radii[3] = {0.0, 0.02 * size, 0.06 * size};
   for (int k = 0; k < planes; ++k) {
-    FingerPlane pl;
-    pl.origin = c + Vec3(U(rng) - 0.5, U(rng) - 0.5, U(rng) - 0.5).cwiseProduct(ext) * 0.8;
-    pl.p = test::random_unit(rng);
-    pl.u = test::random_unit(rng).cross(pl.p).normalized();
+    const Vec3 origin = c + Vec3(U(rng) - 0.5, U(rng) - 0.5, U(rng) - 0.5).cwiseProduct(ext) * 0.8;
+    const FingerPlane pl = test::random_plane(rng, origin);
     const double r = radii[k % 3];
     const Vec2 lo = pl.to_plane(c) - Vec2::Constant(0.7 * size), span = Vec2::Constant(1.4 * size);
     for (int q = 0; q < per_plane; ++q) {
@@ -259,10 +257,7 @@ TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
     const double size = object->bounds().extent().maxCoeff();
     long checked = 0;
     for (int k = 0; k < 12; ++k) {
-      FingerPlane pl;
-      pl.origin = c;
-      pl.p = test::random_unit(rng);
-      pl.u = test::random_unit(rng).cross(pl.p).normalized();
+      const FingerPlane pl = test::random_plane(rng, c);
       const double r = (k % 3) * 0.03 * size;
       for (int q = 0; q < 60; ++q) {
         const Vec2 a = Vec2(U(rng) - 0.5, U(rng) - 0.5) * 1.4 * size;
@@ -292,11 +287,7 @@ TEST(SectionSkin, PrepareBuildsTheSameRegionsSideBySide) {
   std::mt19937 rng(11);
   std::vector<FingerPlane> planes;
   for (int k = 0; k < 6; ++k) {
-    FingerPlane pl;
-    pl.origin = object->bounds().centre();
-    pl.p = test::random_unit(rng);
-    pl.u = test::random_unit(rng).cross(pl.p).normalized();
-    planes.push_back(pl);
+    planes.push_back(test::random_plane(rng, object->bounds().centre()));
   }
   planes.push_back(planes[2]);
   const double r = 0.004;
@@ -336,11 +327,7 @@ TEST(SectionSkin, RotateUntilFreeIsTheSmallestFreeingRotation) {
     const double size = object->bounds().extent().maxCoeff();
     int checked = 0, fronts = 0;
     std::vector<FingerPlane> planes(16);  // a skin keeps at most kMaxRegions regions
-    for (FingerPlane& pl : planes) {
-      pl.origin = c;
-      pl.p = test::random_unit(rng);
-      pl.u = test::random_unit(rng).cross(pl.p).normalized();
-    }
+    for (FingerPlane& pl : planes) pl = test::random_plane(rng, c);
     for (int trial = 0; trial < 400; ++trial) {
       const FingerPlane& pl = planes[trial % planes.size()];
       const double r = (trial / planes.size()) % 2 * 0.004;
@@ -391,10 +378,7 @@ TEST(SectionSkin, DepthWithinMatchesDenseSampling) {
     const Vec3 c = object->bounds().centre();
     int yes = 0, no = 0;
     for (int k = 0; k < 16; ++k) {
-      FingerPlane pl;
-      pl.origin = c;
-      pl.p = test::random_unit(rng);
-      pl.u = test::random_unit(rng).cross(pl.p).normalized();
+      const FingerPlane pl = test::random_plane(rng, c);
       const PlaneRegion* R = skin.region(pl, (k % 2) * 0.004);
       ASSERT_NE(R, nullptr);
       if (R->segments().empty()) continue;

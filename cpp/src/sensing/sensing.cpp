@@ -43,19 +43,9 @@ Touch check_touch(Touch touch, const char* source) {
   return touch;
 }
 
-namespace {
-
-Vec2 rotate(const Vec2& v, double angle) {
-  const double c = std::cos(angle), s = std::sin(angle);
-  return Vec2(c * v.x() - s * v.y(), s * v.x() + c * v.y());
-}
-
-}  // namespace
-
 bool Sensing::link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
                         bool a_outside) const {
-  constexpr double kSlack = 1e-12;
-  if (a.y() < front - kSlack || b.y() < front - kSlack) return false;
+  if (a.y() < front - kFrontSlack || b.y() < front - kFrontSlack) return false;
   return capsule_clear(plane.to_world(a), plane.to_world(b), radius, a_outside);
 }
 
@@ -169,7 +159,7 @@ RotateResult Sensing::rotate_until_touch(const RotateRequest& req) const {
   out.end = req.end;
   double angle = 0.0;
   for (int it = 0; it < 200; ++it) {
-    const Vec2 end = req.pivot + rotate(arm, angle);
+    const Vec2 end = req.pivot + rotate_planar(arm, angle);
     const double gap = link(req.plane, req.pivot, end, req.radius, kInf).gap;
     if (gap < 0.0) break;  // cannot happen when starting free; keep the last free position
     out.end = end;
@@ -183,7 +173,7 @@ RotateResult Sensing::rotate_until_touch(const RotateRequest& req) const {
     double d = (gap - req.level) / len;
     d = std::min(d, req.max_angle - angle);
     if (d <= 1e-15) break;
-    const Vec2 next = req.pivot + rotate(arm, angle + d);
+    const Vec2 next = req.pivot + rotate_planar(arm, angle + d);
     if (next.y() < req.front) break;
     angle += d;
   }
@@ -203,13 +193,12 @@ RotateResult Sensing::rotate_until_free(const RotateRequest& req) const {
     double slope = 0.0;      ///< d gap / d angle at this angle
     bool measured = false;   ///< gap and slope are exact (the axis is outside O, within cap)
   };
-  auto end_at = [&](double a) { return Vec2(req.pivot + rotate(arm, a)); };
+  auto end_at = [&](double a) { return Vec2(req.pivot + rotate_planar(arm, a)); };
   auto probe = [&](double a) {
     Probe pr;
     pr.angle = a;
     const Vec2 e = end_at(a);
-    constexpr double kSlack = 1e-12;
-    if (req.pivot.y() < req.front - kSlack || e.y() < req.front - kSlack) return pr;  // behind the palm
+    if (req.pivot.y() < req.front - kFrontSlack || e.y() < req.front - kFrontSlack) return pr;  // behind the palm
     const Touch t = link(req.plane, req.pivot, e, req.radius, cap);
     pr.gap = t.gap;
     pr.free = t.gap >= 0.0;

@@ -719,6 +719,10 @@ bool capsule_interval(const Vec2& a, const Vec2& d, const Vec2& p, const Vec2& q
 
 }  // namespace
 
+bool PlaneRegion::clear(const Vec2& a, const Vec2& b, bool a_outside) const {
+  return !any_within(a, b, kTouch) && (a_outside || !inside(a));
+}
+
 bool PlaneRegion::depth_within(const Vec2& a, const Vec2& b, double allow) const {
   if (nodes_.empty()) return true;  // no boundary: R is empty
   const Query q(a, b);
@@ -761,10 +765,9 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
   const Vec2 behind = -length * u;  // the point at pseudo-angle +-2, for spans cut there
   // The wedge of directions within `within` of u: spans wholly outside it are left out, and
   // where it is convex (within <= pi/2) so are nodes wholly outside one of its two sides.
-  const double pm = within >= kPi ? 2.0 : pseudo_angle(Vec2::UnitX(), Vec2(std::cos(within), std::sin(within)));
+  const double pm = pseudo_angle_of(within);
   const bool wedge = within <= 0.5 * kPi;
-  const Vec2 e_plus(std::cos(within) * u.x() - std::sin(within) * u.y(), std::sin(within) * u.x() + std::cos(within) * u.y());
-  const Vec2 e_minus(std::cos(within) * u.x() + std::sin(within) * u.y(), -std::sin(within) * u.x() + std::cos(within) * u.y());
+  const Vec2 e_plus = rotate_planar(u, within), e_minus = rotate_planar(u, -within);
   Vec2 last_q(kInf, kInf);  // the last end point seen and its pseudo-angle (neighbours share ends)
   double last_p = 0.0;
   auto add = [&](const Vec2& q0, const Vec2& q1) {
@@ -1112,18 +1115,12 @@ bool SectionSkin::link_gap_below(const FingerPlane& plane, const Vec2& a, const 
 
 namespace {
 
-Vec2 rotated(const Vec2& v, double angle) {
-  const double c = std::cos(angle), s = std::sin(angle);
-  return Vec2(c * v.x() - s * v.y(), s * v.x() + c * v.y());
-}
-
 /// Signed angle from u to v (radians, in [-pi, pi]).
 double angle_between(const Vec2& u, const Vec2& v) { return std::atan2(cross2(u, v), u.dot(v)); }
 
 }  // namespace
 
 RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
-  constexpr double kSlack = 1e-12;  // as link_free
   const Vec2 arm = req.end - req.pivot;
   const double len = arm.norm();
   // A search range beyond pi (the planner's is at most pi) goes round onto itself: generic.
@@ -1131,11 +1128,11 @@ RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
   if (!R) return Sensing::rotate_until_free(req);
   RotateResult out;
   out.end = req.end;
-  if (req.pivot.y() < req.front - kSlack) return out;  // behind the palm: no rotation frees it
+  if (req.pivot.y() < req.front - kFrontSlack) return out;  // behind the palm: no rotation frees it
   const Vec2 u = arm / len;
   // The end may not pass behind the front: blocked where its height pivot.y + len sin(phi) falls
   // below front, the directions counter-clockwise from (-c, k) to (c, k), c = sqrt(1 - k^2).
-  const double k = (req.front - kSlack - req.pivot.y()) / len;
+  const double k = (req.front - kFrontSlack - req.pivot.y()) / len;
   const double c = std::sqrt(std::max(0.0, 1.0 - k * k));
   const Vec2 f0 = len * Vec2(-c, k), f1 = len * Vec2(c, k);
   // Most links free within a few sample angles: the spans of a narrow wedge about the link are
@@ -1195,7 +1192,7 @@ RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
     // reaches its edge may go on. Each final end gives a candidate: its true angle plus a margin
     // that moves the link's end half the tolerance on (at most half the free window beyond),
     // within max_angle.
-    const double pm = within >= kPi ? 2.0 : PlaneRegion::pseudo_angle(Vec2::UnitX(), Vec2(std::cos(within), std::sin(within)));
+    const double pm = PlaneRegion::pseudo_angle_of(within);
     const bool plus_final = plus.reach < pm - kSpanJoin, minus_final = minus.reach > -pm + kSpanJoin;
     struct Candidate {
       double angle = 0.0;
@@ -1226,7 +1223,7 @@ RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
       if (has_plus) order[n++] = &c_plus;
     }
     for (int i = 0; i < n; ++i) {
-      const Vec2 end = req.pivot + rotated(arm, order[i]->angle);
+      const Vec2 end = req.pivot + rotate_planar(arm, order[i]->angle);
       // The spans are exact up to rounding: a link that clears the run's end by more than
       // kCertain is free; a closer one (a narrow window) is checked.
       if (order[i]->clearance < kCertain && !link_free(req.plane, req.pivot, end, req.radius, req.front, true)) {
@@ -1252,18 +1249,15 @@ bool SectionSkin::link_depth_within(const FingerPlane& plane, const Vec2& a, con
   const PlaneRegion* R = allow > 0.0 ? region(plane, radius) : nullptr;
   if (!R) return Sensing::link_depth_within(plane, a, b, radius, allow);
   // Most links asked are clear: the plain clearance test settles them, cheaper than the depth.
-  if (!R->any_within(a, b, kTouch) && !R->inside(a)) return true;
-  return R->depth_within(a, b, allow);
+  return R->clear(a, b, false) || R->depth_within(a, b, allow);
 }
 
 bool SectionSkin::link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
                             bool a_outside) const {
-  constexpr double kSlack = 1e-12;
-  if (a.y() < front - kSlack || b.y() < front - kSlack) return false;
+  if (a.y() < front - kFrontSlack || b.y() < front - kFrontSlack) return false;
   const PlaneRegion* R = region(plane, radius);
   if (!R) return Sensing::link_free(plane, a, b, radius, front, a_outside);
-  if (R->any_within(a, b, kTouch)) return false;
-  return a_outside || !R->inside(a);
+  return R->clear(a, b, a_outside);
 }
 
 }  // namespace hugger

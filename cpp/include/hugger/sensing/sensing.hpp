@@ -6,6 +6,7 @@
 /// implementation.
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include "hugger/hand/hand_model.hpp"
@@ -22,6 +23,16 @@ struct Touch {
   Vec3 on_object = Vec3::Zero();   ///< nearest point of O
   Vec3 normal = Vec3::UnitZ();     ///< gradient of the signed distance at on_hand (unit, outward)
 };
+
+/// A link end at most this far behind the palm's front plane (metres) still counts as in front of
+/// it (rounding of positions computed in the plane).
+constexpr double kFrontSlack = 1e-12;
+
+/// v turned counter-clockwise by `angle` (radians), in a finger plane.
+inline Vec2 rotate_planar(const Vec2& v, double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  return Vec2(c * v.x() - s * v.y(), s * v.x() + c * v.y());
+}
 
 /// Boundary following in a finger plane (docs/algorithm.md, decision 5).
 struct FollowRequest {

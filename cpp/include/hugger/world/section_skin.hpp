@@ -64,6 +64,9 @@ class PlaneRegion {
   Near nearest(const Vec2& a, const Vec2& b, double cap = kInf) const;
   /// True when some boundary piece comes within `distance` of segment [a, b] (or touches it).
   bool any_within(const Vec2& a, const Vec2& b, double distance) const;
+  /// True when segment [a, b] stays out of R: no boundary piece touches it and a lies outside R
+  /// (`a_outside`: the caller knows so).
+  bool clear(const Vec2& a, const Vec2& b, bool a_outside) const;
   /// True when no point of segment [a, b] lies in R deeper than `allow` (> 0) from its boundary:
   /// the points within `allow` of a boundary piece (an interval of the segment per piece) are
   /// that shallow, and each stretch between them lies wholly outside R or wholly inside (one
@@ -82,6 +85,11 @@ class PlaneRegion {
   /// False when a piece comes within touching distance of the pivot (every direction is blocked;
   /// `out` is then incomplete).
   bool spans(const Vec2& pivot, const Vec2& u, double length, double within, std::vector<Span>* out) const;
+  /// The pseudo-angle of the direction at `angle` radians from u (|angle| <= pi; +-2 beyond).
+  static double pseudo_angle_of(double angle) {
+    return std::abs(angle) >= kPi ? (angle < 0.0 ? -2.0 : 2.0)
+                                  : pseudo_angle(Vec2::UnitX(), Vec2(std::cos(angle), std::sin(angle)));
+  }
   /// The pseudo-angle of v (non-zero) relative to the unit direction u (see Span).
   static double pseudo_angle(const Vec2& u, const Vec2& v) {
     // In u's frame: y / (|x| + |y|) runs from -1 to 1 over the half-plane ahead (x >= 0); behind,
