@@ -5,6 +5,8 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <future>
+#include <system_error>
 #include <unordered_map>
 
 #include "hugger/check.hpp"
@@ -22,6 +24,10 @@ std::uint64_t edge_key(std::int64_t a, std::int64_t b) {
 
 namespace {
 std::atomic<std::uint64_t> next_serial{1};
+
+/// Meshes at least this large build their BVH on a second thread (a smaller one builds in less
+/// time than a thread takes to start).
+constexpr std::int64_t kConcurrentBvh = 4096;
 
 /// A directed edge leaving a vertex: its other end and the face holding it.
 struct OutEdge {
@@ -183,6 +189,16 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
     HUGGER_CHECK_ARGUMENT(faces_(f, 0) != faces_(f, 1) && faces_(f, 1) != faces_(f, 2) && faces_(f, 2) != faces_(f, 0),
                           "object face " << f << " repeats a vertex (degenerate triangle)");
   }
+  // The BVH needs only valid indices: a large mesh's is built on a second thread while this one
+  // checks the surface and computes the normals (the same tree on any number of threads).
+  // Should a check below throw, the future's destructor waits for the build first.
+  std::future<TriangleBvh> bvh;
+  if (nf >= kConcurrentBvh) {
+    try {
+      bvh = std::async(std::launch::async, [this] { return TriangleBvh(vertices_, faces_); });
+    } catch (const std::system_error&) {  // no thread to be had: built below, on this one
+    }
+  }
   // Closed and consistently oriented: every directed edge once, and its reverse once. The
   // directed edges leaving each vertex, sorted by their other end (compressed rows: linear in
   // the mesh, no hash table).
@@ -254,7 +270,7 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
         vertex_normals_[faces_(f, k)] += angle * face_normals_[f];
       }
     }
-  bvh_ = TriangleBvh(vertices_, faces_);
+  bvh_ = bvh.valid() ? bvh.get() : TriangleBvh(vertices_, faces_);
 }
 
 double Object::sign_at(const Vec3& query, const Vec3& on_mesh, int triangle, TriangleFeature f) const {
