@@ -245,25 +245,32 @@ void PlaneRegion::drop_inner_segments() {
     }
     return O.inside(X);
   };
-  std::sort(cuts_.begin(), cuts_.end(),
-            [](const std::pair<int, double>& a, const std::pair<int, double>& b) { return a < b; });
+  std::sort(cuts_.begin(), cuts_.end());
   std::vector<Segment> kept;
   kept.reserve(segments_.size() + cuts_.size());
   std::size_t c = 0;
+  std::vector<double> at;
   for (std::size_t i = 0; i < segments_.size(); ++i) {
     const Segment& s = segments_[i];
     if (!pieces_[s.piece].crossed) {
       kept.push_back(s);
       continue;
     }
-    // The parameters of its cuts (none unless crossed), then one part per interval.
-    std::vector<double> at = {0.0};
-    for (; c < cuts_.size() && cuts_[c].first == static_cast<int>(i); ++c) at.push_back(cuts_[c].second);
+    // Its cuts (none unless crossed), then one part per interval between them.
+    const std::size_t first_cut = c;
+    at.assign(1, 0.0);
+    for (; c < cuts_.size() && cuts_[c].segment == static_cast<int>(i); ++c) at.push_back(cuts_[c].t);
     at.push_back(1.0);
     Vec2 from = s.a;
     for (std::size_t k = 0; k + 1 < at.size(); ++k) {
       const Vec2 to = k + 2 == at.size() ? s.b : Vec2(s.a + at[k + 1] * (s.b - s.a));
-      if (inner(0.5 * (from + to))) {
+      // The votes of the crossings at its two ends (1: inside, 0: on the boundary; -1: none).
+      const int before = k > 0 ? cuts_[first_cut + k - 1].after_inner : -1;
+      const int after = k + 2 < at.size() ? !cuts_[first_cut + k].after_inner : -1;
+      const bool drop = before >= 0 && (after < 0 || after == before) ? before == 1
+                        : after >= 0 && before < 0                     ? after == 1
+                                                                       : inner(0.5 * (from + to));
+      if (drop) {
         ++dropped_;
       } else {
         Segment part = s;
@@ -900,8 +907,10 @@ void PlaneRegion::mark_crossings() {
                      if (x > ex && x < 1.0 - ex && y > ey && y < 1.0 - ey) {
                        pieces_[s.piece].crossed = true;
                        pieces_[t.piece].crossed = true;
-                       cuts_.push_back({static_cast<int>(i), x});
-                       cuts_.push_back({j, y});
+                       // The part of s beyond the crossing lies on t's inner side when s runs
+                       // against t's outward normal there, and likewise for t.
+                       cuts_.push_back({static_cast<int>(i), x, d1.dot(t.normal) < 0.0});
+                       cuts_.push_back({j, y, d2.dot(s.normal) < 0.0});
                      }
                      return false;
                    });

@@ -134,7 +134,9 @@ class PlaneRegion {
   void build_bvh();
   void mark_crossings();
   /// Cuts crossed segments at their crossings and drops the parts of flagged pieces that lie
-  /// inside R (one 3D test at each part's middle).
+  /// inside R: a part that starts at a crossing on the inner side of the crossing piece (whose
+  /// feature is then nearer than r just past it), unless its two crossings disagree; the parts
+  /// no crossing decides (and those) by one 3D test at the part's middle.
   void drop_inner_segments();
   int build_node(int begin, int end, std::vector<Vec2>& centres, int depth);
   /// The grid of cells that no segment touches, each labelled inside or outside R (one inside
@@ -154,7 +156,15 @@ class PlaneRegion {
   std::vector<Piece> pieces_;
   std::vector<Node> nodes_;
   std::vector<int> order_;                       ///< while building the BVH
-  std::vector<std::pair<int, double>> cuts_;     ///< while building: crossings (segment, parameter)
+  /// A crossing of a segment by a piece of another feature, while building: where, and on which
+  /// side of the crossing segment (its inner side: towards its feature) the segment goes on.
+  struct Cut {
+    int segment = 0;
+    double t = 0.0;            ///< parameter along the segment, in (0, 1)
+    bool after_inner = false;  ///< the part beyond t (towards b) starts on the inner side
+    bool operator<(const Cut& o) const { return segment < o.segment || (segment == o.segment && t < o.t); }
+  };
+  std::vector<Cut> cuts_;
   std::vector<std::array<Vec2, 2>> piece_ends_;  ///< while building: first and last point of each piece
   int depth_ = 0;
   double extent_ = 0.0;  ///< largest absolute coordinate of a segment's end (for rounding margins)
