@@ -39,7 +39,8 @@ struct Harmonic {
 };
 
 /// The closed intervals of [0, 2 pi) (an interval may run past 2 pi when it wraps) where every
-/// constraint holds: cut at every root, test the middle of each part.
+/// constraint holds. Each constraint allows one arc of the circle (or all of it, or at most a
+/// point): the intersection of those arcs, as sorted disjoint intervals of [0, 2 pi].
 std::vector<std::array<double, 2>> allowed_intervals(const Harmonic* hs, int n) {
   std::vector<std::array<double, 2>> out;
   // A constraint that holds nowhere (k0 > its amplitude) empties the set: checked first, cheaply.
@@ -47,31 +48,46 @@ std::vector<std::array<double, 2>> allowed_intervals(const Harmonic* hs, int n) 
     const Harmonic& h = hs[i];
     if (h.k0 > 0.0 && h.k0 * h.k0 > (h.k1 * h.k1 + h.k2 * h.k2) * (1.0 + 1e-12)) return out;
   }
-  double cuts[2 * 18 + 2];
+  constexpr int kMax = 2 * 18 + 2;  // intersecting with one arc adds at most one interval
+  std::array<double, 2> cur[kMax], next[kMax];
   int nc = 0;
-  cuts[nc++] = 0.0;
-  cuts[nc++] = kTwoPi;
-  for (int i = 0; i < n && nc + 2 <= 2 * 18 + 2; ++i) {
+  cur[nc++] = {0.0, kTwoPi};
+  auto wrap = [](double t) {
+    t = std::fmod(t, kTwoPi);
+    return t < 0.0 ? t + kTwoPi : t;
+  };
+  for (int i = 0; i < n && nc > 0; ++i) {
     const Harmonic& h = hs[i];
     const double A = std::hypot(h.k1, h.k2);
-    if (!(A > 0.0) || std::abs(h.k0) > A) continue;
-    const double phi = std::atan2(h.k2, h.k1), dphi = std::acos(std::clamp(-h.k0 / A, -1.0, 1.0));
-    for (double t : {phi - dphi, phi + dphi}) {
-      t = std::fmod(t, kTwoPi);
-      if (t < 0.0) t += kTwoPi;
-      cuts[nc++] = t;
+    if (!(A > 0.0) || h.k0 <= -A) {
+      if (h.k0 > 0.0) return out;  // no amplitude, and positive: nowhere
+      continue;                    // everywhere
     }
+    if (h.k0 >= A) return out;  // at most the point where cos = -1
+    // Allowed where cos(t - phi) <= -k0 / A: from phi + dphi round to phi - dphi (+ 2 pi).
+    const double phi = std::atan2(h.k2, h.k1), dphi = std::acos(std::clamp(-h.k0 / A, -1.0, 1.0));
+    const double s = wrap(phi + dphi), e = wrap(phi - dphi);
+    if (s == e) continue;  // all but one point
+    std::array<double, 2> arc[2];
+    int na = 0;
+    if (s < e) {
+      arc[na++] = {s, e};
+    } else {
+      arc[na++] = {0.0, e};
+      arc[na++] = {s, kTwoPi};
+    }
+    int nn = 0;
+    for (int a = 0; a < na; ++a)
+      for (int j = 0; j < nc; ++j) {
+        const double lo = std::max(cur[j][0], arc[a][0]), hi = std::min(cur[j][1], arc[a][1]);
+        if (hi > lo && nn < kMax) next[nn++] = {lo, hi};
+      }
+    std::copy(next, next + nn, cur);
+    nc = nn;
   }
-  std::sort(cuts, cuts + nc);
-  for (int i = 0; i + 1 < nc; ++i) {
-    const double lo = cuts[i], hi = cuts[i + 1];
-    if (!(hi > lo)) continue;
-    const double mid = 0.5 * (lo + hi), c = std::cos(mid), s = std::sin(mid);
-    bool ok = true;
-    for (int j = 0; j < n && ok; ++j) ok = hs[j].k0 + hs[j].k1 * c + hs[j].k2 * s <= 1e-12 * hs[j].scale();
-    if (!ok) continue;
-    if (!out.empty() && out.back()[1] == lo) out.back()[1] = hi;
-    else out.push_back({lo, hi});
+  for (int j = 0; j < nc; ++j) {
+    if (!out.empty() && out.back()[1] == cur[j][0]) out.back()[1] = cur[j][1];
+    else out.push_back(cur[j]);
   }
   if (out.size() >= 2 && out.front()[0] == 0.0 && out.back()[1] == kTwoPi) {
     out.back()[1] = kTwoPi + out.front()[1];
@@ -225,9 +241,9 @@ void PlaneRegion::build_cells() {
 }
 
 void PlaneRegion::drop_inner_segments() {
-  // Crossed segments are cut at their crossings. Then every segment of a flagged piece lies
-  // wholly on R's boundary or wholly inside R: its middle decides, and those inside are dropped
-  // (the rest still covers the boundary, and no segment left has parts inside R).
+  // Crossed segments are cut at their crossings. Then every part of a flagged piece lies wholly
+  // on R's boundary or wholly inside R, and those inside are dropped (the rest still covers the
+  // boundary, and no segment left has parts inside R).
   const Object& O = *object_;
   auto inner = [&](const Vec2& x) {
     const Vec3 X = plane_.to_world(x);
@@ -250,45 +266,87 @@ void PlaneRegion::drop_inner_segments() {
   kept.reserve(segments_.size() + cuts_.size());
   std::size_t c = 0;
   std::vector<double> at;
-  for (std::size_t i = 0; i < segments_.size(); ++i) {
-    const Segment& s = segments_[i];
-    if (!pieces_[s.piece].crossed) {
-      kept.push_back(s);
-      continue;
-    }
-    // Its cuts (none unless crossed), then one part per interval between them.
-    const std::size_t first_cut = c;
-    at.assign(1, 0.0);
-    for (; c < cuts_.size() && cuts_[c].segment == static_cast<int>(i); ++c) at.push_back(cuts_[c].t);
-    at.push_back(1.0);
-    Vec2 from = s.a;
-    for (std::size_t k = 0; k + 1 < at.size(); ++k) {
-      const Vec2 to = k + 2 == at.size() ? s.b : Vec2(s.a + at[k + 1] * (s.b - s.a));
-      // The votes of the crossings at its two ends (1: inside, 0: on the boundary; -1: none).
-      const int before = k > 0 ? cuts_[first_cut + k - 1].after_inner : -1;
-      const int after = k + 2 < at.size() ? !cuts_[first_cut + k].after_inner : -1;
-      const bool drop = before >= 0 && (after < 0 || after == before) ? before == 1
-                        : after >= 0 && before < 0                     ? after == 1
-                                                                       : inner(0.5 * (from + to));
-      if (drop) {
-        ++dropped_;
-      } else {
-        Segment part = s;
-        part.a = from;
-        part.b = to;
-        kept.push_back(part);
+  // Leaf by leaf: the leaves come in nodes_ in the order of their segments (build_node lays
+  // out a node, its left subtree, then its right one), as the cuts are sorted. The parts kept
+  // stay in their segment's leaf, whose box can only shrink, and the boxes are refitted below.
+  for (Node& leaf : nodes_) {
+    if (leaf.left >= 0) continue;
+    const int first = static_cast<int>(kept.size());
+    for (int i = leaf.first; i < leaf.first + leaf.count; ++i) {
+      const Segment& s = segments_[i];
+      if (!pieces_[s.piece].crossed) {
+        kept.push_back(s);
+        continue;
       }
-      from = to;
+      // Its cuts (none unless crossed), then one part per interval between them.
+      const std::size_t first_cut = c;
+      at.assign(1, 0.0);
+      for (; c < cuts_.size() && cuts_[c].segment == i; ++c) at.push_back(cuts_[c].t);
+      at.push_back(1.0);
+      Vec2 from = s.a;
+      for (std::size_t k = 0; k + 1 < at.size(); ++k) {
+        const Vec2 to = k + 2 == at.size() ? s.b : Vec2(s.a + at[k + 1] * (s.b - s.a));
+        // The votes of the crossings at its two ends (1: inside, 0: on the boundary; -1: none).
+        const int before = k > 0 ? cuts_[first_cut + k - 1].after_inner : -1;
+        const int after = k + 2 < at.size() ? !cuts_[first_cut + k].after_inner : -1;
+        const bool drop = before >= 0 && (after < 0 || after == before) ? before == 1
+                          : after >= 0 && before < 0                     ? after == 1
+                                                                         : inner(0.5 * (from + to));
+        if (drop) {
+          ++dropped_;
+        } else {
+          Segment part = s;
+          part.a = from;
+          part.b = to;
+          kept.push_back(part);
+        }
+        from = to;
+      }
     }
+    leaf.first = first;
+    leaf.count = static_cast<int>(kept.size()) - first;
   }
   const bool changed = !cuts_.empty() || dropped_ > 0;
   cuts_.clear();
   cuts_.shrink_to_fit();
   segments_.swap(kept);
   for (auto& p : pieces_) p.crossed = false;  // resolved
-  // Else the same segments: the tree stands (a rebuild would make the same nodes, perhaps with
-  // the segments of a leaf in another order).
-  if (changed) build_bvh();
+  if (changed) refit();
+}
+
+void PlaneRegion::refit() {
+  // Children come after their parent in nodes_: backwards, every child is fitted first. An
+  // empty leaf gets an empty box (no query reaches it).
+  extent_ = 0.0;
+  for (std::size_t id = nodes_.size(); id-- > 0;) {
+    Node& nd = nodes_[id];
+    nd.lo[0] = nd.lo[1] = kInf;
+    nd.hi[0] = nd.hi[1] = -kInf;
+    if (nd.left < 0) {
+      for (int i = nd.first; i < nd.first + nd.count; ++i) {
+        const Segment& s = segments_[i];
+        for (int a = 0; a < 2; ++a) {
+          nd.lo[a] = std::min({nd.lo[a], s.a[a], s.b[a]});
+          nd.hi[a] = std::max({nd.hi[a], s.a[a], s.b[a]});
+        }
+        extent_ = std::max({extent_, s.a.cwiseAbs().maxCoeff(), s.b.cwiseAbs().maxCoeff()});
+      }
+    } else {
+      for (const int child : {nd.left, nd.right})
+        for (int a = 0; a < 2; ++a) {
+          nd.lo[a] = std::min(nd.lo[a], nodes_[child].lo[a]);
+          nd.hi[a] = std::max(nd.hi[a], nodes_[child].hi[a]);
+        }
+      nd.first = nodes_[nd.left].first;
+      nd.count = nodes_[nd.right].first + nodes_[nd.right].count - nd.first;
+    }
+    const bool empty = !(nd.lo[0] <= nd.hi[0]);
+    for (int a = 0; a < 2; ++a) {
+      nd.c[a] = empty ? 0.0 : 0.5 * (nd.lo[a] + nd.hi[a]);
+      nd.h[a] = empty ? 0.0 : 0.5 * (nd.hi[a] - nd.lo[a]);
+    }
+  }
+  if (segments_.empty()) nodes_.clear();
 }
 
 void PlaneRegion::add_segment(const Vec2& a, const Vec2& b, const Vec2& outward, int piece) {
@@ -396,6 +454,15 @@ void PlaneRegion::build_pieces() {
       const double sa = height(Pa), sb = height(Pb);
       if (std::min(sa, sb) > r || std::max(sa, sb) < -r) continue;
       const std::int64_t g = O.face_neighbor(f, k);
+      {
+        // A cheaper, looser form of the quick rejection below, before the edge's frame is built:
+        // 1 - sqrt((1 + c) / 2) <= (1 - c) / 2 bounds the sag.
+        const Vec3& nB = O.face_normal(g);
+        const double da = n.dot(nu), db = nB.dot(nu), sag = 0.5 * (1.0 - n.dot(nB));
+        if (std::min(sa, sb) + r * (std::min(da, db) - sag) - 1e-12 * r > 0.0 ||
+            std::max(sa, sb) + r * (std::max(da, db) + sag) + 1e-12 * r < 0.0)
+          continue;
+      }
       std::int64_t ic = -1;
       for (int j = 0; j < 3; ++j)
         if (F(g, j) != ia && F(g, j) != ib) ic = F(g, j);
@@ -487,16 +554,21 @@ void PlaneRegion::build_pieces() {
       }
       Harmonic hs[17];
       int nh = 0;
-      for (const std::int64_t* w = O.ring_begin(iv); w != O.ring_end(iv); ++w) {
+      // An unmarked vertex's constraints are tested as they are made: each must hold on the
+      // whole circle, and most vertices fail the first or second.
+      const bool marked = vertex_mark[static_cast<std::size_t>(iv)];
+      auto whole = [](const Harmonic& h) { return h.k0 + std::hypot(h.k1, h.k2) <= 0.0; };
+      bool open = false;
+      for (const std::int64_t* w = O.ring_begin(iv); w != O.ring_end(iv) && !open; ++w) {
         const Vec3 e = vertex(*w) - V;
         hs[nh++] = {-sv * nu.dot(e), rho * u.dot(e), rho * p.dot(e)};
+        open = !marked && !whole(hs[nh - 1]);
       }
+      if (open) continue;
       const Vec3& nv = O.vertex_normal(iv);
-      if (nv.norm() > 1e-12) hs[nh++] = {sv * nu.dot(nv), -rho * u.dot(nv), -rho * p.dot(nv)};
-      if (!vertex_mark[static_cast<std::size_t>(iv)]) {
-        bool whole = true;  // every constraint holds on the whole circle
-        for (int j = 0; j < nh && whole; ++j) whole = hs[j].k0 + std::hypot(hs[j].k1, hs[j].k2) <= 0.0;
-        if (!whole) continue;
+      if (nv.norm() > 1e-12) {
+        hs[nh++] = {sv * nu.dot(nv), -rho * u.dot(nv), -rho * p.dot(nv)};
+        if (!marked && !whole(hs[nh - 1])) continue;
       }
       const auto allowed = allowed_intervals(hs, nh);
       if (allowed.empty()) continue;
@@ -526,9 +598,9 @@ int PlaneRegion::build_node(int begin, int end, std::vector<Vec2>& centres, int 
     nd.c[a] = 0.5 * (nd.lo[a] + nd.hi[a]);
     nd.h[a] = 0.5 * (nd.hi[a] - nd.lo[a]);
   }
+  nd.first = begin;  // every node's segments are a range: a leaf's, or its subtree's
+  nd.count = end - begin;
   if (end - begin <= 4) {
-    nd.first = begin;
-    nd.count = end - begin;
     nodes_[id] = nd;
     return id;
   }
@@ -593,7 +665,7 @@ bool PlaneRegion::visit_segments(Skip&& skip, Visit&& visit) const {
   while (top > 0) {
     const Node& nd = nodes_[stack[--top]];
     if (skip(nd)) continue;
-    if (nd.count == 0) {
+    if (nd.left >= 0) {
       stack[top++] = nd.right;
       stack[top++] = nd.left;
       continue;
@@ -622,7 +694,7 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
     const Item it = stack[--top];
     if (it.lb > best + kTie) continue;
     const Node& nd = nodes_[it.node];
-    if (nd.count > 0) {
+    if (nd.left < 0) {
       for (int i = nd.first; i < nd.first + nd.count; ++i) {
         const Segment& s = segments_[i];
         if (farther_than(q, s.a, s.b, s.normal, best + kTie + slack)) continue;
@@ -894,9 +966,13 @@ void PlaneRegion::mark_crossings() {
   for (std::size_t i = 0; i < n; ++i) {
     const Segment& s = segments_[i];
     const Query q(s.a, s.b);
-    visit_segments([&](const Node& nd) { return node_bound(nd, q) > kTouch; },
+    // Each pair once: only segments after i (a node whose range ends at or before i is skipped).
+    visit_segments([&](const Node& nd) {
+                     return nd.first + nd.count <= static_cast<int>(i) + 1 || nd.lo[0] - q.hi.x() > kTouch ||
+                            q.lo.x() - nd.hi[0] > kTouch || nd.lo[1] - q.hi.y() > kTouch || q.lo.y() - nd.hi[1] > kTouch;
+                   },
                    [&](int j) {
-                     if (static_cast<std::size_t>(j) <= i) return false;  // each pair once
+                     if (static_cast<std::size_t>(j) <= i) return false;
                      const Segment& t = segments_[j];
                      if (t.piece == s.piece) return false;
                      const Vec2 d1 = s.b - s.a, d2 = t.b - t.a, w = t.a - s.a;

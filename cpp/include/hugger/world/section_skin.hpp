@@ -122,8 +122,8 @@ class PlaneRegion {
   struct Node {
     double lo[2], hi[2];
     double c[2], h[2];  ///< centre and half extent, (lo + hi) / 2 and (hi - lo) / 2
-    int left = -1, right = -1;
-    int first = 0, count = 0;
+    int left = -1, right = -1;  ///< children; -1 in a leaf
+    int first = 0, count = 0;   ///< its segments' range: a leaf's (none in a leaf emptied by the build), or its subtree's
   };
   /// Depth first over the 2D tree (left before right): skips every node `skip(node)` is true of
   /// and calls `visit(i)` on each segment of the leaves reached, stopping when `visit` returns
@@ -132,6 +132,8 @@ class PlaneRegion {
   bool visit_segments(Skip&& skip, Visit&& visit) const;
   void build_pieces();
   void build_bvh();
+  /// Fits every node's box to its segments again (leaves keep their segments' ranges).
+  void refit();
   void mark_crossings();
   /// Cuts crossed segments at their crossings and drops the parts of flagged pieces that lie
   /// inside R: a part that starts at a crossing on the inner side of the crossing piece (whose
