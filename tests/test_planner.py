@@ -373,9 +373,12 @@ def test_bit_identical_across_runs_and_threads():
 
 
 def test_gil_is_released_while_planning():
-    obj = hugger.objects.sphere(radius=0.04, subdivisions=6)  # a large mesh: a plan of ~1 s
+    # A large mesh and the mesh skin (the slower reference): a plan of ~0.4 s, long enough to count
+    # another thread's ticks during it (with the section skin it takes ~0.05 s).
+    obj = hugger.objects.sphere(radius=0.04, subdivisions=6)
     hand = hugger.Hand(fingers=8, links=8, link_length=0.0125, link_radius=0.002)
-    planner = hugger.Planner(hand, obj, [0, 0, 0], hugger.look_at([0, 0, 0.2], [0, 0, 0]), step=0.0003)
+    planner = hugger.Planner(hand, obj, [0, 0, 0], hugger.look_at([0, 0, 0.2], [0, 0, 0]), step=0.0003,
+                             skin="mesh")
     elapsed, during = _ticks_while(planner.plan)
     # the other thread kept ticking during the plan (it could not if the GIL were held)
     assert elapsed > 0.05
@@ -384,7 +387,7 @@ def test_gil_is_released_while_planning():
 
 def test_one_planner_cannot_run_on_two_threads_at_once(hand, fine_sphere):
     planner = hugger.Planner(hand, hugger.objects.sphere(radius=0.04, subdivisions=6), [0, 0, 0], start(),
-                             step=0.0002)
+                             step=0.0002, skin="mesh")  # the slower reference skin: still planning 10 ms on
     errors = []
     t = threading.Thread(target=planner.plan)
     t.start()

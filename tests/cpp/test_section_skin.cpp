@@ -226,7 +226,8 @@ TEST(SectionSkin, PlansAreCollisionFreeIn3DAndDeterministic) {
 TEST(SectionSkin, RegionSizeBarelyGrowsWithTheMesh) {
   // A plane through a sphere of radius 4 cm, link radius 4 mm: the boundary pieces are one ring
   // of features, so their number grows with the square root of the triangle count, and the
-  // flattened segments (whose count is set by the curvature of R, not the mesh) barely at all.
+  // segments left once chains are simplified (whose count is set by the curvature of R and the
+  // tolerance, not the mesh) barely at all.
   FingerPlane pl;
   pl.origin = Vec3(0.0, 0.005, 0.0);
   pl.u = Vec3(1, 0, 0);
@@ -241,7 +242,9 @@ TEST(SectionSkin, RegionSizeBarelyGrowsWithTheMesh) {
     EXPECT_EQ(R.dropped(), 0);  // a convex object: no piece of its region lies inside it
     counts.push_back(R.segments().size());
   }
-  EXPECT_LT(counts.back(), 8 * counts.front());
+  // Chains of pieces are simplified to the flattening tolerance: 64 times the triangles, less
+  // than twice the segments (unsimplified, 2.7 times).
+  EXPECT_LT(counts.back(), 2 * counts.front());
 }
 
 // link_gap_below (the motion check's question) gives link(...).gap < below with both skins, also
@@ -438,4 +441,38 @@ TEST(SectionSkin, RotateUntilFreeFitsANarrowWindow) {
     EXPECT_LT(std::abs(res.end.x()), 0.5 * w);           // through the slit
     EXPECT_NEAR(res.angle, -start, 0.5 * w / 0.05 + 1e-9);  // the smallest rotation, into the window
   }
+}
+
+// The pieces the skin keeps lie at most `flatten` outside R, also where chains of them were
+// simplified: every segment's ends and points along it are, in 3D, at most r + flatten from O.
+// (Pieces may lie inside R: parts the build could not show to be off the boundary; the deepest is
+// reported.)
+TEST(SectionSkin, BoundaryLiesJustOutsideRIn3D) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  double worst_in = 0.0, worst_out = 0.0;
+  long samples = 0;
+  for (const test::Mesh& m : {test::icosphere(5, Vec3::Constant(0.04)), test::icosphere(3, Vec3(0.05, 0.03, 0.02)),
+                              test::curvy(4), test::box(Vec3(0.03, 0.02, 0.05))}) {
+    auto object = std::make_shared<Object>(m.vertices, m.faces);
+    const Aabb box = object->bounds();
+    for (int k = 0; k < 12; ++k) {
+      const Vec3 origin = box.centre() + Vec3(U(rng) - 0.5, U(rng) - 0.5, U(rng) - 0.5).cwiseProduct(box.extent()) * 0.6;
+      const FingerPlane pl = test::random_plane(rng, origin);
+      const double r = k % 2 == 0 ? 0.004 : 0.001;
+      const PlaneRegion R(object, pl, r, kFlatten);
+      for (const auto& s : R.segments())
+        for (double t : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+          const Vec3 X = pl.to_world(s.a + t * (s.b - s.a));
+          const double d = object->nearest(X, X).signed_distance;
+          worst_in = std::max(worst_in, r - d);
+          worst_out = std::max(worst_out, d - r);
+          ++samples;
+        }
+    }
+  }
+  std::printf("  %ld boundary samples: deepest inside R %.3g m, farthest outside %.3g m (flatten %.3g m)\n", samples,
+              worst_in, worst_out, kFlatten);
+  EXPECT_GT(samples, 10000);
+  EXPECT_LE(worst_out, kFlatten + 1e-12);
 }

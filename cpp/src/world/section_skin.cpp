@@ -189,7 +189,234 @@ PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane
   build_bvh();
   mark_crossings();
   drop_inner_segments();
+  // The chains may move out by what the arcs' flattening left of the tolerance (at least half).
+  simplify(flatten_ - std::min(arc_deviation_, 0.5 * flatten_));
   build_cells();
+}
+
+void PlaneRegion::simplify(double tol) {
+  const int n = static_cast<int>(segments_.size());
+  if (n < 3) return;
+  // The end points, joined where they lie within kJoin (one vertex), each with the segments
+  // that end there.
+  std::vector<int> idx(2 * n);
+  for (int i = 0; i < 2 * n; ++i) idx[i] = i;
+  auto point = [&](int e) -> const Vec2& { return e % 2 == 0 ? segments_[e / 2].a : segments_[e / 2].b; };
+  std::sort(idx.begin(), idx.end(), [&](int x, int y) {
+    return point(x).x() < point(y).x() || (point(x).x() == point(y).x() && x < y);
+  });
+  std::vector<int> parent(2 * n);
+  for (int i = 0; i < 2 * n; ++i) parent[i] = i;
+  auto root = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (int i = 0; i < 2 * n; ++i)
+    for (int j = i + 1; j < 2 * n && point(idx[j]).x() - point(idx[i]).x() <= kJoin; ++j)
+      if ((point(idx[j]) - point(idx[i])).squaredNorm() <= kJoin * kJoin) {
+        const int x = root(idx[i]), y = root(idx[j]);
+        if (x != y) parent[std::max(x, y)] = std::min(x, y);
+      }
+  // Per vertex (its root end): how many segment ends, and the first two. A segment whose two
+  // ends are one vertex (an arc shorter than kJoin, where two pieces meet) is left out: the
+  // chain through its vertex joins its neighbours at one point.
+  std::vector<int> degree(2 * n, 0), first(2 * n, -1), second(2 * n, -1);
+  std::vector<char> used(n, 0);
+  for (int e = 0; e < 2 * n; ++e) {
+    const int v = root(e);
+    if (v == root(e ^ 1)) {
+      used[e / 2] = 1;
+      continue;
+    }
+    if (degree[v]++ == 0) first[v] = e;
+    else if (degree[v] == 2) second[v] = e;
+  }
+  // Chains: runs of segments through vertices where exactly two meet, walked from a vertex
+  // where some other number meet (or, for a closed loop, from any vertex).
+  std::vector<Segment> out;
+  out.reserve(n);
+  std::vector<Vec2> P;
+  std::vector<int> seg;
+  auto walk = [&](int e0) {  // e0: the end of the first segment the chain leaves from
+    P.assign(1, point(e0));
+    seg.clear();
+    for (int e = e0;;) {
+      const int i = e / 2;
+      used[i] = 1;
+      seg.push_back(i);
+      const int other = e ^ 1;  // the segment's other end
+      P.push_back(point(other));
+      const int v = root(other);
+      if (degree[v] != 2) break;
+      const int next = first[v] == other ? second[v] : first[v];
+      if (used[next / 2]) break;  // a closed loop, back at its start
+      e = next;
+    }
+    simplify_chain(P, seg, tol, &out);
+  };
+  for (int e = 0; e < 2 * n; ++e)
+    if (!used[e / 2] && degree[root(e)] != 2) walk(e);
+  for (int e = 0; e < 2 * n; e += 2)
+    if (!used[e / 2]) walk(e);
+  if (static_cast<int>(out.size()) == n) return;
+  segments_.swap(out);
+  build_bvh();
+}
+
+void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<int>& seg, double tol,
+                                 std::vector<Segment>* out) const {
+  const int k = static_cast<int>(seg.size());
+  // R lies on one side of the whole chain: `side` is +1 when the outward normals point to the
+  // left of the walk. A chain that is not (it should be) keeps its segments.
+  auto left = [](const Vec2& d) { return Vec2(-d.y(), d.x()); };
+  const double side0 = left(P[1] - P[0]).dot(segments_[seg[0]].normal) >= 0.0 ? 1.0 : -1.0;
+  bool consistent = true;
+  for (int i = 0; i < k && consistent; ++i)
+    consistent = side0 * left(P[i + 1] - P[i]).dot(segments_[seg[i]].normal) > 0.0;
+  auto emit = [&](const Vec2& a, const Vec2& b, int piece) {
+    const Vec2 d = b - a;
+    const double len = d.norm();
+    if (!(len > 0.0)) return;
+    Segment s;
+    s.a = a;
+    s.b = b;
+    s.normal = side0 * left(d) / len;
+    s.piece = piece;
+    out->push_back(s);
+  };
+  if (!consistent || k < 2) {
+    for (int i = 0; i < k; ++i) out->push_back(segments_[seg[i]]);
+    return;
+  }
+  // Each inner vertex is convex (R's boundary turns toward R there: the outward side bulges)
+  // or not. A run of segments whose inner vertices are all convex is replaced by lines of some
+  // of its segments (supporting lines: R lies behind each), meeting where they cross; a run whose
+  // inner vertices are all concave or straight by chords between some of its vertices (R lies
+  // behind each chord). Either way every original vertex lies behind the new segments and within
+  // `tol` of them, and runs meet at original vertices.
+  // Kind of inner vertex v (0 < v < k): +1 convex, -1 concave, 0 straight to rounding (a piece
+  // meeting its tangent neighbour), which either kind of run takes.
+  auto kind = [&](int v) {
+    const Vec2 d0 = P[v] - P[v - 1], d1 = P[v + 1] - P[v];
+    const double c = side0 * cross2(d0, d1);
+    if (std::abs(c) <= 1e-9 * d0.norm() * d1.norm()) return 0;
+    return c < 0.0 ? 1 : -1;
+  };
+  for (int s0 = 0; s0 < k;) {
+    // The run: segments s0 .. e - 1, inner vertices s0 + 1 .. e - 1 of one kind.
+    int e = s0 + 1, run = 0;
+    for (; e < k; ++e) {
+      const int v = kind(e);
+      if (v != 0 && run != 0 && v != run) break;
+      if (run == 0) run = v;
+    }
+    if (run > 0) {
+      // R is convex along the run. Two ways to bound it from outside, the one with fewer
+      // segments kept: (1) lines of some of its segments (R lies behind each), from the first
+      // segment's to the last's, each line to where it crosses the farthest next one whose
+      // crossing lies within tol of the chain (ahead of the one and short of the other): a run
+      // of long straight stretches keeps them and loses the rounded corners between; (2) chords
+      // of the chain moved out by tol: from the current point (the run's start, or a vertex moved
+      // out along its normal) to the farthest vertex, moved out too (the run's end as it is),
+      // with every vertex between behind the chord and between its ends: a finely divided curve
+      // keeps a chord per length its curvature allows. The corners and moved vertices lie within
+      // tol of the chain, and so do the segments between them (R is convex there).
+      const std::size_t mark = out->size();
+      int a = s0;
+      Vec2 from = P[s0];
+      while (a < e - 1) {
+        int best = a + 1;
+        Vec2 corner = P[a + 1];
+        const Vec2 da = P[a + 1] - P[a];
+        for (int b = a + 2; b < e; ++b) {
+          const Vec2 db = P[b + 1] - P[b];
+          const double den = cross2(da, db);
+          // Along a's line (straight to rounding): no corner with it, the next segment may give one.
+          if (std::abs(den) <= 1e-9 * da.norm() * db.norm()) continue;
+          if (!(side0 * den < 0.0)) break;  // not turning toward R: the lines do not bound it
+          const Vec2 w = P[a] + (cross2(P[b] - P[a], db) / den) * da;
+          // (Where a straight stretch joins them, w is an end itself, to rounding.)
+          if (!w.allFinite() || (w - P[a + 1]).dot(da) < -1e-12 * da.norm() || (P[b] - w).dot(db) < -1e-12 * db.norm())
+            break;
+          double near = kInf;  // w's distance to the chain from a to b
+          for (int i = a; i <= b; ++i) {
+            const Vec2 d = P[i + 1] - P[i];
+            const double l2 = d.squaredNorm();
+            const double t = l2 > 0.0 ? std::clamp((w - P[i]).dot(d) / l2, 0.0, 1.0) : 0.0;
+            near = std::min(near, (w - P[i] - t * d).squaredNorm());
+          }
+          if (std::sqrt(near) > tol) break;
+          best = b;
+          corner = w;
+        }
+        emit(from, corner, segments_[seg[a]].piece);
+        from = corner;
+        a = best;
+      }
+      emit(from, P[e], segments_[seg[a]].piece);
+      const std::size_t by_lines = out->size() - mark;
+      auto moved = [&](int v) {
+        if (v == s0 || v == e) return P[v];
+        const Vec2 nv = segments_[seg[v - 1]].normal + segments_[seg[v]].normal;
+        const double len = nv.norm();
+        return len > 0.0 ? Vec2(P[v] + (tol / len) * nv) : P[v];
+      };
+      thread_local std::vector<Segment> chords;
+      chords.clear();
+      std::swap(*out, chords);  // emit appends to *out: the chords go to their own list first
+      a = s0;
+      from = P[s0];
+      while (a < e && out->size() < by_lines) {
+        int best = a + 1;
+        Vec2 to = moved(a + 1);
+        for (int b = a + 2; b <= e; ++b) {
+          const Vec2 q = moved(b), d = q - from;
+          const double len = d.norm();
+          if (!(len > 0.0)) break;
+          const Vec2 nrm = side0 * left(d) / len;  // outward
+          bool ok = true;
+          for (int v = a; v <= b && ok; ++v) {
+            const double h = (P[v] - from).dot(nrm), t = (P[v] - from).dot(d);
+            ok = h <= 1e-12 && t >= -1e-12 * len && t <= len * len + 1e-12 * len;
+          }
+          if (!ok) break;
+          best = b;
+          to = q;
+        }
+        emit(from, to, segments_[seg[a]].piece);
+        from = to;
+        a = best;
+      }
+      std::swap(*out, chords);
+      if (a == e && chords.size() < by_lines) {
+        out->resize(mark);
+        out->insert(out->end(), chords.begin(), chords.end());
+      }
+    } else {
+      // Chords: from vertex a, the farthest vertex b with every vertex between behind the chord
+      // (or on it), within tol of it, and between its ends.
+      int a = s0;
+      while (a < e) {
+        int best = a + 1;
+        for (int b = a + 2; b <= e; ++b) {
+          const Vec2 d = P[b] - P[a];
+          const double len = d.norm();
+          if (!(len > 0.0)) break;
+          const Vec2 nrm = side0 * left(d) / len;  // outward
+          bool ok = true;
+          for (int v = a + 1; v < b && ok; ++v) {
+            const double h = (P[v] - P[a]).dot(nrm), t = (P[v] - P[a]).dot(d);
+            ok = h <= 1e-12 && h >= -tol && t >= 0.0 && t <= len * len;  // (straight: within rounding)
+          }
+          if (!ok) break;
+          best = b;
+        }
+        emit(P[a], P[best], segments_[seg[a]].piece);
+        a = best;
+      }
+    }
+    s0 = e;
+  }
 }
 
 void PlaneRegion::build_cells() {
@@ -373,13 +600,15 @@ void PlaneRegion::add_arcs(Kind kind, std::int64_t feature, const Vec2& centre, 
   const double M = U.norm() + V.norm();
   if (!(M > 0.0) || allowed.empty()) return;
   // Tangent polygons: the tangents at t_j and t_j + dt meet at centre + (U cos + V sin)(t_j +
-  // dt/2) / cos(dt/2), at most M (1 / cos(dt/2) - 1) <= flatten outside the curve.
-  const double dt_max = std::min(kPi / 3.0, 2.0 * std::acos(1.0 / (1.0 + flatten_ / M)));
+  // dt/2) / cos(dt/2), at most M (1 / cos(dt/2) - 1) <= flatten / 2 outside the curve (the
+  // rest of the tolerance is the simplification's).
+  const double dt_max = std::min(kPi / 3.0, 2.0 * std::acos(1.0 / (1.0 + 0.5 * flatten_ / M)));
   for (const auto& iv : allowed) {
     const double t0 = iv[0], t1 = iv[1];
     if (!(t1 - t0 > 1e-15)) continue;
     const int k = std::clamp(static_cast<int>(std::ceil((t1 - t0) / dt_max)), 1, 4096);
     const double dt = (t1 - t0) / k, sec = 1.0 / std::cos(0.5 * dt);
+    arc_deviation_ = std::max(arc_deviation_, M * (sec - 1.0));
     const int piece = static_cast<int>(pieces_.size());
     pieces_.push_back({kind, feature, false});
     auto at = [&](double t, double scale) { return Vec2(centre + scale * (U * std::cos(t) + V * std::sin(t))); };
@@ -654,6 +883,19 @@ inline double node_bound(const Node& nd, const Query& q) {
   return lb;
 }
 
+/// node_bound(nd, q) > d, without the square root: the tests of the threshold queries.
+template <class Node>
+inline bool node_farther(const Node& nd, const Query& q, double d) {
+  const double dx = std::max(nd.lo[0] - q.hi.x(), q.lo.x() - nd.hi[0]);
+  const double dy = std::max(nd.lo[1] - q.hi.y(), q.lo.y() - nd.hi[1]);
+  if (dx > d || dy > d) return true;
+  const double ex = std::max(dx, 0.0), ey = std::max(dy, 0.0);
+  if (ex * ex + ey * ey > d * d) return true;
+  return q.line && std::abs(q.n.x() * (nd.c[0] - q.a.x()) + q.n.y() * (nd.c[1] - q.a.y())) -
+                           (q.n_abs.x() * nd.h[0] + q.n_abs.y() * nd.h[1]) >
+                       d;
+}
+
 }  // namespace
 
 template <class Skip, class Visit>
@@ -743,7 +985,7 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
 bool PlaneRegion::any_within(const Vec2& a, const Vec2& b, double distance) const {
   const Query q(a, b);
   const double limit = distance + q.slack(extent_);
-  return visit_segments([&](const Node& nd) { return node_bound(nd, q) > distance; },
+  return visit_segments([&](const Node& nd) { return node_farther(nd, q, distance); },
                         [&](int i) {
                           const Segment& s = segments_[i];
                           if (farther_than(q, s.a, s.b, s.normal, limit)) return false;
@@ -812,7 +1054,7 @@ bool PlaneRegion::depth_within(const Vec2& a, const Vec2& b, double allow) const
   thread_local std::vector<std::array<double, 2>> near;
   near.clear();
   const bool shallow_point =
-      visit_segments([&](const Node& nd) { return node_bound(nd, q) > limit; },
+      visit_segments([&](const Node& nd) { return node_farther(nd, q, limit); },
                      [&](int i) {
                        const Segment& s = segments_[i];
                        if (farther_than(q, s.a, s.b, s.normal, limit)) return false;

@@ -134,6 +134,13 @@ class PlaneRegion {
   void build_bvh();
   /// Fits every node's box to its segments again (leaves keep their segments' ranges).
   void refit();
+  /// Replaces the chains of segments (joined end to end, two at each inner vertex) by fewer
+  /// segments that lie outside them, behind which every original vertex lies within `tol`.
+  void simplify(double tol);
+  /// One chain: points P (P[i], P[i + 1] the ends of segments_[seg[i]]); appends the new
+  /// segments to `out`.
+  void simplify_chain(const std::vector<Vec2>& P, const std::vector<int>& seg, double tol,
+                      std::vector<Segment>* out) const;
   void mark_crossings();
   /// Cuts crossed segments at their crossings and drops the parts of flagged pieces that lie
   /// inside R: a part that starts at a crossing on the inner side of the crossing piece (whose
@@ -169,6 +176,7 @@ class PlaneRegion {
   std::vector<Cut> cuts_;
   std::vector<std::array<Vec2, 2>> piece_ends_;  ///< while building: first and last point of each piece
   int depth_ = 0;
+  double arc_deviation_ = 0.0;  ///< while building: how far the flattened arcs lie out, at most
   double extent_ = 0.0;  ///< largest absolute coordinate of a segment's end (for rounding margins)
   // The cell grid (build_cells): cell (i, j) spans lo + cell * [i, i + 1] x [j, j + 1]; cells_
   // holds -1 where a segment's box (grown by a margin) meets the cell, else 1 inside R, 0 outside.
