@@ -199,12 +199,14 @@ void PlaneRegion::simplify(double tol) {
   if (n < 3) return;
   // The end points, joined where they lie within kJoin (one vertex), each with the segments
   // that end there.
-  std::vector<int> idx(2 * n);
-  for (int i = 0; i < 2 * n; ++i) idx[i] = i;
   auto point = [&](int e) -> const Vec2& { return e % 2 == 0 ? segments_[e / 2].a : segments_[e / 2].b; };
-  std::sort(idx.begin(), idx.end(), [&](int x, int y) {
-    return point(x).x() < point(y).x() || (point(x).x() == point(y).x() && x < y);
-  });
+  struct End {
+    double x, y;
+    int e;  ///< 2 * segment + (0: a, 1: b)
+  };
+  std::vector<End> ends(2 * n);
+  for (int e = 0; e < 2 * n; ++e) ends[e] = {point(e).x(), point(e).y(), e};
+  std::sort(ends.begin(), ends.end(), [](const End& x, const End& y) { return x.x < y.x || (x.x == y.x && x.e < y.e); });
   std::vector<int> parent(2 * n);
   for (int i = 0; i < 2 * n; ++i) parent[i] = i;
   auto root = [&](int x) {
@@ -212,11 +214,13 @@ void PlaneRegion::simplify(double tol) {
     return x;
   };
   for (int i = 0; i < 2 * n; ++i)
-    for (int j = i + 1; j < 2 * n && point(idx[j]).x() - point(idx[i]).x() <= kJoin; ++j)
-      if ((point(idx[j]) - point(idx[i])).squaredNorm() <= kJoin * kJoin) {
-        const int x = root(idx[i]), y = root(idx[j]);
+    for (int j = i + 1; j < 2 * n && ends[j].x - ends[i].x <= kJoin; ++j) {
+      const double dx = ends[j].x - ends[i].x, dy = ends[j].y - ends[i].y;
+      if (dx * dx + dy * dy <= kJoin * kJoin) {
+        const int x = root(ends[i].e), y = root(ends[j].e);
         if (x != y) parent[std::max(x, y)] = std::min(x, y);
       }
+    }
   // Per vertex (its root end): how many segment ends, and the first two. A segment whose two
   // ends are one vertex (an arc shorter than kJoin, where two pieces meet) is left out: the
   // chain through its vertex joins its neighbours at one point.
@@ -869,21 +873,24 @@ void PlaneRegion::build_bvh() {
 
 namespace {
 
-/// Lower bound of the distance from the query to anything in the node's box.
+/// Lower bound of the squared distance from the query to anything in the node's box (the
+/// larger of the boxes' separation and the box's distance from the query's line), squared so
+/// that the search needs no square root per node.
 template <class Node>
-inline double node_bound(const Node& nd, const Query& q) {
+inline double node_bound2(const Node& nd, const Query& q) {
   const double dx = std::max({nd.lo[0] - q.hi.x(), q.lo.x() - nd.hi[0], 0.0});
   const double dy = std::max({nd.lo[1] - q.hi.y(), q.lo.y() - nd.hi[1], 0.0});
-  double lb = std::sqrt(dx * dx + dy * dy);
+  double lb2 = dx * dx + dy * dy;
   if (q.line) {
     const double l = std::abs(q.n.x() * (nd.c[0] - q.a.x()) + q.n.y() * (nd.c[1] - q.a.y())) -
                      (q.n_abs.x() * nd.h[0] + q.n_abs.y() * nd.h[1]);
-    lb = std::max(lb, l);
+    if (l > 0.0) lb2 = std::max(lb2, l * l);
   }
-  return lb;
+  return lb2;
 }
 
-/// node_bound(nd, q) > d, without the square root: the tests of the threshold queries.
+/// True when the node's box lies farther than d from the query (node_bound2 > d^2, the box
+/// tests first): the tests of the threshold queries.
 template <class Node>
 inline bool node_farther(const Node& nd, const Query& q, double d) {
   const double dx = std::max(nd.lo[0] - q.hi.x(), q.lo.x() - nd.hi[0]);
@@ -927,14 +934,15 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
   bool found = false;
   struct Item {
     int node;
-    double lb;
+    double lb2;  ///< node_bound2
   };
+  auto reach2 = [&] { return (best + kTie) * (best + kTie); };  // nodes beyond cannot hold the nearest
   Item stack[96];
   int top = 0;
-  stack[top++] = {0, node_bound(nodes_[0], q)};
+  stack[top++] = {0, node_bound2(nodes_[0], q)};
   while (top > 0) {
     const Item it = stack[--top];
-    if (it.lb > best + kTie) continue;
+    if (it.lb2 > reach2()) continue;
     const Node& nd = nodes_[it.node];
     if (nd.left < 0) {
       for (int i = nd.first; i < nd.first + nd.count; ++i) {
@@ -969,13 +977,13 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
       }
       continue;
     }
-    const double ll = node_bound(nodes_[nd.left], q), lr = node_bound(nodes_[nd.right], q);
+    const double ll = node_bound2(nodes_[nd.left], q), lr = node_bound2(nodes_[nd.right], q), r2 = reach2();
     if (ll < lr) {
-      if (lr <= best + kTie) stack[top++] = {nd.right, lr};
-      if (ll <= best + kTie) stack[top++] = {nd.left, ll};
+      if (lr <= r2) stack[top++] = {nd.right, lr};
+      if (ll <= r2) stack[top++] = {nd.left, ll};
     } else {
-      if (ll <= best + kTie) stack[top++] = {nd.left, ll};
-      if (lr <= best + kTie) stack[top++] = {nd.right, lr};
+      if (ll <= r2) stack[top++] = {nd.left, ll};
+      if (lr <= r2) stack[top++] = {nd.right, lr};
     }
   }
   if (!found) out = Near();
