@@ -186,11 +186,11 @@ PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane
   HUGGER_CHECK_ARGUMENT(flatten > 0.0 && std::isfinite(flatten),
                         "PlaneRegion: the flattening tolerance must be positive, got " << flatten);
   build_pieces();
-  build_bvh();
   mark_crossings();
   drop_inner_segments();
   // The chains may move out by what the arcs' flattening left of the tolerance (at least half).
   simplify(flatten_ - std::min(arc_deviation_, 0.5 * flatten_));
+  build_bvh();
   build_cells();
 }
 
@@ -262,9 +262,7 @@ void PlaneRegion::simplify(double tol) {
     if (!used[e / 2] && degree[root(e)] != 2) walk(e);
   for (int e = 0; e < 2 * n; e += 2)
     if (!used[e / 2]) walk(e);
-  if (static_cast<int>(out.size()) == n) return;
   segments_.swap(out);
-  build_bvh();
 }
 
 void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<int>& seg, double tol,
@@ -497,87 +495,41 @@ void PlaneRegion::drop_inner_segments() {
   kept.reserve(segments_.size() + cuts_.size());
   std::size_t c = 0;
   std::vector<double> at;
-  // Leaf by leaf: the leaves come in nodes_ in the order of their segments (build_node lays
-  // out a node, its left subtree, then its right one), as the cuts are sorted. The parts kept
-  // stay in their segment's leaf, whose box can only shrink, and the boxes are refitted below.
-  for (Node& leaf : nodes_) {
-    if (leaf.left >= 0) continue;
-    const int first = static_cast<int>(kept.size());
-    for (int i = leaf.first; i < leaf.first + leaf.count; ++i) {
-      const Segment& s = segments_[i];
-      if (!pieces_[s.piece].crossed) {
-        kept.push_back(s);
-        continue;
-      }
-      // Its cuts (none unless crossed), then one part per interval between them.
-      const std::size_t first_cut = c;
-      at.assign(1, 0.0);
-      for (; c < cuts_.size() && cuts_[c].segment == i; ++c) at.push_back(cuts_[c].t);
-      at.push_back(1.0);
-      Vec2 from = s.a;
-      for (std::size_t k = 0; k + 1 < at.size(); ++k) {
-        const Vec2 to = k + 2 == at.size() ? s.b : Vec2(s.a + at[k + 1] * (s.b - s.a));
-        // The votes of the crossings at its two ends (1: inside, 0: on the boundary; -1: none).
-        const int before = k > 0 ? cuts_[first_cut + k - 1].after_inner : -1;
-        const int after = k + 2 < at.size() ? !cuts_[first_cut + k].after_inner : -1;
-        const bool drop = before >= 0 && (after < 0 || after == before) ? before == 1
-                          : after >= 0 && before < 0                     ? after == 1
-                                                                         : inner(0.5 * (from + to));
-        if (drop) {
-          ++dropped_;
-        } else {
-          Segment part = s;
-          part.a = from;
-          part.b = to;
-          kept.push_back(part);
-        }
-        from = to;
-      }
+  for (std::size_t i = 0; i < segments_.size(); ++i) {
+    const Segment& s = segments_[i];
+    if (!pieces_[s.piece].crossed) {
+      kept.push_back(s);
+      continue;
     }
-    leaf.first = first;
-    leaf.count = static_cast<int>(kept.size()) - first;
+    // Its cuts (none unless crossed), then one part per interval between them.
+    const std::size_t first_cut = c;
+    at.assign(1, 0.0);
+    for (; c < cuts_.size() && cuts_[c].segment == static_cast<int>(i); ++c) at.push_back(cuts_[c].t);
+    at.push_back(1.0);
+    Vec2 from = s.a;
+    for (std::size_t k = 0; k + 1 < at.size(); ++k) {
+      const Vec2 to = k + 2 == at.size() ? s.b : Vec2(s.a + at[k + 1] * (s.b - s.a));
+      // The votes of the crossings at its two ends (1: inside, 0: on the boundary; -1: none).
+      const int before = k > 0 ? cuts_[first_cut + k - 1].after_inner : -1;
+      const int after = k + 2 < at.size() ? !cuts_[first_cut + k].after_inner : -1;
+      const bool drop = before >= 0 && (after < 0 || after == before) ? before == 1
+                        : after >= 0 && before < 0                     ? after == 1
+                                                                       : inner(0.5 * (from + to));
+      if (drop) {
+        ++dropped_;
+      } else {
+        Segment part = s;
+        part.a = from;
+        part.b = to;
+        kept.push_back(part);
+      }
+      from = to;
+    }
   }
-  const bool changed = !cuts_.empty() || dropped_ > 0;
   cuts_.clear();
   cuts_.shrink_to_fit();
   segments_.swap(kept);
   for (auto& p : pieces_) p.crossed = false;  // resolved
-  if (changed) refit();
-}
-
-void PlaneRegion::refit() {
-  // Children come after their parent in nodes_: backwards, every child is fitted first. An
-  // empty leaf gets an empty box (no query reaches it).
-  extent_ = 0.0;
-  for (std::size_t id = nodes_.size(); id-- > 0;) {
-    Node& nd = nodes_[id];
-    nd.lo[0] = nd.lo[1] = kInf;
-    nd.hi[0] = nd.hi[1] = -kInf;
-    if (nd.left < 0) {
-      for (int i = nd.first; i < nd.first + nd.count; ++i) {
-        const Segment& s = segments_[i];
-        for (int a = 0; a < 2; ++a) {
-          nd.lo[a] = std::min({nd.lo[a], s.a[a], s.b[a]});
-          nd.hi[a] = std::max({nd.hi[a], s.a[a], s.b[a]});
-        }
-        extent_ = std::max({extent_, s.a.cwiseAbs().maxCoeff(), s.b.cwiseAbs().maxCoeff()});
-      }
-    } else {
-      for (const int child : {nd.left, nd.right})
-        for (int a = 0; a < 2; ++a) {
-          nd.lo[a] = std::min(nd.lo[a], nodes_[child].lo[a]);
-          nd.hi[a] = std::max(nd.hi[a], nodes_[child].hi[a]);
-        }
-      nd.first = nodes_[nd.left].first;
-      nd.count = nodes_[nd.right].first + nodes_[nd.right].count - nd.first;
-    }
-    const bool empty = !(nd.lo[0] <= nd.hi[0]);
-    for (int a = 0; a < 2; ++a) {
-      nd.c[a] = empty ? 0.0 : 0.5 * (nd.lo[a] + nd.hi[a]);
-      nd.h[a] = empty ? 0.0 : 0.5 * (nd.hi[a] - nd.lo[a]);
-    }
-  }
-  if (segments_.empty()) nodes_.clear();
 }
 
 void PlaneRegion::add_segment(const Vec2& a, const Vec2& b, const Vec2& outward, int piece) {
@@ -831,9 +783,9 @@ int PlaneRegion::build_node(int begin, int end, std::vector<Vec2>& centres, int 
     nd.c[a] = 0.5 * (nd.lo[a] + nd.hi[a]);
     nd.h[a] = 0.5 * (nd.hi[a] - nd.lo[a]);
   }
-  nd.first = begin;  // every node's segments are a range: a leaf's, or its subtree's
-  nd.count = end - begin;
   if (end - begin <= 4) {
+    nd.first = begin;
+    nd.count = end - begin;
     nodes_[id] = nd;
     return id;
   }
@@ -1181,66 +1133,93 @@ void PlaneRegion::mark_crossings() {
   {
     struct End {
       double x, y;
-      int piece;
+      int id;  ///< 2 * piece + (0: first, 1: last)
+      bool joined;
     };
     std::vector<End> ends;
     ends.reserve(2 * pieces_.size());
     for (std::size_t k = 0; k < piece_ends_.size(); ++k) {
       const auto& pe = piece_ends_[k];
       if (std::isnan(pe[0].x())) continue;  // a piece without segments
-      ends.push_back({pe[0].x(), pe[0].y(), static_cast<int>(k)});
-      ends.push_back({pe[1].x(), pe[1].y(), static_cast<int>(k)});
+      ends.push_back({pe[0].x(), pe[0].y(), static_cast<int>(2 * k), false});
+      ends.push_back({pe[1].x(), pe[1].y(), static_cast<int>(2 * k + 1), false});
     }
-    std::vector<int> idx(ends.size());
-    for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<int>(i);
-    std::sort(idx.begin(), idx.end(), [&](int a, int b) { return ends[a].x < ends[b].x || (ends[a].x == ends[b].x && a < b); });
-    std::vector<char> joined(ends.size(), 0);
-    for (std::size_t i = 0; i < idx.size(); ++i) {
-      const End& e = ends[idx[i]];
-      for (std::size_t j = i + 1; j < idx.size() && ends[idx[j]].x - e.x <= kJoin; ++j) {
-        const End& f = ends[idx[j]];
-        if (std::abs(f.y - e.y) <= kJoin && std::hypot(f.x - e.x, f.y - e.y) <= kJoin &&
-            (f.piece != e.piece || (idx[i] ^ idx[j]) == 1)) {
-          joined[idx[i]] = 1;
-          joined[idx[j]] = 1;
+    std::sort(ends.begin(), ends.end(), [](const End& a, const End& b) { return a.x < b.x || (a.x == b.x && a.id < b.id); });
+    for (std::size_t i = 0; i < ends.size(); ++i) {
+      End& e = ends[i];
+      for (std::size_t j = i + 1; j < ends.size() && ends[j].x - e.x <= kJoin; ++j) {
+        End& f = ends[j];
+        // Joined to another end: another piece's, or its own other end (a closed circle).
+        if (std::abs(f.y - e.y) <= kJoin && std::hypot(f.x - e.x, f.y - e.y) <= kJoin) {
+          e.joined = true;
+          f.joined = true;
         }
       }
     }
-    for (std::size_t i = 0; i < ends.size(); ++i)
-      if (!joined[i]) pieces_[ends[i].piece].crossed = true;
+    for (const End& e : ends)
+      if (!e.joined) pieces_[e.id / 2].crossed = true;
     piece_ends_.clear();
     piece_ends_.shrink_to_fit();
   }
   // Pieces of R's boundary never cross one another; a piece that another crosses (transversally,
-  // away from both their end points) has parts inside R, where the side test is unsafe.
-  for (std::size_t i = 0; i < n; ++i) {
-    const Segment& s = segments_[i];
-    const Query q(s.a, s.b);
-    // Each pair once: only segments after i (a node whose range ends at or before i is skipped).
-    visit_segments([&](const Node& nd) {
-                     return nd.first + nd.count <= static_cast<int>(i) + 1 || nd.lo[0] - q.hi.x() > kTouch ||
-                            q.lo.x() - nd.hi[0] > kTouch || nd.lo[1] - q.hi.y() > kTouch || q.lo.y() - nd.hi[1] > kTouch;
-                   },
-                   [&](int j) {
-                     if (static_cast<std::size_t>(j) <= i) return false;
-                     const Segment& t = segments_[j];
-                     if (t.piece == s.piece) return false;
-                     const Vec2 d1 = s.b - s.a, d2 = t.b - t.a, w = t.a - s.a;
-                     const double denom = cross2(d1, d2);
-                     if (std::abs(denom) <= 1e-9 * d1.norm() * d2.norm()) return false;  // parallel: a junction
-                     const double x = cross2(w, d2) / denom, y = cross2(w, d1) / denom;
-                     const double ex = 1e-9, ey = 1e-9;
-                     if (x > ex && x < 1.0 - ex && y > ey && y < 1.0 - ey) {
-                       pieces_[s.piece].crossed = true;
-                       pieces_[t.piece].crossed = true;
-                       // The part of s beyond the crossing lies on t's inner side when s runs
-                       // against t's outward normal there, and likewise for t.
-                       cuts_.push_back({static_cast<int>(i), x, d1.dot(t.normal) < 0.0});
-                       cuts_.push_back({j, y, d2.dot(s.normal) < 0.0});
-                     }
-                     return false;
-                   });
+  // away from both their end points) has parts inside R, where the side test is unsafe. The
+  // pairs to test: segments whose boxes (grown by kTouch) overlap, found on a grid of about one
+  // cell per segment; a pair is tested in the one cell that holds the low corner of the overlap.
+  if (n < 2) return;
+  Vec2 lo = segments_[0].a, hi = lo;
+  for (const Segment& sg : segments_) {
+    lo = lo.cwiseMin(sg.a.cwiseMin(sg.b));
+    hi = hi.cwiseMax(sg.a.cwiseMax(sg.b));
   }
+  const int g = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(n))), 1, 256);
+  const Vec2 cell = ((hi - lo) / g).cwiseMax(Vec2::Constant(1e-300));
+  auto cell_of = [&](double x, int axis) {
+    return std::clamp(static_cast<int>(std::floor((x - lo[axis]) / cell[axis])), 0, g - 1);
+  };
+  std::vector<std::array<Vec2, 2>> box(n);  // each segment's box, grown by kTouch
+  for (std::size_t i = 0; i < n; ++i) {
+    const Segment& sg = segments_[i];
+    box[i] = {Vec2(sg.a.cwiseMin(sg.b).array() - kTouch), Vec2(sg.a.cwiseMax(sg.b).array() + kTouch)};
+  }
+  // The segments of each cell (compressed rows: counted, then filled).
+  std::vector<int> start(static_cast<std::size_t>(g) * g + 1, 0), items;
+  for (int pass = 0; pass < 2; ++pass) {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i)
+      for (int cy = cell_of(box[i][0].y(), 1); cy <= cell_of(box[i][1].y(), 1); ++cy)
+        for (int cx = cell_of(box[i][0].x(), 0); cx <= cell_of(box[i][1].x(), 0); ++cx) {
+          const int c = cy * g + cx;
+          if (pass == 0) ++start[c + 1];
+          else items[fill[c]++] = static_cast<int>(i);
+        }
+    if (pass == 0) {
+      for (std::size_t c = 0; c + 1 < start.size(); ++c) start[c + 1] += start[c];
+      items.resize(static_cast<std::size_t>(start.back()));
+    }
+  }
+  for (int c = 0; c < g * g; ++c)
+    for (int p = start[c]; p < start[c + 1]; ++p)
+      for (int q = p + 1; q < start[c + 1]; ++q) {
+        const int i = std::min(items[p], items[q]), j = std::max(items[p], items[q]);
+        const Segment &s = segments_[i], &t = segments_[j];
+        if (t.piece == s.piece) continue;
+        const Vec2 olo = box[i][0].cwiseMax(box[j][0]), ohi = box[i][1].cwiseMin(box[j][1]);
+        if (olo.x() > ohi.x() || olo.y() > ohi.y()) continue;              // the boxes do not overlap
+        if (cell_of(olo.y(), 1) * g + cell_of(olo.x(), 0) != c) continue;  // tested in another cell
+        const Vec2 d1 = s.b - s.a, d2 = t.b - t.a, w = t.a - s.a;
+        const double denom = cross2(d1, d2);
+        if (std::abs(denom) <= 1e-9 * d1.norm() * d2.norm()) continue;  // parallel: a junction
+        const double x = cross2(w, d2) / denom, y = cross2(w, d1) / denom;
+        const double ex = 1e-9, ey = 1e-9;
+        if (x > ex && x < 1.0 - ex && y > ey && y < 1.0 - ey) {
+          pieces_[s.piece].crossed = true;
+          pieces_[t.piece].crossed = true;
+          // The part of s beyond the crossing lies on t's inner side when s runs against t's
+          // outward normal there, and likewise for t.
+          cuts_.push_back({i, x, d1.dot(t.normal) < 0.0});
+          cuts_.push_back({j, y, d2.dot(s.normal) < 0.0});
+        }
+      }
 }
 
 bool PlaneRegion::inside_3d(const Vec2& x) const {

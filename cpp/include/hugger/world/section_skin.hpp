@@ -123,7 +123,7 @@ class PlaneRegion {
     double lo[2], hi[2];
     double c[2], h[2];  ///< centre and half extent, (lo + hi) / 2 and (hi - lo) / 2
     int left = -1, right = -1;  ///< children; -1 in a leaf
-    int first = 0, count = 0;   ///< its segments' range: a leaf's (none in a leaf emptied by the build), or its subtree's
+    int first = 0, count = 0;   ///< a leaf's segments
   };
   /// Depth first over the 2D tree (left before right): skips every node `skip(node)` is true of
   /// and calls `visit(i)` on each segment of the leaves reached, stopping when `visit` returns
@@ -132,8 +132,6 @@ class PlaneRegion {
   bool visit_segments(Skip&& skip, Visit&& visit) const;
   void build_pieces();
   void build_bvh();
-  /// Fits every node's box to its segments again (leaves keep their segments' ranges).
-  void refit();
   /// Replaces the chains of segments (joined end to end, two at each inner vertex) by fewer
   /// segments that lie outside them, behind which every original vertex lies within `tol`.
   void simplify(double tol);
