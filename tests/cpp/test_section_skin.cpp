@@ -476,3 +476,55 @@ TEST(SectionSkin, BoundaryLiesJustOutsideRIn3D) {
   EXPECT_GT(samples, 10000);
   EXPECT_LE(worst_out, kFlatten + 1e-12);
 }
+
+// Boundary following in closed form (the level curve walked exactly) against the generic
+// marching procedure, on random tips just outside R in random planes: where the closed form
+// answers, its head lies on the level curve and `step` from the tip (to rounding), and within
+// 2% of a step of the generic head (whose projections stop within 10% of the level).
+TEST(SectionSkin, FollowBoundaryMatchesTheGenericWalk) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  long asked = 0, closed = 0;
+  double worst = 0.0;
+  for (const test::Mesh& m : {test::icosphere(4, Vec3::Constant(0.04)), test::curvy(4), test::box(Vec3(0.03, 0.02, 0.05))}) {
+    auto object = std::make_shared<Object>(m.vertices, m.faces);
+    const SectionSkin skin(object);
+    const Aabb box = object->bounds();
+    for (int k = 0; k < 20; ++k) {
+      const FingerPlane pl = test::random_plane(rng, box.centre() + 0.3 * Vec3(U(rng) - 0.5, U(rng) - 0.5, U(rng) - 0.5).cwiseProduct(box.extent()));
+      const double r = k % 2 == 0 ? 0.004 : 0.0;
+      const PlaneRegion* R = skin.region(pl, r);
+      ASSERT_NE(R, nullptr);
+      if (R->segments().empty()) continue;
+      for (int q = 0; q < 40; ++q) {
+        // A tip at a random gap up to twice the level off a random boundary point.
+        const auto& sg = R->segments()[static_cast<std::size_t>(U(rng) * R->segments().size()) % R->segments().size()];
+        FollowRequest fr;
+        fr.plane = pl;
+        fr.radius = r;
+        fr.step = 1e-3;
+        fr.level = 5e-5;
+        fr.tip = sg.a + U(rng) * (sg.b - sg.a) + (0.1 + 1.9 * U(rng)) * fr.level * sg.normal;
+        if (R->inside(fr.tip)) continue;
+        ++asked;
+        Vec2 head;
+        int pieces = 0;
+        if (!R->follow(fr.tip, fr.level, fr.step, 16 * fr.step, fr.root, fr.reach, fr.front, &head, &pieces)) continue;
+        ++closed;
+        const Touch t = skin.link(pl, head, head, r);
+        EXPECT_NEAR(t.gap, fr.level, 1e-9) << "plane " << k << " tip " << q;
+        const double chord = (head - fr.tip).norm();
+        EXPECT_TRUE(std::abs(chord - fr.step) <= 1e-9 || chord < fr.step) << chord;
+        const FollowResult g = skin.Sensing::follow_boundary(fr);  // the generic procedure
+        if (g.steps > 0 && std::abs((g.head - fr.tip).norm() - fr.step) < 1e-6 && std::abs(chord - fr.step) < 1e-9) {
+          worst = std::max(worst, (g.head - head).norm());
+          EXPECT_LE((g.head - head).norm(), 0.02 * fr.step) << "plane " << k << " tip " << q;
+        }
+      }
+    }
+  }
+  std::printf("  %ld tips: %ld walked in closed form, farthest from the generic head %.3g m (step 1 mm)\n", asked,
+              closed, worst);
+  EXPECT_GT(asked, 1000);
+  EXPECT_GT(closed, asked / 2);
+}

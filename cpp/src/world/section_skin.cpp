@@ -192,6 +192,172 @@ PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane
   simplify(flatten_ - std::min(arc_deviation_, 0.5 * flatten_));
   build_bvh();
   build_cells();
+  link_segments();
+}
+
+void PlaneRegion::link_segments() {
+  // Each segment walked along R's boundary with R on the left (the direction of its normal
+  // turned a quarter to the left) runs from its tail to its head; a segment's next is the one
+  // whose tail is its head, to the bit (a chain's segments share their end points exactly).
+  const int n = static_cast<int>(segments_.size());
+  next_.assign(n, -1);
+  auto head_of = [&](const Segment& s) {
+    const Vec2 t(-s.normal.y(), s.normal.x());
+    return (s.b - s.a).dot(t) >= 0.0 ? s.b : s.a;
+  };
+  struct Tail {
+    double x, y;
+    int segment;
+    bool operator<(const Tail& o) const { return x < o.x || (x == o.x && (y < o.y || (y == o.y && segment < o.segment))); }
+  };
+  std::vector<Tail> tails(n);
+  for (int i = 0; i < n; ++i) {
+    const Segment& s = segments_[i];
+    const Vec2 tail = head_of(s) == s.b ? s.a : s.b;
+    tails[i] = {tail.x(), tail.y(), i};
+  }
+  std::sort(tails.begin(), tails.end());
+  for (int i = 0; i < n; ++i) {
+    const Vec2 h = head_of(segments_[i]);
+    const auto it = std::lower_bound(tails.begin(), tails.end(), Tail{h.x(), h.y(), -1});
+    // Exactly one segment leaves this point (two: a junction, where the walk does not guess).
+    if (it != tails.end() && it->x == h.x() && it->y == h.y() && it->segment != i &&
+        (it + 1 == tails.end() || it[1].x != h.x() || it[1].y != h.y()))
+      next_[i] = it->segment;
+  }
+}
+
+bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_length, const Vec2& root,
+                         double reach, double lowest, Vec2* head, int* pieces) const {
+  // The level curve {gap = level} outside R is R's boundary moved out by `level`: each segment
+  // moved along its normal, joined at a convex vertex by an arc of radius `level` about it, cut
+  // where two moved segments cross at a concave one. Walked from the tip's projection onto it
+  // (along the gap's gradient) with R on the left, to the first point `step` from the tip.
+  *pieces = 0;
+  if (nodes_.empty() || !(level > 0.0) || !(step > 0.0)) return false;
+  const Near nr = nearest(tip, tip, kInf);
+  if (!(nr.distance > 0.0) || !std::isfinite(nr.distance) || nr.segment < 0 || inside_from(nr, tip)) return false;
+  const double l = level;
+  auto tangent = [](const Vec2& n) { return Vec2(-n.y(), n.x()); };
+  auto head_of = [&](int k) {
+    const Segment& s = segments_[k];
+    return (s.b - s.a).dot(tangent(s.normal)) >= 0.0 ? s.b : s.a;
+  };
+  auto acceptable = [&](const Vec2& x) { return (x - root).norm() <= reach && x.y() >= lowest; };
+  double walked = 0.0;
+  Vec2 at;  // the walk's current point on the level curve
+  // The first point past which the walk leaves the circle |x - tip| = step, along a piece from
+  // `from`: a segment to `to`, or (arc) the arc about `c` turning left through `sweep` radians.
+  auto cross_segment = [&](const Vec2& from, const Vec2& to, double* t) {
+    const Vec2 d = to - from, w = from - tip;
+    const double a = d.squaredNorm(), b = w.dot(d), c = w.squaredNorm() - step * step;
+    if (!(a > 0.0)) return false;
+    const double disc = b * b - a * c;
+    if (disc < 0.0) return false;
+    const double r = (-b + std::sqrt(disc)) / a;
+    if (!(r >= 0.0 && r <= 1.0)) return false;
+    *t = r;
+    return true;
+  };
+  int k = nr.segment;
+  const Segment* s = &segments_[k];
+  const Vec2 g = (tip - nr.on_region) / nr.distance;
+  at = nr.on_region + l * g;
+  if (!acceptable(at)) return false;
+  // Where the tip's nearest point is a vertex, the walk starts on its arc: finish the arc first.
+  const Vec2 h0 = head_of(k);
+  const bool on_head = (nr.on_region - h0).squaredNorm() <= kJoin * kJoin;
+  const bool on_tail = !on_head && (nr.on_region - (h0 == s->b ? s->a : s->b)).squaredNorm() <= kJoin * kJoin;
+  if (on_tail || on_head) {
+    // Turning left from g to the normal of the segment the arc leads onto.
+    const int onto = on_head ? next_[k] : k;
+    if (onto < 0) return false;
+    const Vec2 n1 = segments_[onto].normal, c = on_head ? h0 : nr.on_region;
+    const double sweep = std::atan2(cross2(g, n1), g.dot(n1));
+    if (sweep < -1e-9) return false;  // not a convex corner between them: the generic walk decides
+    if (sweep > 0.0) {
+      // The arc's point `step` from the tip, if any, by bisection on the angle (the distance
+      // from the tip grows along the arc here only where it leaves the circle).
+      const double th0 = std::atan2(g.y(), g.x());
+      auto arc_at = [&](double a) { return Vec2(c + l * Vec2(std::cos(th0 + a), std::sin(th0 + a))); };
+      if ((arc_at(sweep) - tip).norm() >= step) {
+        double lo = 0.0, hi = sweep;
+        for (int it = 0; it < 60; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          ((arc_at(mid) - tip).norm() >= step ? hi : lo) = mid;
+        }
+        const Vec2 x = arc_at(hi);
+        if (!acceptable(x)) return false;
+        *head = x;
+        *pieces = 1;
+        return true;
+      }
+      walked += l * sweep;
+      at = arc_at(sweep);
+    }
+    k = onto;
+    s = &segments_[k];
+    ++*pieces;
+  }
+  // Then segment by segment: the moved segment from `at` to its end (its head moved out, or the
+  // crossing with the next moved segment at a concave vertex), then the arc at a convex vertex.
+  for (int guard = 0; guard < 4096; ++guard) {
+    const Vec2 n = s->normal, t = tangent(n), hk = head_of(k);
+    const int nx = next_[k];
+    Vec2 end = hk + l * n;
+    double sweep = 0.0;
+    if (nx >= 0) {
+      const Vec2 n1 = segments_[nx].normal;
+      const double turn = cross2(t, tangent(n1)), dot = n.dot(n1);
+      if (turn < 0.0) {
+        // Concave: the moved segments cross at hk + l (n + n1) / (1 + n . n1).
+        if (!(1.0 + dot > 1e-6)) return false;
+        end = hk + (l / (1.0 + dot)) * (n + n1);
+      } else {
+        sweep = std::atan2(turn, dot);
+      }
+    }
+    if ((end - at).dot(t) < 0.0) return false;  // cut back past the walk: the generic walk decides
+    double tc;
+    if (cross_segment(at, end, &tc)) {
+      const Vec2 x = at + tc * (end - at);
+      if (!acceptable(x)) return false;
+      *head = x;
+      ++*pieces;
+      return true;
+    }
+    walked += (end - at).norm();
+    at = end;
+    // Out of the finger's reach or behind the palm, or a junction of pieces: the generic walk
+    // decides (it stops at its last acceptable sample, or steps across the junction).
+    if (!acceptable(at) || nx < 0) return false;
+    if (walked >= max_length) {
+      *head = at;  // as far as the generic walk would go without reaching the chord
+      return true;
+    }
+    if (sweep > 0.0) {
+      const double th0 = std::atan2(n.y(), n.x());
+      auto arc_at = [&](double a) { return Vec2(hk + l * Vec2(std::cos(th0 + a), std::sin(th0 + a))); };
+      if ((arc_at(sweep) - tip).norm() >= step) {
+        double lo = 0.0, hi = sweep;
+        for (int it = 0; it < 60; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          ((arc_at(mid) - tip).norm() >= step ? hi : lo) = mid;
+        }
+        const Vec2 x = arc_at(hi);
+        if (!acceptable(x)) return false;
+        *head = x;
+        ++*pieces;
+        return true;
+      }
+      walked += l * sweep;
+      at = arc_at(sweep);
+    }
+    k = nx;
+    s = &segments_[k];
+    ++*pieces;
+  }
+  return false;
 }
 
 void PlaneRegion::simplify(double tol) {
@@ -912,6 +1078,7 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
           out.distance = d;
           out.on_query = c1;
           out.on_region = c2;
+          out.segment = i;
         } else {
           out.normal_sum += s.normal;
           ++out.ties;
@@ -920,6 +1087,7 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
             out.distance = d;
             out.on_query = c1;
             out.on_region = c2;
+            out.segment = i;
           }
         }
         if (d <= kTouch) {
@@ -1555,6 +1723,18 @@ RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
   // No rotation within max_angle frees the link, unless a window too narrow to trust was refused:
   // the generic search decides those.
   if (unsure) return Sensing::rotate_until_free(req);
+  return out;
+}
+
+FollowResult SectionSkin::follow_boundary(const FollowRequest& req) const {
+  const PlaneRegion* R = region(req.plane, req.radius);
+  FollowResult out;
+  // The generic walk goes at most 48 steps of a third of `step`.
+  if (R && R->follow(req.tip, req.level, req.step, 16.0 * req.step, req.root, req.reach, req.front + req.radius,
+                     &out.head, &out.steps))
+    out.gap = req.level;
+  else
+    out = Sensing::follow_boundary(req);
   return out;
 }
 

@@ -9,9 +9,12 @@
 /// edges (ellipse arcs) and of the spheres of radius r about its vertices (circle arcs), each
 /// piece kept only where its feature can be the nearest one. Every piece lies in R (its points
 /// are at distance r from a feature of O) and together they cover R's boundary; arcs are
-/// flattened *outward* (tangent polygons, at most `flatten` metres out), so the pieces form a
-/// barrier that no segment starting outside R can cross unseen. A 2D BVH over the pieces answers
-/// every query of a link in the plane in a few hundred instructions, nearly independently of the
+/// flattened *outward* (tangent polygons, at most flatten / 2 out), so the pieces form a barrier
+/// that no segment starting outside R can cross unseen. Parts of pieces that other pieces cross
+/// into R are dropped; the pieces left, joined end to end into chains, are simplified outward
+/// with what remains of the tolerance (every point at most `flatten` outside R), so that their
+/// number follows R's curvature rather than the mesh. A 2D BVH over the segments answers every
+/// query of a link in the plane in about a thousand instructions, nearly independently of the
 /// mesh size. Gaps it reports are measured within the plane (never smaller than the 3D gap).
 #pragma once
 
@@ -32,12 +35,13 @@ namespace hugger {
 /// The region R of one plane for one link radius (see the file comment). Immutable once built.
 class PlaneRegion {
  public:
-  /// One flattened piece of R's boundary: a segment in plane coordinates with its outward unit
-  /// normal (pointing away from R) and the feature of O it comes from.
+  /// One segment of R's boundary: a segment in plane coordinates with its outward unit normal
+  /// (pointing away from R) and the feature of O it comes from.
   struct Segment {
     Vec2 a = Vec2::Zero(), b = Vec2::Zero();
     Vec2 normal = Vec2::UnitX();
-    int piece = 0;  ///< index of the feature's piece (one polyline per face, edge or vertex arc)
+    int piece = 0;  ///< index of the feature's piece (one polyline per face, edge or vertex arc);
+                    ///< for a simplified segment, the piece of the first segment it replaces
   };
   enum class Kind : std::uint8_t { kFace, kEdge, kVertex };
   struct Piece {
@@ -53,10 +57,11 @@ class PlaneRegion {
     Vec2 normal_sum = Vec2::Zero();  ///< sum of the outward normals of the pieces nearest (ties)
     int ties = 0;                    ///< how many segments are nearest (several at a shared end point)
     bool at_end = false;             ///< the nearest point is an end point of the (first) nearest segment
+    int segment = -1;                ///< index (segments()) of the segment holding on_region
   };
 
-  /// Builds R for the plane and `radius` (>= 0). `flatten` (> 0): how far outside the exact arcs
-  /// their tangent polygons may lie (metres).
+  /// Builds R for the plane and `radius` (>= 0). `flatten` (> 0): how far outside R the boundary
+  /// segments may lie (metres): arcs' tangent polygons and the simplified chains together.
   PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane& plane, double radius, double flatten);
 
   /// Nearest boundary piece to segment [a, b] (a == b: a point) within `cap`; distance is +inf
@@ -108,6 +113,15 @@ class PlaneRegion {
   bool inside_from(const Near& near, const Vec2& x) const;
   /// The exact 3D test (x in R: within `radius` of O, or inside O).
   bool inside_3d(const Vec2& x) const;
+  /// Boundary following in closed form: from the projection of `tip` (outside R) onto the level
+  /// curve {in-plane gap = level} (R's boundary moved out by `level`: moved segments, arcs of
+  /// radius `level` at convex vertices, cut at concave ones), walks it with R on the left to the
+  /// first point `step` from the tip, or `max_length` along it, and writes it to `head` (with
+  /// the pieces walked). False, leaving the walk to the generic procedure, where the tip is not
+  /// outside R, the walk meets a junction of pieces or a corner it cannot place, or a point it
+  /// reaches is farther than `reach` from `root` or below `lowest`.
+  bool follow(const Vec2& tip, double level, double step, double max_length, const Vec2& root, double reach,
+              double lowest, Vec2* head, int* pieces) const;
 
   const FingerPlane& plane() const { return plane_; }
   double radius() const { return radius_; }
@@ -149,6 +163,8 @@ class PlaneRegion {
   /// The grid of cells that no segment touches, each labelled inside or outside R (one inside
   /// test per connected group of such cells: no boundary separates two of its points).
   void build_cells();
+  /// next_: each segment's successor along the boundary (R on the left), or -1 at a junction.
+  void link_segments();
   /// Adds the arcs of x(t) = centre + U cos t + V sin t over the allowed intervals of `allowed`
   /// ([0, 2 pi), sorted, disjoint) as tangent polygons; `out3(t)`: the in-plane outward direction.
   template <class Outward>
@@ -160,6 +176,7 @@ class PlaneRegion {
   FingerPlane plane_;
   double radius_ = 0.0, flatten_ = 1e-6;
   std::vector<Segment> segments_;
+  std::vector<int> next_;  ///< link_segments()
   std::vector<Piece> pieces_;
   std::vector<Node> nodes_;
   std::vector<int> order_;                       ///< while building the BVH
@@ -192,7 +209,7 @@ class PlaneRegion {
 /// to the mesh world. Thread-safe: regions are built under a lock and then only read.
 class SectionSkin final : public Sensing {
  public:
-  /// `flatten`: the outward flattening tolerance of arcs (metres, > 0).
+  /// `flatten`: how far outside R the boundary may lie (metres, > 0; PlaneRegion).
   explicit SectionSkin(std::shared_ptr<const Object> object, double flatten = 1e-6);
   ~SectionSkin() override;
 
@@ -217,6 +234,9 @@ class SectionSkin final : public Sensing {
   /// Exactly, by PlaneRegion::depth_within: no point of the axis deeper in R than `allow`.
   bool link_depth_within(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                          double allow) const override;
+  /// In closed form where it can (PlaneRegion::follow: the level curve walked exactly), else
+  /// the generic procedure on this skin's in-plane gaps.
+  FollowResult follow_boundary(const FollowRequest& req) const override;
   /// In closed form: the directions in which the link meets R are the union of the spans of R's
   /// boundary pieces seen from the pivot (and, for the end, the half-plane behind the front);
   /// the smallest rotation out of the blocked run containing the link's direction, plus a
