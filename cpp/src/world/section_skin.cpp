@@ -259,6 +259,29 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
     *t = r;
     return true;
   };
+  // The arc of radius l about c from direction d0, turning left through `sweep`: where it leaves
+  // the circle |x - tip| = step, the head (by bisection on the angle: the distance from the tip
+  // grows along the arc where it leaves the circle; 1, or -1 if that point is not acceptable),
+  // else the walk goes on from the arc's end (0).
+  auto arc = [&](const Vec2& c, const Vec2& d0, double sweep) {
+    const double th0 = std::atan2(d0.y(), d0.x());
+    auto arc_at = [&](double a) { return Vec2(c + l * Vec2(std::cos(th0 + a), std::sin(th0 + a))); };
+    if ((arc_at(sweep) - tip).norm() >= step) {
+      double lo = 0.0, hi = sweep;
+      for (int it = 0; it < 60; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        ((arc_at(mid) - tip).norm() >= step ? hi : lo) = mid;
+      }
+      const Vec2 x = arc_at(hi);
+      if (!acceptable(x)) return -1;
+      *head = x;
+      ++*pieces;
+      return 1;
+    }
+    walked += l * sweep;
+    at = arc_at(sweep);
+    return 0;
+  };
   int k = nr.segment;
   const Segment* s = &segments_[k];
   const Vec2 g = (tip - nr.on_region) / nr.distance;
@@ -276,24 +299,8 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
     const double sweep = std::atan2(cross2(g, n1), g.dot(n1));
     if (sweep < -1e-9) return false;  // not a convex corner between them: the generic walk decides
     if (sweep > 0.0) {
-      // The arc's point `step` from the tip, if any, by bisection on the angle (the distance
-      // from the tip grows along the arc here only where it leaves the circle).
-      const double th0 = std::atan2(g.y(), g.x());
-      auto arc_at = [&](double a) { return Vec2(c + l * Vec2(std::cos(th0 + a), std::sin(th0 + a))); };
-      if ((arc_at(sweep) - tip).norm() >= step) {
-        double lo = 0.0, hi = sweep;
-        for (int it = 0; it < 60; ++it) {
-          const double mid = 0.5 * (lo + hi);
-          ((arc_at(mid) - tip).norm() >= step ? hi : lo) = mid;
-        }
-        const Vec2 x = arc_at(hi);
-        if (!acceptable(x)) return false;
-        *head = x;
-        *pieces = 1;
-        return true;
-      }
-      walked += l * sweep;
-      at = arc_at(sweep);
+      const int done = arc(c, g, sweep);
+      if (done != 0) return done > 0;
     }
     k = onto;
     s = &segments_[k];
@@ -336,22 +343,8 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
       return true;
     }
     if (sweep > 0.0) {
-      const double th0 = std::atan2(n.y(), n.x());
-      auto arc_at = [&](double a) { return Vec2(hk + l * Vec2(std::cos(th0 + a), std::sin(th0 + a))); };
-      if ((arc_at(sweep) - tip).norm() >= step) {
-        double lo = 0.0, hi = sweep;
-        for (int it = 0; it < 60; ++it) {
-          const double mid = 0.5 * (lo + hi);
-          ((arc_at(mid) - tip).norm() >= step ? hi : lo) = mid;
-        }
-        const Vec2 x = arc_at(hi);
-        if (!acceptable(x)) return false;
-        *head = x;
-        ++*pieces;
-        return true;
-      }
-      walked += l * sweep;
-      at = arc_at(sweep);
+      const int done = arc(hk, n, sweep);
+      if (done != 0) return done > 0;
     }
     k = nx;
     s = &segments_[k];
