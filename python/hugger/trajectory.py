@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import os
 import struct
@@ -310,8 +311,10 @@ def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, source: str) -> np.
         if declared > info.file_size - member.tell():
             raise ValueError(f"{key}: its header declares {declared} bytes of data but the file holds "
                              f"{info.file_size - member.tell()}")
-    with zf.open(info) as member:
-        return fmt.read_array(member, allow_pickle=False)
+    # The whole member, so that zipfile checks its CRC-32 (reading just the array's bytes can stop
+    # short of the end of a compressed member, where the check is made): a damaged member is
+    # refused rather than read as other numbers.
+    return fmt.read_array(io.BytesIO(zf.read(info)), allow_pickle=False)
 
 
 def _check_hand_sizes(hand: dict[str, Any], m: int, n: int, source: str) -> None:
