@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import hashlib
-import io
 import json
 import os
 import struct
@@ -308,13 +307,17 @@ def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, source: str) -> np.
         if dtype.hasobject:
             raise ValueError(f"{key} holds pickled Python objects ({dtype}); refused, never unpickled")
         declared = int(np.prod(shape, dtype=object)) * dtype.itemsize
-        if declared > info.file_size - member.tell():
+        if declared != info.file_size - member.tell():
             raise ValueError(f"{key}: its header declares {declared} bytes of data but the file holds "
                              f"{info.file_size - member.tell()}")
-    # The whole member, so that zipfile checks its CRC-32 (reading just the array's bytes can stop
-    # short of the end of a compressed member, where the check is made): a damaged member is
-    # refused rather than read as other numbers.
-    return fmt.read_array(io.BytesIO(zf.read(info)), allow_pickle=False)
+    with zf.open(info) as member:
+        array = fmt.read_array(member, allow_pickle=False)
+        # On to the member's end, where zipfile checks its CRC-32 (reading just the array's bytes
+        # can stop short of it in a compressed member): a damaged member is refused rather than
+        # read as other numbers. Nothing is left to read but the end of the stream.
+        if member.read(1):
+            raise ValueError(f"{key}: data beyond its array")
+    return array
 
 
 def _check_hand_sizes(hand: dict[str, Any], m: int, n: int, source: str) -> None:

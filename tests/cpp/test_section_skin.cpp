@@ -528,3 +528,36 @@ TEST(SectionSkin, FollowBoundaryMatchesTheGenericWalk) {
   EXPECT_GT(asked, 1000);
   EXPECT_GT(closed, asked / 2);
 }
+
+// Boundary following where another part of R comes nearer than the level: two boxes with a slot
+// between their regions 15 um wide (r = 1 mm, level 50 um), the tip in the slot. The chain the
+// walk offsets is not the only boundary near the head: the head it hands back must still have
+// the level for gap (else no step, as the generic walk gives), never a gap below zero.
+TEST(SectionSkin, FollowBoundaryKeepsItsLevelInANarrowSlot) {
+  const double r = 0.001, level = 5e-5, slot = 2 * r + 0.3 * level;
+  const test::Mesh A = test::box(Vec3(0.01, 0.01, 0.01)), B = test::box(Vec3(0.01, 0.01, 0.01), Vec3(0.02 + slot, 0, 0));
+  test::Mesh M;
+  M.vertices.resize(A.vertices.rows() + B.vertices.rows(), 3);
+  M.faces.resize(A.faces.rows() + B.faces.rows(), 3);
+  M.vertices << A.vertices, B.vertices;
+  M.faces << A.faces, (B.faces.array() + A.vertices.rows()).matrix();
+  auto object = std::make_shared<Object>(M.vertices, M.faces);
+  FingerPlane pl;
+  pl.origin = Vec3::Zero();
+  pl.u = Vec3::UnitX();
+  pl.p = Vec3::UnitY();
+  const SectionSkin skin(object);
+  FollowRequest fr;
+  fr.plane = pl;
+  fr.radius = r;
+  fr.step = 1e-3;
+  fr.level = level;
+  for (const double y : {-0.005, 0.0, 0.004}) {
+    fr.tip = Vec2(0.01 + r + 0.25 * level, y);  // in the slot, outside R
+    ASSERT_GT(skin.link(pl, fr.tip, fr.tip, r).gap, 0.0);
+    const FollowResult res = skin.follow_boundary(fr);
+    const double gap = skin.link(pl, res.head, res.head, r).gap;
+    EXPECT_GE(gap, 0.0) << "y " << y;
+    if (res.head != fr.tip) EXPECT_NEAR(gap, level, 0.1 * level) << "y " << y;
+  }
+}

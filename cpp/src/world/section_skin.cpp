@@ -244,6 +244,13 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
     return (s.b - s.a).dot(tangent(s.normal)) >= 0.0 ? s.b : s.a;
   };
   auto acceptable = [&](const Vec2& x) { return (x - root).norm() <= reach && x.y() >= lowest; };
+  // The walk offsets the chain it is on, not the rest of the boundary: another part of it may come
+  // nearer the head than the level (a narrow gap between two parts of R). A head is kept only if
+  // its measured gap is the level to within a tenth, as the generic walk's projections are.
+  auto on_level = [&](const Vec2& x) {
+    const Near hn = nearest(x, x, 2.0 * level);
+    return std::isfinite(hn.distance) && std::abs(hn.distance - level) <= 0.1 * level && !inside_from(hn, x);
+  };
   double walked = 0.0;
   Vec2 at;  // the walk's current point on the level curve
   // The first point past which the walk leaves the circle |x - tip| = step, along a piece from
@@ -273,7 +280,7 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
         ((arc_at(mid) - tip).norm() >= step ? hi : lo) = mid;
       }
       const Vec2 x = arc_at(hi);
-      if (!acceptable(x)) return -1;
+      if (!acceptable(x) || !on_level(x)) return -1;
       *head = x;
       ++*pieces;
       return 1;
@@ -328,7 +335,7 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
     double tc;
     if (cross_segment(at, end, &tc)) {
       const Vec2 x = at + tc * (end - at);
-      if (!acceptable(x)) return false;
+      if (!acceptable(x) || !on_level(x)) return false;
       *head = x;
       ++*pieces;
       return true;
@@ -339,6 +346,7 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
     // decides (it stops at its last acceptable sample, or steps across the junction).
     if (!acceptable(at) || nx < 0) return false;
     if (walked >= max_length) {
+      if (!on_level(at)) return false;
       *head = at;  // as far as the generic walk would go without reaching the chord
       return true;
     }
@@ -412,7 +420,10 @@ void PlaneRegion::simplify(double tol) {
       const int v = root(other);
       if (degree[v] != 2) break;
       const int next = first[v] == other ? second[v] : first[v];
-      if (used[next / 2]) break;  // a closed loop, back at its start
+      if (used[next / 2]) {
+        if (next == e0) P.back() = P[0];  // a closed loop, back at its start: the same point
+        break;
+      }
       e = next;
     }
     simplify_chain(P, seg, tol, &out);
@@ -668,12 +679,12 @@ void PlaneRegion::drop_inner_segments() {
     Vec2 from = s.a;
     for (std::size_t k = 0; k + 1 < at.size(); ++k) {
       const Vec2 to = k + 2 == at.size() ? s.b : Vec2(s.a + at[k + 1] * (s.b - s.a));
-      // The votes of the crossings at its two ends (1: inside, 0: on the boundary; -1: none).
-      const int before = k > 0 ? cuts_[first_cut + k - 1].after_inner : -1;
-      const int after = k + 2 < at.size() ? !cuts_[first_cut + k].after_inner : -1;
-      const bool drop = before >= 0 && (after < 0 || after == before) ? before == 1
-                        : after >= 0 && before < 0                     ? after == 1
-                                                                       : inner(0.5 * (from + to));
+      // The crossings at its two ends: a part that starts on the inner side of the crossing
+      // piece is inside R (within r of that piece's feature). The outer side proves nothing (a
+      // third feature may still cover the part): such parts ask the 3D test.
+      const bool inner_before = k > 0 && cuts_[first_cut + k - 1].after_inner;
+      const bool inner_after = k + 2 < at.size() && !cuts_[first_cut + k].after_inner;
+      const bool drop = inner_before || inner_after || inner(0.5 * (from + to));
       if (drop) {
         ++dropped_;
       } else {
@@ -1335,7 +1346,7 @@ void PlaneRegion::mark_crossings() {
   const int g = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(n))), 1, 256);
   const Vec2 cell = ((hi - lo) / g).cwiseMax(Vec2::Constant(1e-300));
   auto cell_of = [&](double x, int axis) {
-    return std::clamp(static_cast<int>(std::floor((x - lo[axis]) / cell[axis])), 0, g - 1);
+    return static_cast<int>(std::clamp(std::floor((x - lo[axis]) / cell[axis]), 0.0, g - 1.0));
   };
   std::vector<std::array<Vec2, 2>> box(n);  // each segment's box, grown by kTouch
   for (std::size_t i = 0; i < n; ++i) {

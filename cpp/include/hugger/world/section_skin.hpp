@@ -118,8 +118,9 @@ class PlaneRegion {
   /// radius `level` at convex vertices, cut at concave ones), walks it with R on the left to the
   /// first point `step` from the tip, or `max_length` along it, and writes it to `head` (with
   /// the pieces walked). False, leaving the walk to the generic procedure, where the tip is not
-  /// outside R, the walk meets a junction of pieces or a corner it cannot place, or a point it
-  /// reaches is farther than `reach` from `root` or below `lowest`.
+  /// outside R, the walk meets a junction of pieces or a corner it cannot place, a point it
+  /// reaches is farther than `reach` from `root` or below `lowest`, or the head's measured gap is
+  /// not the level to within a tenth (another part of the boundary comes nearer).
   bool follow(const Vec2& tip, double level, double step, double max_length, const Vec2& root, double reach,
               double lowest, Vec2* head, int* pieces) const;
 
@@ -156,8 +157,8 @@ class PlaneRegion {
   void mark_crossings();
   /// Cuts crossed segments at their crossings and drops the parts of flagged pieces that lie
   /// inside R: a part that starts at a crossing on the inner side of the crossing piece (whose
-  /// feature is then nearer than r just past it), unless its two crossings disagree; the parts
-  /// no crossing decides (and those) by one 3D test at the part's middle.
+  /// feature is then nearer than r just past it), and every other part whose middle the 3D test
+  /// finds inside.
   void drop_inner_segments();
   int build_node(int begin, int end, std::vector<Vec2>& centres, int depth);
   /// The grid of cells that no segment touches, each labelled inside or outside R (one inside
