@@ -30,6 +30,31 @@ constexpr double kSpanJoin = 1e-9;
 constexpr double kCertain = 1e-9;
 
 inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+/// v turned a quarter to the left.
+inline Vec2 left_of(const Vec2& v) { return Vec2(-v.y(), v.x()); }
+
+/// A point of the plane with an id, for close_pairs.
+struct IdPoint {
+  double x, y;
+  int id;
+};
+
+/// Calls f(i, j) (i < j, indices into pts, sorted by x then id) for every two points of `pts`
+/// within kJoin of each other: the same point computed twice, to rounding.
+template <class F>
+void close_pairs(std::vector<IdPoint>& pts, F&& f) {
+  std::sort(pts.begin(), pts.end(), [](const IdPoint& a, const IdPoint& b) { return a.x < b.x || (a.x == b.x && a.id < b.id); });
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    for (std::size_t j = i + 1; j < pts.size() && pts[j].x - pts[i].x <= kJoin; ++j) {
+      const double dx = pts[j].x - pts[i].x, dy = pts[j].y - pts[i].y;
+      if (dx * dx + dy * dy <= kJoin * kJoin) f(i, j);
+    }
+}
+
+/// The end a boundary segment leads to when walked with R on the left (along its outward normal
+/// turned a quarter to the left), and the end it comes from.
+inline const Vec2& head_of(const PlaneRegion::Segment& s) { return (s.b - s.a).dot(left_of(s.normal)) >= 0.0 ? s.b : s.a; }
+inline const Vec2& tail_of(const PlaneRegion::Segment& s) { return &head_of(s) == &s.b ? s.a : s.b; }
 
 /// A constraint on an angle t: allowed where k0 + k1 cos t + k2 sin t <= 0.
 struct Harmonic {
@@ -201,10 +226,6 @@ void PlaneRegion::link_segments() {
   // whose tail is its head, to the bit (a chain's segments share their end points exactly).
   const int n = static_cast<int>(segments_.size());
   next_.assign(n, -1);
-  auto head_of = [&](const Segment& s) {
-    const Vec2 t(-s.normal.y(), s.normal.x());
-    return (s.b - s.a).dot(t) >= 0.0 ? s.b : s.a;
-  };
   struct Tail {
     double x, y;
     int segment;
@@ -212,13 +233,12 @@ void PlaneRegion::link_segments() {
   };
   std::vector<Tail> tails(n);
   for (int i = 0; i < n; ++i) {
-    const Segment& s = segments_[i];
-    const Vec2 tail = head_of(s) == s.b ? s.a : s.b;
+    const Vec2& tail = tail_of(segments_[i]);
     tails[i] = {tail.x(), tail.y(), i};
   }
   std::sort(tails.begin(), tails.end());
   for (int i = 0; i < n; ++i) {
-    const Vec2 h = head_of(segments_[i]);
+    const Vec2& h = head_of(segments_[i]);
     const auto it = std::lower_bound(tails.begin(), tails.end(), Tail{h.x(), h.y(), -1});
     // Exactly one segment leaves this point (two: a junction, where the walk does not guess).
     if (it != tails.end() && it->x == h.x() && it->y == h.y() && it->segment != i &&
@@ -238,11 +258,6 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
   const Near nr = nearest(tip, tip, kInf);
   if (!(nr.distance > 0.0) || !std::isfinite(nr.distance) || nr.segment < 0 || inside_from(nr, tip)) return false;
   const double l = level;
-  auto tangent = [](const Vec2& n) { return Vec2(-n.y(), n.x()); };
-  auto head_of = [&](int k) {
-    const Segment& s = segments_[k];
-    return (s.b - s.a).dot(tangent(s.normal)) >= 0.0 ? s.b : s.a;
-  };
   auto acceptable = [&](const Vec2& x) { return (x - root).norm() <= reach && x.y() >= lowest; };
   // The walk offsets the chain it is on, not the rest of the boundary: another part of it may come
   // nearer the head than the level (a narrow gap between two parts of R). A head is kept only if
@@ -253,8 +268,7 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
   };
   double walked = 0.0;
   Vec2 at;  // the walk's current point on the level curve
-  // The first point past which the walk leaves the circle |x - tip| = step, along a piece from
-  // `from`: a segment to `to`, or (arc) the arc about `c` turning left through `sweep` radians.
+  // Where the segment from `from` to `to` leaves the circle |x - tip| = step: its parameter t.
   auto cross_segment = [&](const Vec2& from, const Vec2& to, double* t) {
     const Vec2 d = to - from, w = from - tip;
     const double a = d.squaredNorm(), b = w.dot(d), c = w.squaredNorm() - step * step;
@@ -295,9 +309,9 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
   at = nr.on_region + l * g;
   if (!acceptable(at)) return false;
   // Where the tip's nearest point is a vertex, the walk starts on its arc: finish the arc first.
-  const Vec2 h0 = head_of(k);
+  const Vec2 h0 = head_of(*s);
   const bool on_head = (nr.on_region - h0).squaredNorm() <= kJoin * kJoin;
-  const bool on_tail = !on_head && (nr.on_region - (h0 == s->b ? s->a : s->b)).squaredNorm() <= kJoin * kJoin;
+  const bool on_tail = !on_head && (nr.on_region - tail_of(*s)).squaredNorm() <= kJoin * kJoin;
   if (on_tail || on_head) {
     // Turning left from g to the normal of the segment the arc leads onto.
     const int onto = on_head ? next_[k] : k;
@@ -316,13 +330,13 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
   // Then segment by segment: the moved segment from `at` to its end (its head moved out, or the
   // crossing with the next moved segment at a concave vertex), then the arc at a convex vertex.
   for (int guard = 0; guard < 4096; ++guard) {
-    const Vec2 n = s->normal, t = tangent(n), hk = head_of(k);
+    const Vec2 n = s->normal, t = left_of(n), hk = head_of(*s);
     const int nx = next_[k];
     Vec2 end = hk + l * n;
     double sweep = 0.0;
     if (nx >= 0) {
       const Vec2 n1 = segments_[nx].normal;
-      const double turn = cross2(t, tangent(n1)), dot = n.dot(n1);
+      const double turn = cross2(t, left_of(n1)), dot = n.dot(n1);
       if (turn < 0.0) {
         // Concave: the moved segments cross at hk + l (n + n1) / (1 + n . n1).
         if (!(1.0 + dot > 1e-6)) return false;
@@ -367,27 +381,18 @@ void PlaneRegion::simplify(double tol) {
   // The end points, joined where they lie within kJoin (one vertex), each with the segments
   // that end there.
   auto point = [&](int e) -> const Vec2& { return e % 2 == 0 ? segments_[e / 2].a : segments_[e / 2].b; };
-  struct End {
-    double x, y;
-    int e;  ///< 2 * segment + (0: a, 1: b)
-  };
-  std::vector<End> ends(2 * n);
+  std::vector<IdPoint> ends(2 * n);  // id: 2 * segment + (0: a, 1: b)
   for (int e = 0; e < 2 * n; ++e) ends[e] = {point(e).x(), point(e).y(), e};
-  std::sort(ends.begin(), ends.end(), [](const End& x, const End& y) { return x.x < y.x || (x.x == y.x && x.e < y.e); });
   std::vector<int> parent(2 * n);
   for (int i = 0; i < 2 * n; ++i) parent[i] = i;
   auto root = [&](int x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
   };
-  for (int i = 0; i < 2 * n; ++i)
-    for (int j = i + 1; j < 2 * n && ends[j].x - ends[i].x <= kJoin; ++j) {
-      const double dx = ends[j].x - ends[i].x, dy = ends[j].y - ends[i].y;
-      if (dx * dx + dy * dy <= kJoin * kJoin) {
-        const int x = root(ends[i].e), y = root(ends[j].e);
-        if (x != y) parent[std::max(x, y)] = std::min(x, y);
-      }
-    }
+  close_pairs(ends, [&](std::size_t i, std::size_t j) {
+    const int x = root(ends[i].id), y = root(ends[j].id);
+    if (x != y) parent[std::max(x, y)] = std::min(x, y);
+  });
   // Per vertex (its root end): how many segment ends, and the first two. A segment whose two
   // ends are one vertex (an arc shorter than kJoin, where two pieces meet) is left out: the
   // chain through its vertex joins its neighbours at one point.
@@ -440,11 +445,10 @@ void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<i
   const int k = static_cast<int>(seg.size());
   // R lies on one side of the whole chain: `side` is +1 when the outward normals point to the
   // left of the walk. A chain that is not (it should be) keeps its segments.
-  auto left = [](const Vec2& d) { return Vec2(-d.y(), d.x()); };
-  const double side0 = left(P[1] - P[0]).dot(segments_[seg[0]].normal) >= 0.0 ? 1.0 : -1.0;
+  const double side0 = left_of(P[1] - P[0]).dot(segments_[seg[0]].normal) >= 0.0 ? 1.0 : -1.0;
   bool consistent = true;
   for (int i = 0; i < k && consistent; ++i)
-    consistent = side0 * left(P[i + 1] - P[i]).dot(segments_[seg[i]].normal) > 0.0;
+    consistent = side0 * left_of(P[i + 1] - P[i]).dot(segments_[seg[i]].normal) > 0.0;
   auto emit = [&](const Vec2& a, const Vec2& b, int piece) {
     const Vec2 d = b - a;
     const double len = d.norm();
@@ -452,7 +456,7 @@ void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<i
     Segment s;
     s.a = a;
     s.b = b;
-    s.normal = side0 * left(d) / len;
+    s.normal = side0 * left_of(d) / len;
     s.piece = piece;
     out->push_back(s);
   };
@@ -468,6 +472,19 @@ void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<i
   // `tol` of them, and runs meet at original vertices.
   // Kind of inner vertex v (0 < v < k): +1 convex, -1 concave, 0 straight to rounding (a piece
   // meeting its tangent neighbour), which either kind of run takes.
+  // True when every vertex v0..v1 lies behind the chord from -> to (outward side up to rounding),
+  // at most `depth` behind it, and between its ends (to `slack` times its length).
+  auto behind = [&](const Vec2& from, const Vec2& to, int v0, int v1, double depth, double slack) {
+    const Vec2 d = to - from;
+    const double len = d.norm();
+    if (!(len > 0.0)) return false;
+    const Vec2 nrm = side0 * left_of(d) / len;  // outward
+    for (int v = v0; v <= v1; ++v) {
+      const double h = (P[v] - from).dot(nrm), t = (P[v] - from).dot(d);
+      if (!(h <= 1e-12 && h >= -depth && t >= -slack * len && t <= len * len + slack * len)) return false;
+    }
+    return true;
+  };
   auto kind = [&](int v) {
     const Vec2 d0 = P[v] - P[v - 1], d1 = P[v + 1] - P[v];
     const double c = side0 * cross2(d0, d1);
@@ -542,16 +559,8 @@ void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<i
         int best = a + 1;
         Vec2 to = moved(a + 1);
         for (int b = a + 2; b <= e; ++b) {
-          const Vec2 q = moved(b), d = q - from;
-          const double len = d.norm();
-          if (!(len > 0.0)) break;
-          const Vec2 nrm = side0 * left(d) / len;  // outward
-          bool ok = true;
-          for (int v = a; v <= b && ok; ++v) {
-            const double h = (P[v] - from).dot(nrm), t = (P[v] - from).dot(d);
-            ok = h <= 1e-12 && t >= -1e-12 * len && t <= len * len + 1e-12 * len;
-          }
-          if (!ok) break;
+          const Vec2 q = moved(b);
+          if (!behind(from, q, a, b, kInf, 1e-12)) break;
           best = b;
           to = q;
         }
@@ -570,19 +579,7 @@ void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<i
       int a = s0;
       while (a < e) {
         int best = a + 1;
-        for (int b = a + 2; b <= e; ++b) {
-          const Vec2 d = P[b] - P[a];
-          const double len = d.norm();
-          if (!(len > 0.0)) break;
-          const Vec2 nrm = side0 * left(d) / len;  // outward
-          bool ok = true;
-          for (int v = a + 1; v < b && ok; ++v) {
-            const double h = (P[v] - P[a]).dot(nrm), t = (P[v] - P[a]).dot(d);
-            ok = h <= 1e-12 && h >= -tol && t >= 0.0 && t <= len * len;  // (straight: within rounding)
-          }
-          if (!ok) break;
-          best = b;
-        }
+        for (int b = a + 2; b <= e && behind(P[a], P[b], a + 1, b - 1, tol, 0.0); ++b) best = b;
         emit(P[a], P[best], segments_[seg[a]].piece);
         a = best;
       }
@@ -1303,33 +1300,19 @@ void PlaneRegion::mark_crossings() {
   // itself, a closed circle). A piece with a loose end lies (in part) inside R: flag it.
   const std::size_t n = segments_.size();
   {
-    struct End {
-      double x, y;
-      int id;  ///< 2 * piece + (0: first, 1: last)
-      bool joined;
-    };
-    std::vector<End> ends;
+    std::vector<IdPoint> ends;  // id: 2 * piece + (0: first, 1: last)
     ends.reserve(2 * pieces_.size());
     for (std::size_t k = 0; k < piece_ends_.size(); ++k) {
       const auto& pe = piece_ends_[k];
       if (std::isnan(pe[0].x())) continue;  // a piece without segments
-      ends.push_back({pe[0].x(), pe[0].y(), static_cast<int>(2 * k), false});
-      ends.push_back({pe[1].x(), pe[1].y(), static_cast<int>(2 * k + 1), false});
+      ends.push_back({pe[0].x(), pe[0].y(), static_cast<int>(2 * k)});
+      ends.push_back({pe[1].x(), pe[1].y(), static_cast<int>(2 * k + 1)});
     }
-    std::sort(ends.begin(), ends.end(), [](const End& a, const End& b) { return a.x < b.x || (a.x == b.x && a.id < b.id); });
-    for (std::size_t i = 0; i < ends.size(); ++i) {
-      End& e = ends[i];
-      for (std::size_t j = i + 1; j < ends.size() && ends[j].x - e.x <= kJoin; ++j) {
-        End& f = ends[j];
-        // Joined to another end: another piece's, or its own other end (a closed circle).
-        if (std::abs(f.y - e.y) <= kJoin && std::hypot(f.x - e.x, f.y - e.y) <= kJoin) {
-          e.joined = true;
-          f.joined = true;
-        }
-      }
-    }
-    for (const End& e : ends)
-      if (!e.joined) pieces_[e.id / 2].crossed = true;
+    // Joined to another end: another piece's, or its own other end (a closed circle).
+    std::vector<char> joined(ends.size(), 0);
+    close_pairs(ends, [&](std::size_t i, std::size_t j) { joined[i] = joined[j] = 1; });
+    for (std::size_t i = 0; i < ends.size(); ++i)
+      if (!joined[i]) pieces_[ends[i].id / 2].crossed = true;
     piece_ends_.clear();
     piece_ends_.shrink_to_fit();
   }
