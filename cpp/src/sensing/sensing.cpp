@@ -97,7 +97,7 @@ bool Sensing::link_depth_within(const FingerPlane& plane, const Vec2& a, const V
 FollowResult Sensing::follow_boundary(const FollowRequest& req) const {
   FollowResult out;
   out.head = req.tip;
-  const double h = req.step / 3.0;
+  const double h = req.step / kFollowDivisions;
   // A point of the level curve gap = level, sensed: f = gap - level, g = its gradient in the plane.
   struct Level {
     Vec2 x = Vec2::Zero();
@@ -127,7 +127,7 @@ FollowResult Sensing::follow_boundary(const FollowRequest& req) const {
   };
   Level x;
   if (!project(req.tip, &x) || !acceptable(x.x)) return out;
-  for (int i = 0; i < 48; ++i) {
+  for (int i = 0; i < kFollowSteps; ++i) {
     const Vec2 t = Vec2(-x.g.y(), x.g.x()).normalized();
     Level y;
     if (!project(x.x + h * t, &y) || !acceptable(y.x)) break;

@@ -1716,8 +1716,9 @@ RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
 FollowResult SectionSkin::follow_boundary(const FollowRequest& req) const {
   const PlaneRegion* R = region(req.plane, req.radius);
   FollowResult out;
-  // The generic walk goes at most 48 steps of a third of `step`.
-  if (R && R->follow(req.tip, req.level, req.step, 16.0 * req.step, req.root, req.reach, req.front + req.radius,
+  // As far along the curve as the generic walk goes at most.
+  const double max_length = kFollowSteps / kFollowDivisions * req.step;
+  if (R && R->follow(req.tip, req.level, req.step, max_length, req.root, req.reach, req.front + req.radius,
                      &out.head, &out.steps))
     out.gap = req.level;
   else

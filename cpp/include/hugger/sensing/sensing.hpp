@@ -34,6 +34,11 @@ inline Vec2 rotate_planar(const Vec2& v, double angle) {
   return Vec2(c * v.x() - s * v.y(), s * v.x() + c * v.y());
 }
 
+/// The generic boundary following (Sensing::follow_boundary) marches at most kFollowSteps steps
+/// of step / kFollowDivisions along the level curve.
+constexpr int kFollowSteps = 48;
+constexpr double kFollowDivisions = 3.0;
+
 /// Boundary following in a finger plane (docs/algorithm.md, decision 5).
 struct FollowRequest {
   FingerPlane plane;
