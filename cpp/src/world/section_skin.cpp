@@ -645,15 +645,12 @@ void PlaneRegion::drop_inner_segments() {
     const Vec3 X = plane_.to_world(x);
     if (radius_ > 0.0) {
       // Within r less a margin of O's surface, or inside O: strictly inside R. One search for
-      // the nearest triangle within r answers the first; only a point with nothing closer than r
-      // (off the surface: the ray test is safe) needs the inside test. The comparisons are
-      // TriangleBvh::any_within's (squared, strict, or touching) at r less the margin and at r.
+      // the nearest triangle within r + flatten answers both: its distance, and where that is
+      // beyond the margin, its side (the pseudo-normal's sign, well conditioned that far from
+      // the surface). Every point of a piece lies within r + flatten / 2 of its feature, so the
+      // search finds a triangle (should it not, Object::nearest signs the point by rays).
       const double margin = std::max(1e-9, 1e-3 * radius_);
-      const NearestResult near = O.bvh().nearest(X, X, radius_);
-      const double d2 = near.squared_distance, inner = radius_ - margin;
-      if (d2 < inner * inner || d2 == 0.0) return true;
-      if (d2 < radius_ * radius_) return false;
-      return O.inside_off_surface(X);
+      return O.nearest(X, X, radius_ + flatten_).signed_distance < radius_ - margin;
     }
     return O.inside(X);
   };
