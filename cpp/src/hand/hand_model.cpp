@@ -200,14 +200,20 @@ FingerPlane HandModel::plane(const Pose& palm, int m) const {
 }
 
 std::vector<Vec2> HandModel::forward_planar(int m, const Vec2& root, const double* angles) const {
-  std::vector<Vec2> j(links_ + 1);
+  std::vector<Vec2> j;
+  forward_planar(m, root, angles, &j);
+  return j;
+}
+
+void HandModel::forward_planar(int m, const Vec2& root, const double* angles, std::vector<Vec2>* out) const {
+  std::vector<Vec2>& j = *out;
+  j.resize(links_ + 1);
   j[0] = root;
   double theta = 0.0;
   for (int n = 0; n < links_; ++n) {
     theta += angles[n];
     j[n + 1] = j[n] + lengths_(m, n) * Vec2(-std::sin(theta), std::cos(theta));
   }
-  return j;
 }
 
 void HandModel::planar_angles(const std::vector<Vec2>& joints, double* angles) {

@@ -1,6 +1,7 @@
 #include "hugger/planner/planner.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -298,7 +299,10 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next) const {
   const int N = hand_.links();
   const double s = params_.step, r = hand_.link_radius();
   if (largest_move(old, next) > kMaxJointSteps * s) return false;
-  std::vector<double> a0(N), a1(N), a(N);
+  // On the stack: this runs for every finger that moves, in every iteration (and a skin's
+  // callback may plan on this thread meanwhile: no scratch shared across calls).
+  std::array<double, kMaxLinks> a0, a1, a;
+  std::array<char, kMaxLinks> sample{};
   HandModel::planar_angles(old, a0.data());
   HandModel::planar_angles(next, a1.data());
   // How far any joint can move along the straight line in joint space (as the checker bounds it).
@@ -307,7 +311,6 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next) const {
   // Link n moves no farther than its distal joint, by at most D_n; a link whose gap at the new
   // configuration is at least D_n is clear all along (the gap shrinks no faster than the link
   // moves), and is not sampled.
-  std::vector<char> sample(N, 0);
   bool any = false;
   for (int n = 0; n < N; ++n) {
     cum += a1[n] - a0[n];
@@ -320,10 +323,11 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next) const {
   if (!any) return true;
   const double h = std::max(r, s) / 4.0;
   const int S = std::clamp(static_cast<int>(std::ceil(bound / h - 1e-9)), 1, 128);
+  Chain c;
   for (int i = 1; i < S; ++i) {
     const double t = static_cast<double>(i) / S;
     for (int n = 0; n < N; ++n) a[n] = a0[n] + t * (a1[n] - a0[n]);
-    const Chain c = hand_.forward_planar(m, old[0] + t * (next[0] - old[0]), a.data());
+    hand_.forward_planar(m, old[0] + t * (next[0] - old[0]), a.data(), &c);
     for (int n = 0; n < N; ++n)
       if (sample[n] && !swept_link_ok(m, c[n], c[n + 1])) return false;
   }
