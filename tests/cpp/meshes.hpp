@@ -78,6 +78,29 @@ inline Mesh box(const Vec3& half, const Vec3& centre = Vec3::Zero()) {
                      {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}});
 }
 
+/// A cylinder of `radius` and half-height `half` about the z axis: `n` sides, each cap a fan about
+/// a centre vertex (of degree n: a vertex of high degree), outward normals.
+inline Mesh cylinder(double radius, double half, int n) {
+  std::vector<Vec3> v;
+  for (int k = 0; k < n; ++k) {
+    const double t = 2.0 * kPi * k / n;
+    v.emplace_back(radius * std::cos(t), radius * std::sin(t), -half);  // 2 k: bottom ring
+    v.emplace_back(radius * std::cos(t), radius * std::sin(t), half);   // 2 k + 1: top ring
+  }
+  const std::int64_t bottom = 2 * n, top = 2 * n + 1;
+  v.emplace_back(0.0, 0.0, -half);
+  v.emplace_back(0.0, 0.0, half);
+  std::vector<std::array<std::int64_t, 3>> f;
+  for (std::int64_t k = 0; k < n; ++k) {
+    const std::int64_t b0 = 2 * k, t0 = 2 * k + 1, b1 = 2 * ((k + 1) % n), t1 = b1 + 1;
+    f.push_back({b0, b1, t1});
+    f.push_back({b0, t1, t0});
+    f.push_back({top, t0, t1});
+    f.push_back({bottom, b1, b0});
+  }
+  return to_mesh(v, f);
+}
+
 /// `curvy` (hugger.objects.curvy; non-convex: concave dents): the unit icosphere of
 /// `subdivisions`, each vertex v = (x, y, z) moved to p = v * rho(v) * 0.04 with rho = 1 + 0.20
 /// sin(3.0x+0.7) cos(2.5y-0.3) + 0.12 sin(4.0z+1.2) cos(2.0x-0.5) + 0.10 cos(3.5y+0.9) sin(2.5z)

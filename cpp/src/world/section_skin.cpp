@@ -73,8 +73,14 @@ std::vector<std::array<double, 2>> allowed_intervals(const Harmonic* hs, int n) 
     const Harmonic& h = hs[i];
     if (h.k0 > 0.0 && h.k0 * h.k0 > (h.k1 * h.k1 + h.k2 * h.k2) * (1.0 + 1e-12)) return out;
   }
-  constexpr int kMax = 2 * 18 + 2;  // intersecting with one arc adds at most one interval
-  std::array<double, 2> cur[kMax], next[kMax];
+  // Intersecting with one arc adds at most one interval: 2 n + 2 suffice (on the stack for up to
+  // 18 constraints, a vertex of degree 17; beyond, on the heap).
+  constexpr int kSmall = 2 * 18 + 2;
+  const int room = 2 * n + 2;
+  std::array<double, 2> small[2][kSmall];
+  std::vector<std::array<double, 2>> large(room > kSmall ? 2 * static_cast<std::size_t>(room) : 0);
+  std::array<double, 2>* cur = room > kSmall ? large.data() : small[0];
+  std::array<double, 2>* next = room > kSmall ? large.data() + room : small[1];
   int nc = 0;
   cur[nc++] = {0.0, kTwoPi};
   auto wrap = [](double t) {
@@ -105,7 +111,7 @@ std::vector<std::array<double, 2>> allowed_intervals(const Harmonic* hs, int n) 
     for (int a = 0; a < na; ++a)
       for (int j = 0; j < nc; ++j) {
         const double lo = std::max(cur[j][0], arc[a][0]), hi = std::min(cur[j][1], arc[a][1]);
-        if (hi > lo && nn < kMax) next[nn++] = {lo, hi};
+        if (hi > lo && nn < room) next[nn++] = {lo, hi};
       }
     std::copy(next, next + nn, cur);
     nc = nn;
@@ -376,8 +382,11 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
 }
 
 void PlaneRegion::simplify(double tol) {
+  std::vector<char> tested;  // drop_inner_segments' tests, per segment
+  tested.swap(tested_);
   const int n = static_cast<int>(segments_.size());
   if (n < 3) return;
+  tested.resize(n, 0);
   // The end points, joined where they lie within kJoin (one vertex), each with the segments
   // that end there.
   auto point = [&](int e) -> const Vec2& { return e % 2 == 0 ? segments_[e / 2].a : segments_[e / 2].b; };
@@ -393,17 +402,56 @@ void PlaneRegion::simplify(double tol) {
     const int x = root(ends[i].id), y = root(ends[j].id);
     if (x != y) parent[std::max(x, y)] = std::min(x, y);
   });
-  // Per vertex (its root end): how many segment ends, and the first two. A segment whose two
-  // ends are one vertex (an arc shorter than kJoin, where two pieces meet) is left out: the
-  // chain through its vertex joins its neighbours at one point.
-  std::vector<int> degree(2 * n, 0), first(2 * n, -1), second(2 * n, -1);
+  // A segment whose two ends are one vertex (an arc shorter than kJoin, where two pieces meet)
+  // is left out: the chain through its vertex joins its neighbours at one point.
   std::vector<char> used(n, 0);
-  for (int e = 0; e < 2 * n; ++e) {
-    const int v = root(e);
-    if (v == root(e ^ 1)) {
-      used[e / 2] = 1;
-      continue;
+  for (int e = 0; e < 2 * n; e += 2)
+    if (root(e) == root(e + 1)) used[e / 2] = 1;
+  // Per vertex (its root end): how many segment ends.
+  std::vector<int> degree(2 * n, 0);
+  for (int e = 0; e < 2 * n; ++e)
+    if (!used[e / 2]) ++degree[root(e)];
+  // A run of pieces can go on into R beyond a crossing without crossing anything itself (the
+  // pieces of features that another feature covers): drop_inner_segments flags only the piece
+  // crossed. With the parts inside R dropped, such a run is left with a loose end (a vertex of
+  // one segment) where it joined a dropped part, or it meets R's boundary at a junction (a
+  // vertex of three or more). Each segment with such an end, not tested yet, is tested once and
+  // dropped if inside R, which may leave its neighbour loose in turn.
+  {
+    std::vector<int> start(2 * n + 1, 0), at(2 * n);  // the segment ends of each vertex
+    for (int e = 0; e < 2 * n; ++e)
+      if (!used[e / 2]) ++start[root(e) + 1];
+    for (int v = 0; v < 2 * n; ++v) start[v + 1] += start[v];
+    {
+      std::vector<int> fill(start.begin(), start.end() - 1);
+      for (int e = 0; e < 2 * n; ++e)
+        if (!used[e / 2]) at[fill[root(e)]++] = e;
     }
+    std::vector<int> queue;
+    for (int e = 0; e < 2 * n; ++e)
+      if (!used[e / 2] && degree[root(e)] != 2 && !tested[e / 2]) queue.push_back(e / 2);
+    while (!queue.empty()) {
+      const int i = queue.back();
+      queue.pop_back();
+      if (tested[i]) continue;
+      tested[i] = 1;
+      if (!strictly_inside_3d(0.5 * (segments_[i].a + segments_[i].b))) continue;
+      used[i] = 1;  // dropped
+      ++dropped_;
+      for (const int e : {2 * i, 2 * i + 1}) {
+        const int v = root(e);
+        if (--degree[v] == 2) continue;
+        for (int k = start[v]; k < start[v + 1]; ++k)
+          if (!used[at[k] / 2] && !tested[at[k] / 2]) queue.push_back(at[k] / 2);
+      }
+    }
+  }
+  // Per vertex: the first two segment ends left.
+  std::vector<int> first(2 * n, -1), second(2 * n, -1);
+  std::fill(degree.begin(), degree.end(), 0);
+  for (int e = 0; e < 2 * n; ++e) {
+    if (used[e / 2]) continue;
+    const int v = root(e);
     if (degree[v]++ == 0) first[v] = e;
     else if (degree[v] == 2) second[v] = e;
   }
@@ -636,33 +684,37 @@ void PlaneRegion::build_cells() {
   }
 }
 
+bool PlaneRegion::strictly_inside_3d(const Vec2& x) const {
+  const Object& O = *object_;
+  const Vec3 X = plane_.to_world(x);
+  if (radius_ > 0.0) {
+    // Within r less a margin of O's surface, or inside O: strictly inside R. One search for
+    // the nearest triangle within r + flatten answers both: its distance, and where that is
+    // beyond the margin, its side (the pseudo-normal's sign, well conditioned that far from
+    // the surface). Every point of a piece lies within r + flatten / 2 of its feature, so the
+    // search finds a triangle (should it not, Object::nearest signs the point by rays).
+    const double margin = std::max(1e-9, 1e-7 * radius_);
+    return O.nearest(X, X, radius_ + flatten_).signed_distance < radius_ - margin;
+  }
+  return O.inside(X);
+}
+
 void PlaneRegion::drop_inner_segments() {
   // Crossed segments are cut at their crossings. Then every part of a flagged piece lies wholly
   // on R's boundary or wholly inside R, and those inside are dropped (the rest still covers the
   // boundary, and no segment left has parts inside R).
-  const Object& O = *object_;
-  auto inner = [&](const Vec2& x) {
-    const Vec3 X = plane_.to_world(x);
-    if (radius_ > 0.0) {
-      // Within r less a margin of O's surface, or inside O: strictly inside R. One search for
-      // the nearest triangle within r + flatten answers both: its distance, and where that is
-      // beyond the margin, its side (the pseudo-normal's sign, well conditioned that far from
-      // the surface). Every point of a piece lies within r + flatten / 2 of its feature, so the
-      // search finds a triangle (should it not, Object::nearest signs the point by rays).
-      const double margin = std::max(1e-9, 1e-3 * radius_);
-      return O.nearest(X, X, radius_ + flatten_).signed_distance < radius_ - margin;
-    }
-    return O.inside(X);
-  };
   std::sort(cuts_.begin(), cuts_.end());
   std::vector<Segment> kept;
+  std::vector<char> tested;  // per kept segment: the 3D test found it on R's boundary
   kept.reserve(segments_.size() + cuts_.size());
+  tested.reserve(kept.capacity());
   std::size_t c = 0;
   std::vector<double> at;
   for (std::size_t i = 0; i < segments_.size(); ++i) {
     const Segment& s = segments_[i];
     if (!pieces_[s.piece].crossed) {
       kept.push_back(s);
+      tested.push_back(0);
       continue;
     }
     // Its cuts (none unless crossed), then one part per interval between them.
@@ -678,7 +730,7 @@ void PlaneRegion::drop_inner_segments() {
       // third feature may still cover the part): such parts ask the 3D test.
       const bool inner_before = k > 0 && cuts_[first_cut + k - 1].after_inner;
       const bool inner_after = k + 2 < at.size() && !cuts_[first_cut + k].after_inner;
-      const bool drop = inner_before || inner_after || inner(0.5 * (from + to));
+      const bool drop = inner_before || inner_after || strictly_inside_3d(0.5 * (from + to));
       if (drop) {
         ++dropped_;
       } else {
@@ -686,6 +738,7 @@ void PlaneRegion::drop_inner_segments() {
         part.a = from;
         part.b = to;
         kept.push_back(part);
+        tested.push_back(1);
       }
       from = to;
     }
@@ -693,6 +746,7 @@ void PlaneRegion::drop_inner_segments() {
   cuts_.clear();
   cuts_.shrink_to_fit();
   segments_.swap(kept);
+  tested_.swap(tested);
   for (auto& p : pieces_) p.crossed = false;  // resolved
 }
 
@@ -882,6 +936,7 @@ void PlaneRegion::build_pieces() {
   // can be the nearest feature (the polar cone of its edges, on the outward side). The ends of a
   // vertex's arc lie on the wedges of its (convex) edges: a vertex none of whose edge wedges the
   // plane meets has an arc only when its whole circle lies in the cone.
+  std::vector<Harmonic> hs;  // a vertex's constraints: one per edge and its pseudo-normal's
   for (const int f : band) {
     const std::int64_t idx[3] = {F(f, 0), F(f, 1), F(f, 2)};
     const Vec3 P[3] = {vertex(idx[0]), vertex(idx[1]), vertex(idx[2])};
@@ -894,14 +949,7 @@ void PlaneRegion::build_pieces() {
       if (!(std::abs(sv) < r)) continue;
       const double rho = std::sqrt((r - sv) * (r + sv));
       if (!(rho > 1e-15)) continue;
-      const int degree = static_cast<int>(O.ring_end(iv) - O.ring_begin(iv));
-      if (degree + 1 > 16) {
-        // A vertex of very high degree: keep its whole circle (every point of it lies in R).
-        add_arcs(Kind::kVertex, iv, to_plane(V - sv * nu), Vec2(rho, 0.0), Vec2(0.0, rho), {{0.0, kTwoPi}},
-                 [](double t) { return Vec2(std::cos(t), std::sin(t)); });
-        continue;
-      }
-      Harmonic hs[17];
+      hs.resize(static_cast<std::size_t>(O.ring_end(iv) - O.ring_begin(iv)) + 1);
       int nh = 0;
       // An unmarked vertex's constraints are tested as they are made: each must hold on the
       // whole circle, and most vertices fail the first or second.
@@ -919,7 +967,7 @@ void PlaneRegion::build_pieces() {
         hs[nh++] = {sv * nu.dot(nv), -rho * u.dot(nv), -rho * p.dot(nv)};
         if (!marked && !whole(hs[nh - 1])) continue;
       }
-      const auto allowed = allowed_intervals(hs, nh);
+      const auto allowed = allowed_intervals(hs.data(), nh);
       if (allowed.empty()) continue;
       add_arcs(Kind::kVertex, iv, to_plane(V - sv * nu), Vec2(rho, 0.0), Vec2(0.0, rho), allowed,
                [](double t) { return Vec2(std::cos(t), std::sin(t)); });

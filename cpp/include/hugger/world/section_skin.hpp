@@ -147,14 +147,19 @@ class PlaneRegion {
   bool visit_segments(Skip&& skip, Visit&& visit) const;
   void build_pieces();
   void build_bvh();
-  /// Replaces the chains of segments (joined end to end, two at each inner vertex) by fewer
-  /// segments that lie outside them, behind which every original vertex lies within `tol`.
+  /// Drops the runs of segments that go on inside R beyond a crossing (found from their loose
+  /// ends and junctions, each tested once in 3D), then replaces the chains of segments (joined
+  /// end to end, two at each inner vertex) by fewer segments that lie outside them, behind which
+  /// every original vertex lies within `tol`.
   void simplify(double tol);
   /// One chain: points P (P[i], P[i + 1] the ends of segments_[seg[i]]); appends the new
   /// segments to `out`.
   void simplify_chain(const std::vector<Vec2>& P, const std::vector<int>& seg, double tol,
                       std::vector<Segment>* out) const;
   void mark_crossings();
+  /// The 3D test of a point of a piece: strictly inside R (within r less a margin of O's
+  /// surface, or inside O).
+  bool strictly_inside_3d(const Vec2& x) const;
   /// Cuts crossed segments at their crossings and drops the parts of flagged pieces that lie
   /// inside R: a part that starts at a crossing on the inner side of the crossing piece (whose
   /// feature is then nearer than r just past it), and every other part whose middle the 3D test
@@ -190,6 +195,7 @@ class PlaneRegion {
     bool operator<(const Cut& o) const { return segment < o.segment || (segment == o.segment && t < o.t); }
   };
   std::vector<Cut> cuts_;
+  std::vector<char> tested_;  ///< while building: per segment, the 3D test found it on R's boundary
   std::vector<std::array<Vec2, 2>> piece_ends_;  ///< while building: first and last point of each piece
   int depth_ = 0;
   double arc_deviation_ = 0.0;  ///< while building: how far the flattened arcs lie out, at most
