@@ -468,11 +468,13 @@ bool Planner::approach() {
   Pose palm = palm2_;
   palm.translation() += eta_ * palm2_.linear().col(2);
   // The exact free distance of the palm and the extended fingers (each gap bounds how far that
-  // part can translate before it touches O).
+  // part can translate before it touches O). Each gap is asked only up to the smallest so far:
+  // beyond that cap a gap is reported as some value at least the cap, which leaves the minimum
+  // as it is.
   double free = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), kInf);
   for (int m = 0; m < M; ++m) {
     const Chain& c = chains_[m];
-    for (int n = 0; n < N; ++n) free = std::min(free, link_gap(m, c[n], c[n + 1], kInf));
+    for (int n = 0; n < N; ++n) free = std::min(free, link_gap(m, c[n], c[n + 1], free));
   }
   const double total = free - level;
   if (!(total >= s) || !std::isfinite(total)) return false;  // within a step of O: the regular iteration lands
