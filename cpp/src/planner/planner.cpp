@@ -667,6 +667,7 @@ void Planner::phase2_iteration() {
     const double new_eta = eta_ + sig;
     for (int m = 0; m < M; ++m) {
       Chain c;
+      bool checked = false;  // c was found clear of the other fingers and itself, against `out`
       switch (st[m]) {
         case TipState::kFrozen:
         case TipState::kDone:  // rigidly with the palm: the joint angles do not change
@@ -681,7 +682,7 @@ void Planner::phase2_iteration() {
           // follow no other way, opens (its root joint turns back) while the palm advances.
           const bool may_open = hug && !last && !palm_touched_ && touching[m] && !closing_[m];
           bool ok = may_open && prefer_open[m] && open_step(m, old[m], new_eta, out, c);
-          bool opened = ok;
+          bool opened = ok;  // open_step checks the fingers itself
           for (int pass = 0; pass < 2 && !ok; ++pass) {
             if (pass == 1 && (sig == 0.0 || cand[m] == old[m])) break;  // the same chain again
             c = pass == 0 ? cand[m] : old[m];
@@ -693,22 +694,29 @@ void Planner::phase2_iteration() {
             }
             // Hug rule: a chain that would hit another finger or itself while the palm moves is
             // refused like one whose motion collides (the old chain re-attached is tried next).
-            if (ok && hug && !last && !fingers_clear(m, c, out)) {
-              ok = false;
-              ++stats_.finger_collisions;
+            if (ok && hug && !last) {
+              checked = fingers_clear(m, c, out);
+              if (!checked) {
+                ok = false;
+                ++stats_.finger_collisions;
+              }
             }
           }
           if (!ok && may_open && !prefer_open[m]) ok = opened = open_step(m, old[m], new_eta, out, c);
-          if (opened) opened_now[m] = 1;
+          if (opened) {
+            opened_now[m] = 1;
+            checked = true;
+          }
           if (!ok) {
             if (!last) return false;
             c = old[m];  // last: sig == 0, the old chain is still attached to its root
             st[m] = TipState::kDone;
+            checked = false;
           }
           break;
         }
       }
-      if (!fingers_clear(m, c, out)) {
+      if (!checked && !fingers_clear(m, c, out)) {
         if (!last) return false;
         c = old[m];
         for (Vec2& x : c) x.y() += sig;
