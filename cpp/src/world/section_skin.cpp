@@ -402,34 +402,36 @@ void PlaneRegion::simplify(double tol) {
     const int x = root(ends[i].id), y = root(ends[j].id);
     if (x != y) parent[std::max(x, y)] = std::min(x, y);
   });
+  std::vector<int> vertex(2 * n);  // each end's vertex (its root end)
+  for (int e = 0; e < 2 * n; ++e) vertex[e] = root(e);
   // A segment whose two ends are one vertex (an arc shorter than kJoin, where two pieces meet)
   // is left out: the chain through its vertex joins its neighbours at one point.
   std::vector<char> used(n, 0);
   for (int e = 0; e < 2 * n; e += 2)
-    if (root(e) == root(e + 1)) used[e / 2] = 1;
-  // Per vertex (its root end): how many segment ends.
+    if (vertex[e] == vertex[e + 1]) used[e / 2] = 1;
+  // Per vertex: how many segment ends.
   std::vector<int> degree(2 * n, 0);
   for (int e = 0; e < 2 * n; ++e)
-    if (!used[e / 2]) ++degree[root(e)];
+    if (!used[e / 2]) ++degree[vertex[e]];
   // A run of pieces can go on into R beyond a crossing without crossing anything itself (the
   // pieces of features that another feature covers): drop_inner_segments flags only the piece
   // crossed. With the parts inside R dropped, such a run is left with a loose end (a vertex of
   // one segment) where it joined a dropped part, or it meets R's boundary at a junction (a
   // vertex of three or more). Each segment with such an end, not tested yet, is tested once and
   // dropped if inside R, which may leave its neighbour loose in turn.
-  {
+  std::vector<int> queue;
+  for (int e = 0; e < 2 * n; ++e)
+    if (!used[e / 2] && degree[vertex[e]] != 2 && !tested[e / 2]) queue.push_back(e / 2);
+  if (!queue.empty()) {
     std::vector<int> start(2 * n + 1, 0), at(2 * n);  // the segment ends of each vertex
     for (int e = 0; e < 2 * n; ++e)
-      if (!used[e / 2]) ++start[root(e) + 1];
+      if (!used[e / 2]) ++start[vertex[e] + 1];
     for (int v = 0; v < 2 * n; ++v) start[v + 1] += start[v];
     {
       std::vector<int> fill(start.begin(), start.end() - 1);
       for (int e = 0; e < 2 * n; ++e)
-        if (!used[e / 2]) at[fill[root(e)]++] = e;
+        if (!used[e / 2]) at[fill[vertex[e]]++] = e;
     }
-    std::vector<int> queue;
-    for (int e = 0; e < 2 * n; ++e)
-      if (!used[e / 2] && degree[root(e)] != 2 && !tested[e / 2]) queue.push_back(e / 2);
     while (!queue.empty()) {
       const int i = queue.back();
       queue.pop_back();
@@ -439,21 +441,20 @@ void PlaneRegion::simplify(double tol) {
       used[i] = 1;  // dropped
       ++dropped_;
       for (const int e : {2 * i, 2 * i + 1}) {
-        const int v = root(e);
+        const int v = vertex[e];
         if (--degree[v] == 2) continue;
         for (int k = start[v]; k < start[v + 1]; ++k)
           if (!used[at[k] / 2] && !tested[at[k] / 2]) queue.push_back(at[k] / 2);
       }
     }
   }
-  // Per vertex: the first two segment ends left.
+  // Per vertex: the first two segment ends left (degree is its count of them).
   std::vector<int> first(2 * n, -1), second(2 * n, -1);
-  std::fill(degree.begin(), degree.end(), 0);
   for (int e = 0; e < 2 * n; ++e) {
     if (used[e / 2]) continue;
-    const int v = root(e);
-    if (degree[v]++ == 0) first[v] = e;
-    else if (degree[v] == 2) second[v] = e;
+    const int v = vertex[e];
+    if (first[v] < 0) first[v] = e;
+    else if (second[v] < 0) second[v] = e;
   }
   // Chains: runs of segments through vertices where exactly two meet, walked from a vertex
   // where some other number meet (or, for a closed loop, from any vertex).
@@ -470,7 +471,7 @@ void PlaneRegion::simplify(double tol) {
       seg.push_back(i);
       const int other = e ^ 1;  // the segment's other end
       P.push_back(point(other));
-      const int v = root(other);
+      const int v = vertex[other];
       if (degree[v] != 2) break;
       const int next = first[v] == other ? second[v] : first[v];
       if (used[next / 2]) {
@@ -482,7 +483,7 @@ void PlaneRegion::simplify(double tol) {
     simplify_chain(P, seg, tol, &out);
   };
   for (int e = 0; e < 2 * n; ++e)
-    if (!used[e / 2] && degree[root(e)] != 2) walk(e);
+    if (!used[e / 2] && degree[vertex[e]] != 2) walk(e);
   for (int e = 0; e < 2 * n; e += 2)
     if (!used[e / 2]) walk(e);
   segments_.swap(out);
