@@ -387,8 +387,7 @@ void PlaneRegion::simplify(double tol) {
   const int n = static_cast<int>(segments_.size());
   if (n < 3) return;
   tested.resize(n, 0);
-  // The end points, joined where they lie within kJoin (one vertex), each with the segments
-  // that end there.
+  // The end points, joined where they lie within kJoin (one vertex).
   auto point = [&](int e) -> const Vec2& { return e % 2 == 0 ? segments_[e / 2].a : segments_[e / 2].b; };
   std::vector<IdPoint> ends(2 * n);  // id: 2 * segment + (0: a, 1: b)
   for (int e = 0; e < 2 * n; ++e) ends[e] = {point(e).x(), point(e).y(), e};
@@ -418,7 +417,10 @@ void PlaneRegion::simplify(double tol) {
   // crossed. With the parts inside R dropped, such a run is left with a loose end (a vertex of
   // one segment) where it joined a dropped part, or it meets R's boundary at a junction (a
   // vertex of three or more). Each segment with such an end, not tested yet, is tested once and
-  // dropped if inside R, which may leave its neighbour loose in turn.
+  // dropped if inside R, which may leave its neighbour loose in turn. A segment is tested at its
+  // middle, as drop_inner_segments tests a part: with the crossings cut, no segment has parts on
+  // both sides of R's boundary (a crossing the search misses, within 1e-9 of a segment's end or
+  // at an angle below 1e-9, could leave a gap of about that size).
   std::vector<int> queue;
   for (int e = 0; e < 2 * n; ++e)
     if (!used[e / 2] && degree[vertex[e]] != 2 && !tested[e / 2]) queue.push_back(e / 2);

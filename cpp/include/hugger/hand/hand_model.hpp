@@ -96,7 +96,8 @@ class HandModel {
   std::vector<Vec3> forward(const Pose& palm, const MatrixX& angles) const;
   /// In-plane forward kinematics of one finger from its root (xi, eta) and its angles.
   std::vector<Vec2> forward_planar(int m, const Vec2& root, const double* angles) const;
-  /// The same into `out` (resized to N+1; no allocation once it has the room).
+  /// The same into `out` (resized to N+1; no allocation once it has the room). `root` must not
+  /// be an element of `*out`.
   void forward_planar(int m, const Vec2& root, const double* angles, std::vector<Vec2>* out) const;
   /// Joint angles of one finger from its in-plane joint positions (N+1 points).
   static void planar_angles(const std::vector<Vec2>& joints, double* angles);

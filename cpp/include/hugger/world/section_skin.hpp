@@ -13,7 +13,9 @@
 /// that no segment starting outside R can cross unseen. Parts of pieces that other pieces cross
 /// into R are dropped, and so are the runs of pieces that go on inside R beyond them (tested in
 /// 3D from their loose ends and junctions), so that the pieces left are R's boundary (to within
-/// nanometres inside it); joined end to end into chains, they are simplified outward
+/// nanometres inside it; a closed loop of pieces that crosses nothing, as a separate part of O
+/// lying within r of another would give, is not tested); joined end to end into chains, they
+/// are simplified outward
 /// with what remains of the tolerance (every point at most `flatten` outside R), so that their
 /// number follows R's curvature rather than the mesh. A 2D BVH over the segments answers every
 /// query of a link in the plane in about a thousand instructions, nearly independently of the
