@@ -101,6 +101,36 @@ inline Mesh cylinder(double radius, double half, int n) {
   return to_mesh(v, f);
 }
 
+/// A torus about the z axis: the circle of radius `minor` about the circle of radius `major` in
+/// the plane z = 0, `n` x `m` quads, outward normals.
+inline Mesh torus(double major, double minor, int n, int m) {
+  std::vector<Vec3> v;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const double a = 2.0 * kPi * i / n, b = 2.0 * kPi * j / m;
+      const double rho = major + minor * std::cos(b);
+      v.emplace_back(rho * std::cos(a), rho * std::sin(a), minor * std::sin(b));
+    }
+  std::vector<std::array<std::int64_t, 3>> f;
+  auto at = [&](int i, int j) { return static_cast<std::int64_t>(((i + n) % n) * m + (j + m) % m); };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      f.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      f.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  return to_mesh(v, f);
+}
+
+/// The union of two meshes (their vertices and faces side by side: two separate parts).
+inline Mesh join(const Mesh& x, const Mesh& y) {
+  Mesh out;
+  out.vertices.resize(x.vertices.rows() + y.vertices.rows(), 3);
+  out.vertices << x.vertices, y.vertices;
+  out.faces.resize(x.faces.rows() + y.faces.rows(), 3);
+  out.faces << x.faces, (y.faces.array() + x.vertices.rows()).matrix();
+  return out;
+}
+
 /// `curvy` (hugger.objects.curvy; non-convex: concave dents): the unit icosphere of
 /// `subdivisions`, each vertex v = (x, y, z) moved to p = v * rho(v) * 0.04 with rho = 1 + 0.20
 /// sin(3.0x+0.7) cos(2.5y-0.3) + 0.12 sin(4.0z+1.2) cos(2.0x-0.5) + 0.10 cos(3.5y+0.9) sin(2.5z)

@@ -481,6 +481,39 @@ TEST(SectionSkin, BoundaryLiesJustOutsideRIn3D) {
   EXPECT_LE(worst_in, 1e-8);
 }
 
+// A closed loop of pieces that crosses nothing can lie inside R: a sphere of radius 8 mm in the
+// hole of a torus (tube from 10 to 30 mm from the axis) gives, in the torus's plane with r = 4 mm,
+// the sphere's circle at 12 mm (inside the torus) and the torus's inner circle at 6 mm (inside
+// the sphere), while R is the whole disk to 34 mm. Both loops are dropped, and the side test
+// knows the gap between the two parts for inside R.
+TEST(SectionSkin, ClosedLoopsInsideRAreDropped) {
+  test::Mesh ball = test::icosphere(3);
+  ball.vertices *= 0.008;
+  const test::Mesh m = test::join(test::torus(0.02, 0.01, 64, 32), ball);
+  auto object = std::make_shared<Object>(m.vertices, m.faces);
+  FingerPlane pl;
+  pl.origin = Vec3::Zero();
+  pl.u = Vec3::UnitX();
+  pl.p = Vec3::UnitY();
+  const double r = 0.004;
+  const PlaneRegion R(object, pl, r, kFlatten);
+  ASSERT_FALSE(R.segments().empty());
+  double nearest_to_axis = kInf, worst_in = 0.0;
+  for (const auto& s : R.segments())
+    for (double t : {0.0, 0.5, 1.0}) {
+      const Vec2 x = s.a + t * (s.b - s.a);
+      nearest_to_axis = std::min(nearest_to_axis, x.norm());
+      const Vec3 X = pl.to_world(x);
+      worst_in = std::max(worst_in, r - object->nearest(X, X).signed_distance);
+    }
+  std::printf("  %zu segments, the nearest %.4g m from the axis, deepest inside R %.3g m\n", R.segments().size(),
+              nearest_to_axis, worst_in);
+  EXPECT_GT(nearest_to_axis, 0.033);  // only the outer circle, at about 34 mm, is left
+  EXPECT_LE(worst_in, 1e-8);
+  for (double x : {0.0, 0.005, 0.009, 0.012, 0.02, 0.032}) EXPECT_TRUE(R.inside(Vec2(x, 0.0))) << x;
+  EXPECT_FALSE(R.inside(Vec2(0.036, 0.0)));
+}
+
 // Boundary following in closed form (the level curve walked exactly) against the generic
 // marching procedure, on random tips just outside R in random planes: where the closed form
 // answers, its head lies on the level curve and `step` from the tip (to rounding), and within

@@ -420,9 +420,10 @@ void PlaneRegion::simplify(double tol) {
   // dropped if inside R, which may leave its neighbour loose in turn. A segment is tested at its
   // middle, as drop_inner_segments tests a part: with the crossings cut, no segment has parts on
   // both sides of R's boundary (a crossing the search misses, within 1e-9 of a segment's end or
-  // at an angle below 1e-9, could leave a gap of about that size).
+  // at an angle below 1e-9, could leave a gap of about that size). For r = 0 the pieces are O's
+  // own section, which has no runs inside O, and lie on its surface, where the test cannot tell.
   std::vector<int> queue;
-  for (int e = 0; e < 2 * n; ++e)
+  for (int e = 0; e < 2 * n && radius_ > 0.0; ++e)
     if (!used[e / 2] && degree[vertex[e]] != 2 && !tested[e / 2]) queue.push_back(e / 2);
   if (!queue.empty()) {
     std::vector<int> start(2 * n + 1, 0), at(2 * n);  // the segment ends of each vertex
@@ -464,7 +465,11 @@ void PlaneRegion::simplify(double tol) {
   out.reserve(n);
   std::vector<Vec2> P;
   std::vector<int> seg;
-  auto walk = [&](int e0) {  // e0: the end of the first segment the chain leaves from
+  // A closed loop (every vertex of it joins two segments) that crosses nothing lies wholly on
+  // R's boundary or wholly inside R (a separate part of O within r of another gives one): unless
+  // a segment of it was tested already, the middle of its longest segment is tested, and a loop
+  // inside R is dropped (not for r = 0: see the run test above).
+  auto walk = [&](int e0, bool closed) {  // e0: the end of the first segment the chain leaves from
     P.assign(1, point(e0));
     seg.clear();
     for (int e = e0;;) {
@@ -482,12 +487,21 @@ void PlaneRegion::simplify(double tol) {
       }
       e = next;
     }
+    if (closed && radius_ > 0.0 && std::none_of(seg.begin(), seg.end(), [&](int i) { return tested[i]; })) {
+      const auto longest = std::max_element(seg.begin(), seg.end(), [&](int a, int b) {
+        return (segments_[a].b - segments_[a].a).squaredNorm() < (segments_[b].b - segments_[b].a).squaredNorm();
+      });
+      if (strictly_inside_3d(0.5 * (segments_[*longest].a + segments_[*longest].b))) {
+        dropped_ += static_cast<long>(seg.size());
+        return;
+      }
+    }
     simplify_chain(P, seg, tol, &out);
   };
   for (int e = 0; e < 2 * n; ++e)
-    if (!used[e / 2] && degree[vertex[e]] != 2) walk(e);
+    if (!used[e / 2] && degree[vertex[e]] != 2) walk(e, false);
   for (int e = 0; e < 2 * n; e += 2)
-    if (!used[e / 2]) walk(e);
+    if (!used[e / 2]) walk(e, true);
   segments_.swap(out);
 }
 
