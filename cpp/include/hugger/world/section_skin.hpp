@@ -12,10 +12,9 @@
 /// flattened *outward* (tangent polygons, at most flatten / 2 out), so the pieces form a barrier
 /// that no segment starting outside R can cross unseen. Parts of pieces that other pieces cross
 /// into R are dropped, and so are the runs of pieces that go on inside R beyond them (tested in
-/// 3D from their loose ends and junctions), so that the pieces left are R's boundary (to within
-/// nanometres inside it; a closed loop of pieces that crosses nothing, as a separate part of O
-/// lying within r of another would give, is not tested); joined end to end into chains, they
-/// are simplified outward
+/// 3D from their loose ends and junctions) and the closed loops of pieces inside R, so that the
+/// pieces left are R's boundary (to within nanometres inside it); joined end to end into chains,
+/// they are simplified outward
 /// with what remains of the tolerance (every point at most `flatten` outside R), so that their
 /// number follows R's curvature rather than the mesh. A 2D BVH over the segments answers every
 /// query of a link in the plane in about a thousand instructions, nearly independently of the
@@ -152,9 +151,10 @@ class PlaneRegion {
   void build_pieces();
   void build_bvh();
   /// Drops the runs of segments that go on inside R beyond a crossing (found from their loose
-  /// ends and junctions, each tested once in 3D), then replaces the chains of segments (joined
-  /// end to end, two at each inner vertex) by fewer segments that lie outside them, behind which
-  /// every original vertex lies within `tol`.
+  /// ends and junctions, each tested once in 3D) and the closed loops inside R (one test each;
+  /// neither for r = 0), then replaces the chains of segments (joined end to end, two at each
+  /// inner vertex) by fewer segments that lie outside them, behind which every original vertex
+  /// lies within `tol`.
   void simplify(double tol);
   /// One chain: points P (P[i], P[i + 1] the ends of segments_[seg[i]]); appends the new
   /// segments to `out`.
