@@ -218,9 +218,9 @@ PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane
                         "PlaneRegion: the flattening tolerance must be positive, got " << flatten);
   build_pieces();
   mark_crossings();
-  drop_inner_segments();
+  std::vector<char> tested = drop_inner_segments();
   // The chains may move out by what the arcs' flattening left of the tolerance (at least half).
-  simplify(flatten_ - std::min(arc_deviation_, 0.5 * flatten_));
+  simplify(flatten_ - std::min(arc_deviation_, 0.5 * flatten_), &tested);
   build_bvh();
   build_cells();
   link_segments();
@@ -311,6 +311,18 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
   };
   int k = nr.segment;
   const Segment* s = &segments_[k];
+  // The arc about c from direction d0 through `sweep` (none at a concave or straight vertex),
+  // then onto segment `onto`: nonzero where the head lies on the arc (1) or is refused there (-1).
+  auto turn_onto = [&](const Vec2& c, const Vec2& d0, double sweep, int onto) {
+    if (sweep > 0.0) {
+      const int done = arc(c, d0, sweep);
+      if (done != 0) return done;
+    }
+    k = onto;
+    s = &segments_[k];
+    ++*pieces;
+    return 0;
+  };
   const Vec2 g = (tip - nr.on_region) / nr.distance;
   at = nr.on_region + l * g;
   if (!acceptable(at)) return false;
@@ -325,13 +337,7 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
     const Vec2 n1 = segments_[onto].normal, c = on_head ? h0 : nr.on_region;
     const double sweep = std::atan2(cross2(g, n1), g.dot(n1));
     if (sweep < -1e-9) return false;  // not a convex corner between them: the generic walk decides
-    if (sweep > 0.0) {
-      const int done = arc(c, g, sweep);
-      if (done != 0) return done > 0;
-    }
-    k = onto;
-    s = &segments_[k];
-    ++*pieces;
+    if (const int done = turn_onto(c, g, sweep, onto)) return done > 0;
   }
   // Then segment by segment: the moved segment from `at` to its end (its head moved out, or the
   // crossing with the next moved segment at a concave vertex), then the arc at a convex vertex.
@@ -370,22 +376,15 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
       *head = at;  // as far as the generic walk would go without reaching the chord
       return true;
     }
-    if (sweep > 0.0) {
-      const int done = arc(hk, n, sweep);
-      if (done != 0) return done > 0;
-    }
-    k = nx;
-    s = &segments_[k];
-    ++*pieces;
+    if (const int done = turn_onto(hk, n, sweep, nx)) return done > 0;
   }
   return false;
 }
 
-void PlaneRegion::simplify(double tol) {
-  std::vector<char> tested;  // drop_inner_segments' tests, per segment
-  tested.swap(tested_);
+void PlaneRegion::simplify(double tol, std::vector<char>* tested_in) {
   const int n = static_cast<int>(segments_.size());
   if (n < 3) return;
+  std::vector<char>& tested = *tested_in;
   tested.resize(n, 0);
   // The end points, joined where they lie within kJoin (one vertex).
   auto point = [&](int e) -> const Vec2& { return e % 2 == 0 ? segments_[e / 2].a : segments_[e / 2].b; };
@@ -514,7 +513,7 @@ void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<i
   bool consistent = true;
   for (int i = 0; i < k && consistent; ++i)
     consistent = side0 * left_of(P[i + 1] - P[i]).dot(segments_[seg[i]].normal) > 0.0;
-  auto emit = [&](const Vec2& a, const Vec2& b, int piece) {
+  auto emit = [&](std::vector<Segment>* to, const Vec2& a, const Vec2& b, int piece) {
     const Vec2 d = b - a;
     const double len = d.norm();
     if (!(len > 0.0)) return;
@@ -523,7 +522,7 @@ void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<i
     s.b = b;
     s.normal = side0 * left_of(d) / len;
     s.piece = piece;
-    out->push_back(s);
+    to->push_back(s);
   };
   if (!consistent || k < 2) {
     for (int i = 0; i < k; ++i) out->push_back(segments_[seg[i]]);
@@ -603,11 +602,11 @@ void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<i
           best = b;
           corner = w;
         }
-        emit(from, corner, segments_[seg[a]].piece);
+        emit(out, from, corner, segments_[seg[a]].piece);
         from = corner;
         a = best;
       }
-      emit(from, P[e], segments_[seg[a]].piece);
+      emit(out, from, P[e], segments_[seg[a]].piece);
       const std::size_t by_lines = out->size() - mark;
       auto moved = [&](int v) {
         if (v == s0 || v == e) return P[v];
@@ -615,12 +614,10 @@ void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<i
         const double len = nv.norm();
         return len > 0.0 ? Vec2(P[v] + (tol / len) * nv) : P[v];
       };
-      thread_local std::vector<Segment> chords;
-      chords.clear();
-      std::swap(*out, chords);  // emit appends to *out: the chords go to their own list first
+      std::vector<Segment> chords;
       a = s0;
       from = P[s0];
-      while (a < e && out->size() < by_lines) {
+      while (a < e && chords.size() < by_lines) {
         int best = a + 1;
         Vec2 to = moved(a + 1);
         for (int b = a + 2; b <= e; ++b) {
@@ -629,11 +626,10 @@ void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<i
           best = b;
           to = q;
         }
-        emit(from, to, segments_[seg[a]].piece);
+        emit(&chords, from, to, segments_[seg[a]].piece);
         from = to;
         a = best;
       }
-      std::swap(*out, chords);
       if (a == e && chords.size() < by_lines) {
         out->resize(mark);
         out->insert(out->end(), chords.begin(), chords.end());
@@ -645,7 +641,7 @@ void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<i
       while (a < e) {
         int best = a + 1;
         for (int b = a + 2; b <= e && behind(P[a], P[b], a + 1, b - 1, tol, 0.0); ++b) best = b;
-        emit(P[a], P[best], segments_[seg[a]].piece);
+        emit(out, P[a], P[best], segments_[seg[a]].piece);
         a = best;
       }
     }
@@ -716,7 +712,7 @@ bool PlaneRegion::strictly_inside_3d(const Vec2& x) const {
   return O.inside(X);
 }
 
-void PlaneRegion::drop_inner_segments() {
+std::vector<char> PlaneRegion::drop_inner_segments() {
   // Crossed segments are cut at their crossings. Then every part of a flagged piece lies wholly
   // on R's boundary or wholly inside R, and those inside are dropped (the rest still covers the
   // boundary, and no segment left has parts inside R).
@@ -763,8 +759,8 @@ void PlaneRegion::drop_inner_segments() {
   cuts_.clear();
   cuts_.shrink_to_fit();
   segments_.swap(kept);
-  tested_.swap(tested);
   for (auto& p : pieces_) p.crossed = false;  // resolved
+  return tested;
 }
 
 void PlaneRegion::add_segment(const Vec2& a, const Vec2& b, const Vec2& outward, int piece) {
@@ -1393,18 +1389,20 @@ void PlaneRegion::mark_crossings() {
   auto cell_of = [&](double x, int axis) {
     return static_cast<int>(std::clamp(std::floor((x - lo[axis]) / cell[axis]), 0.0, g - 1.0));
   };
-  std::vector<std::array<Vec2, 2>> box(n);  // each segment's box, grown by kTouch
+  std::vector<std::array<Vec2, 2>> box(n);    // each segment's box, grown by kTouch
+  std::vector<std::array<int, 4>> cells(n);  // and the cells it meets: x0, x1, y0, y1
   for (std::size_t i = 0; i < n; ++i) {
     const Segment& sg = segments_[i];
     box[i] = {Vec2(sg.a.cwiseMin(sg.b).array() - kTouch), Vec2(sg.a.cwiseMax(sg.b).array() + kTouch)};
+    cells[i] = {cell_of(box[i][0].x(), 0), cell_of(box[i][1].x(), 0), cell_of(box[i][0].y(), 1), cell_of(box[i][1].y(), 1)};
   }
   // The segments of each cell (compressed rows: counted, then filled).
   std::vector<int> start(static_cast<std::size_t>(g) * g + 1, 0), items;
   for (int pass = 0; pass < 2; ++pass) {
     std::vector<int> fill(start.begin(), start.end() - 1);
     for (std::size_t i = 0; i < n; ++i)
-      for (int cy = cell_of(box[i][0].y(), 1); cy <= cell_of(box[i][1].y(), 1); ++cy)
-        for (int cx = cell_of(box[i][0].x(), 0); cx <= cell_of(box[i][1].x(), 0); ++cx) {
+      for (int cy = cells[i][2]; cy <= cells[i][3]; ++cy)
+        for (int cx = cells[i][0]; cx <= cells[i][1]; ++cx) {
           const int c = cy * g + cx;
           if (pass == 0) ++start[c + 1];
           else items[fill[c]++] = static_cast<int>(i);

@@ -154,8 +154,9 @@ class PlaneRegion {
   /// ends and junctions, each tested once in 3D) and the closed loops inside R (one test each;
   /// neither for r = 0), then replaces the chains of segments (joined end to end, two at each
   /// inner vertex) by fewer segments that lie outside them, behind which every original vertex
-  /// lies within `tol`.
-  void simplify(double tol);
+  /// lies within `tol`. `tested`: per segment, whether a 3D test found it on R's boundary
+  /// (drop_inner_segments' answer, updated here).
+  void simplify(double tol, std::vector<char>* tested);
   /// One chain: points P (P[i], P[i + 1] the ends of segments_[seg[i]]); appends the new
   /// segments to `out`.
   void simplify_chain(const std::vector<Vec2>& P, const std::vector<int>& seg, double tol,
@@ -167,8 +168,8 @@ class PlaneRegion {
   /// Cuts crossed segments at their crossings and drops the parts of flagged pieces that lie
   /// inside R: a part that starts at a crossing on the inner side of the crossing piece (whose
   /// feature is then nearer than r just past it), and every other part whose middle the 3D test
-  /// finds inside.
-  void drop_inner_segments();
+  /// finds inside. Returns, per segment kept, whether the 3D test found it on R's boundary.
+  std::vector<char> drop_inner_segments();
   int build_node(int begin, int end, std::vector<Vec2>& centres, int depth);
   /// The grid of cells that no segment touches, each labelled inside or outside R (one inside
   /// test per connected group of such cells: no boundary separates two of its points).
@@ -199,7 +200,6 @@ class PlaneRegion {
     bool operator<(const Cut& o) const { return segment < o.segment || (segment == o.segment && t < o.t); }
   };
   std::vector<Cut> cuts_;
-  std::vector<char> tested_;  ///< while building: per segment, the 3D test found it on R's boundary
   std::vector<std::array<Vec2, 2>> piece_ends_;  ///< while building: first and last point of each piece
   int depth_ = 0;
   double arc_deviation_ = 0.0;  ///< while building: how far the flattened arcs lie out, at most
