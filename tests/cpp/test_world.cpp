@@ -81,6 +81,29 @@ TEST(TriangleBvh, TwoThreadsBuildTheSameTree) {
   }
 }
 
+// The BVH build's order of centres is a comparison sort's by (value, index), over values with
+// many ties, both zeros, subnormals, infinities and values of every magnitude and sign.
+TEST(TriangleBvh, AscendingOrderIsSortByValueThenIndex) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::uniform_int_distribution<int> pick(0, 9);
+  const double specials[] = {0.0, -0.0, 5e-324, -5e-324, 2.2e-308, kInf, -kInf, 1e300, -1e300, 0.25};
+  for (int n : {0, 1, 2, 7, 100, 5000, 40000}) {
+    std::vector<double> values(static_cast<std::size_t>(n));
+    for (double& v : values) {
+      const int kind = pick(rng);
+      if (kind < 3) v = specials[pick(rng)];                        // ties and edge cases
+      else if (kind < 5) v = std::ldexp(unit(rng), pick(rng) * 60 - 300);  // any magnitude
+      else v = std::round(unit(rng) * 50.0) / 50.0;                 // a few distinct values, tied
+    }
+    std::vector<int> expected(values.size());
+    for (int i = 0; i < n; ++i) expected[i] = i;
+    std::sort(expected.begin(), expected.end(),
+              [&](int a, int b) { return values[a] < values[b] || (values[a] == values[b] && a < b); });
+    EXPECT_EQ(ascending_order(values), expected) << n << " values";
+  }
+}
+
 TEST(Object, SignAgreesWithRayParityAndAnalyticEllipsoid) {
   const Vec3 radii(0.05, 0.04, 0.03);
   const auto mesh = test::icosphere(4, radii);

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <future>
 #include <stdexcept>
 #include <system_error>
@@ -16,36 +18,148 @@ constexpr int kParallelBuild = 16384;
 
 }  // namespace
 
+namespace {
+
+/// The bits of x (-0 taken as +0) as an unsigned integer in the same order as the doubles.
+std::uint64_t order_key(double x) {
+  x += 0.0;
+  std::uint64_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  return bits >> 63 ? ~bits : bits | (std::uint64_t{1} << 63);
+}
+
+}  // namespace
+
+std::vector<int> ascending_order(const std::vector<double>& values) {
+  // A least-significant-digit radix sort of the keys' 11-bit digits, stable (so ties keep the
+  // indices' order); digits that all keys share are skipped. Branch-free, where a comparison
+  // sort of such values is a coin toss per comparison.
+  constexpr int kBits = 11, kDigits = (64 + kBits - 1) / kBits, kBuckets = 1 << kBits;
+  const int n = static_cast<int>(values.size());
+  std::vector<std::uint64_t> key(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) key[i] = order_key(values[i]);
+  std::vector<int> order(static_cast<std::size_t>(n)), scratch(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) order[i] = i;
+  std::vector<std::array<int, kBuckets>> count(kDigits);
+  for (auto& c : count) c.fill(0);
+  for (const std::uint64_t k : key)
+    for (int d = 0; d < kDigits; ++d) ++count[d][(k >> (kBits * d)) & (kBuckets - 1)];
+  for (int d = 0; d < kDigits; ++d) {
+    std::array<int, kBuckets>& c = count[d];
+    if (n == 0 || c[(key[0] >> (kBits * d)) & (kBuckets - 1)] == n) continue;
+    for (int b = 0, sum = 0; b < kBuckets; ++b) {
+      const int here = c[b];
+      c[b] = sum;
+      sum += here;
+    }
+    for (const int i : order) scratch[c[(key[i] >> (kBits * d)) & (kBuckets - 1)]++] = i;
+    order.swap(scratch);
+  }
+  return order;
+}
+
+TriangleBvh::Builder::Builder(const PointsN3& vertices_, const FacesN3& faces_, int leaf_size_)
+    : vertices(vertices_), faces(faces_), leaf_size(leaf_size_) {
+  const int n = static_cast<int>(faces.rows());
+  for (std::vector<double>& c : centres) c.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const Vec3 c = box(i).centre();
+    for (int k = 0; k < 3; ++k) centres[k][i] = c[k];
+  }
+  for (int k = 0; k < 3; ++k) sorted[k] = ascending_order(centres[k]);
+  scratch.resize(n);
+  lower.resize(n);
+}
+
+Aabb TriangleBvh::Builder::box(int t) const {
+  Aabb b;
+  for (int k = 0; k < 3; ++k) b.grow(Vec3(vertices.row(faces(t, k)).transpose()));
+  return b;
+}
+
+int TriangleBvh::Builder::split(int begin, int end) {
+  // An inner node's box is its children's union (the same box: min and max are exact), so only
+  // the centroids' box is needed here, for the split axis: the ends of each axis's list.
+  int axis = 0;  // the longest extent, the first axis on ties (as Eigen's maxCoeff)
+  double extent[3];
+  for (int k = 0; k < 3; ++k) extent[k] = centres[k][sorted[k][end - 1]] - centres[k][sorted[k][begin]];
+  for (int k = 1; k < 3; ++k)
+    if (extent[k] > extent[axis]) axis = k;
+  const int mid = (begin + end) / 2;
+  for (int i = begin; i < end; ++i) lower[sorted[axis][i]] = i < mid;
+  // The other two lists, each split into its lower and upper half in order (stable).
+  for (int k = 0; k < 3; ++k) {
+    if (k == axis) continue;
+    std::vector<int>& list = sorted[k];
+    int low = begin, high = mid;
+    for (int i = begin; i < end; ++i) {
+      const int t = list[i];
+      const int is_low = lower[t];
+      scratch[is_low ? low : high] = t;
+      low += is_low;
+      high += 1 - is_low;
+    }
+    std::copy(scratch.begin() + begin, scratch.begin() + end, list.begin() + begin);
+  }
+  return mid;
+}
+
+int TriangleBvh::Builder::build(int begin, int end, BuildOut& out, int depth) {
+  out.depth = std::max(out.depth, depth);
+  const int index = static_cast<int>(out.nodes.size());
+  out.nodes.emplace_back();
+  if (end - begin <= leaf_size) {
+    Aabb box;
+    for (int i = begin; i < end; ++i) box.grow(this->box(sorted[0][i]));
+    Node& nd = out.nodes[index];
+    nd.box = box;
+    nd.centre = box.centre();
+    nd.half = 0.5 * box.extent();
+    nd.first = static_cast<int>(out.order.size());
+    nd.count = end - begin;
+    for (int i = begin; i < end; ++i) out.order.push_back(sorted[0][i]);
+    return index;
+  }
+  const int mid = split(begin, end);
+  const int left = build(begin, mid, out, depth + 1);
+  const int right = build(mid, end, out, depth + 1);
+  Node& nd = out.nodes[index];
+  nd.left = left;
+  nd.right = right;
+  Aabb box = out.nodes[left].box;
+  box.grow(out.nodes[right].box);
+  nd.box = box;
+  nd.centre = box.centre();
+  nd.half = 0.5 * box.extent();
+  return index;
+}
+
 TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int leaf_size, int threads) {
   const int n = static_cast<int>(faces.rows());
   leaf_size = std::max(1, leaf_size);
-  std::vector<BuildItem> items(n);
-  std::vector<Aabb> boxes(n);
-  for (int i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) boxes[i].grow(Vec3(vertices.row(faces(i, k)).transpose()));
-    const Vec3 c = boxes[i].centre();
-    items[i] = {{c.x(), c.y(), c.z()}, i};
-  }
-  const std::size_t capacity = 2 * std::max(1, n / leaf_size) + 1;
+  Builder builder(vertices, faces, leaf_size);
+  // A median split makes leaves of more than leaf_size / 2 triangles: at most n / that leaves,
+  // and one fewer inner nodes.
+  const std::size_t capacity = 2 * static_cast<std::size_t>(std::max(1, n / ((leaf_size + 1) / 2))) + 1;
   BuildOut out;
   if (threads == 0) threads = n >= kParallelBuild && std::thread::hardware_concurrency() >= 2 ? 2 : 1;
   if (threads >= 2 && n > leaf_size) {
     // The root's halves side by side, then laid out as the single-threaded build lays them out
     // (root, the left subtree, the right subtree; leaves in the same order): the same tree.
-    const int mid = split(items, 0, n);
+    const int mid = builder.split(0, n);
     BuildOut left, right;
     left.nodes.reserve(capacity / 2 + 1);
     right.nodes.reserve(capacity / 2 + 1);
     std::future<void> half;
     try {
-      half = std::async(std::launch::async, [&] { build(items, 0, mid, boxes, leaf_size, left, 1); });
+      half = std::async(std::launch::async, [&] { builder.build(0, mid, left, 1); });
     } catch (const std::system_error&) {  // no thread to be had: this one builds both halves
     }
-    build(items, mid, n, boxes, leaf_size, right, 1);
+    builder.build(mid, n, right, 1);
     if (half.valid())
       half.get();
     else
-      build(items, 0, mid, boxes, leaf_size, left, 1);
+      builder.build(0, mid, left, 1);
     const int nl = static_cast<int>(left.nodes.size()), first_right = static_cast<int>(left.order.size());
     out.nodes.reserve(1 + left.nodes.size() + right.nodes.size());
     out.nodes.emplace_back();
@@ -78,7 +192,7 @@ TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int lea
   } else {
     out.nodes.reserve(capacity);
     out.order.reserve(n);
-    build(items, 0, n, boxes, leaf_size, out, 0);
+    builder.build(0, n, out, 0);
   }
   nodes_ = std::move(out.nodes);
   depth_ = out.depth;
@@ -108,60 +222,6 @@ bool TriangleBvh::same_tree(const TriangleBvh& other) const {
       return false;
   }
   return true;
-}
-
-int TriangleBvh::split(std::vector<BuildItem>& items, int begin, int end) {
-  // An inner node's box is its children's union (the same box: min and max are exact), so only
-  // the centroids' box is gathered here, for the split axis.
-  double lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
-  for (int i = begin; i < end; ++i)
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], items[i].c[k]);
-      hi[k] = std::max(hi[k], items[i].c[k]);
-    }
-  // The longest extent, the first axis on ties (as Eigen's maxCoeff).
-  int axis = 0;
-  for (int k = 1; k < 3; ++k)
-    if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
-  const int mid = (begin + end) / 2;
-  // The lower half by (centre, index): a strict total order, so the halves are the same sets
-  // whatever the order of the range.
-  std::nth_element(items.begin() + begin, items.begin() + mid, items.begin() + end,
-                   [axis](const BuildItem& x, const BuildItem& y) {
-                     return x.c[axis] < y.c[axis] || (x.c[axis] == y.c[axis] && x.id < y.id);
-                   });
-  return mid;
-}
-
-int TriangleBvh::build(std::vector<BuildItem>& items, int begin, int end, const std::vector<Aabb>& boxes,
-                       int leaf_size, BuildOut& out, int depth) {
-  out.depth = std::max(out.depth, depth);
-  const int index = static_cast<int>(out.nodes.size());
-  out.nodes.emplace_back();
-  if (end - begin <= leaf_size) {
-    Aabb box;
-    for (int i = begin; i < end; ++i) box.grow(boxes[items[i].id]);
-    Node& nd = out.nodes[index];
-    nd.box = box;
-    nd.centre = box.centre();
-    nd.half = 0.5 * box.extent();
-    nd.first = static_cast<int>(out.order.size());
-    nd.count = end - begin;
-    for (int i = begin; i < end; ++i) out.order.push_back(items[i].id);
-    return index;
-  }
-  const int mid = split(items, begin, end);
-  const int left = build(items, begin, mid, boxes, leaf_size, out, depth + 1);
-  const int right = build(items, mid, end, boxes, leaf_size, out, depth + 1);
-  Node& nd = out.nodes[index];
-  nd.left = left;
-  nd.right = right;
-  Aabb box = out.nodes[left].box;
-  box.grow(out.nodes[right].box);
-  nd.box = box;
-  nd.centre = box.centre();
-  nd.half = 0.5 * box.extent();
-  return index;
 }
 
 namespace {

@@ -25,13 +25,13 @@ std::uint64_t edge_key(std::int64_t a, std::int64_t b) {
 namespace {
 std::atomic<std::uint64_t> next_serial{1};
 
-/// Meshes at least this large build their BVH on a second thread (a smaller one builds in less
-/// time than a thread takes to start).
+/// Meshes at least this large build their surface (normals, adjacency, checks) on a second
+/// thread beside the BVH (a smaller one builds in less time than a thread takes to start).
 constexpr std::int64_t kConcurrentBvh = 4096;
 
 /// A directed edge leaving a vertex: its other end and the face holding it.
 struct OutEdge {
-  std::int64_t to, face;
+  std::int32_t to, face;
 };
 
 /// A face's area is zero (coincident or collinear vertices) when twice its area is at most this
@@ -170,6 +170,23 @@ void check_surface(const PointsN3& V, const FacesN3& F, const std::vector<std::i
   }
 }
 
+/// Each vertex's angle-weighted pseudo-normal (not normalised): the sum over its faces of the
+/// face's unit normal times the face's angle at the vertex.
+std::vector<Vec3> angle_weighted_normals(const PointsN3& V, const FacesN3& F, const std::vector<Vec3>& face_normals) {
+  std::vector<Vec3> normals(static_cast<std::size_t>(V.rows()), Vec3::Zero());
+  for (std::int64_t f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 p = V.row(F(f, k)), q = V.row(F(f, (k + 1) % 3)), r = V.row(F(f, (k + 2) % 3));
+      const Vec3 e1 = q - p, e2 = r - p;
+      const double l1 = e1.norm(), l2 = e2.norm();
+      if (l1 > 0 && l2 > 0) {
+        const double angle = std::acos(std::clamp(e1.dot(e2) / (l1 * l2), -1.0, 1.0));
+        normals[F(f, k)] += angle * face_normals[f];
+      }
+    }
+  return normals;
+}
+
 }  // namespace
 
 Object::Object(const PointsN3& vertices, const FacesN3& faces)
@@ -178,6 +195,7 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
   HUGGER_CHECK_ARGUMENT(nv != 0 && nf != 0, "object mesh is empty: it needs vertices (V,3) and faces (F,3), got V="
                                                  << nv << ", F=" << nf);
   HUGGER_CHECK_ARGUMENT(nv < (std::int64_t(1) << 31), "object mesh has too many vertices");
+  HUGGER_CHECK_ARGUMENT(nf < (std::int64_t(1) << 31), "object mesh has too many faces");
   for (std::int64_t i = 0; i < nv; ++i)
     HUGGER_CHECK_ARGUMENT(vertices_.row(i).allFinite(), "object vertex " << i << " is not finite (" << vertices_(i, 0)
                                                                          << ", " << vertices_(i, 1) << ", "
@@ -189,15 +207,37 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
     HUGGER_CHECK_ARGUMENT(faces_(f, 0) != faces_(f, 1) && faces_(f, 1) != faces_(f, 2) && faces_(f, 2) != faces_(f, 0),
                           "object face " << f << " repeats a vertex (degenerate triangle)");
   }
-  // The BVH needs only valid indices: a large mesh's is built on a second thread while this one
-  // checks the surface and computes the normals (the same tree on any number of threads).
-  // Should a check below throw, the future's destructor waits for the build first.
-  std::future<TriangleBvh> bvh;
+  // The BVH needs only valid indices; a large mesh's surface (normals, adjacency and the checks
+  // below) is built on a second thread beside it (the same results on any number of threads).
+  // A check that fails there is rethrown here once the BVH is built; should the BVH throw, the
+  // future's destructor waits for the other thread first.
+  std::future<void> surface;
   if (nf >= kConcurrentBvh) {
     try {
-      bvh = std::async(std::launch::async, [this] { return TriangleBvh(vertices_, faces_); });
+      surface = std::async(std::launch::async, [this] { build_surface(); });
     } catch (const std::system_error&) {  // no thread to be had: built below, on this one
     }
+  }
+  bvh_ = TriangleBvh(vertices_, faces_, 8, 1);
+  if (surface.valid())
+    surface.get();
+  else
+    build_surface();
+}
+
+void Object::build_surface() {
+  const std::int64_t nv = vertices_.rows(), nf = faces_.rows();
+  // Unit face normals and the volume, a sum of tetrahedra on a reference point inside the
+  // bounding box (taken about the origin, the terms of an object far from it are huge and cancel
+  // to rounding noise). Its sign is checked below, after the checks that come before it.
+  face_normals_.resize(nf);
+  const Vec3 ref = 0.5 * (vertices_.colwise().minCoeff() + vertices_.colwise().maxCoeff()).transpose();
+  for (std::int64_t f = 0; f < nf; ++f) {
+    const Vec3 a = vertices_.row(faces_(f, 0)), b = vertices_.row(faces_(f, 1)), c = vertices_.row(faces_(f, 2));
+    const Vec3 n = (b - a).cross(c - a);
+    volume_ += (a - ref).dot((b - ref).cross(c - ref)) / 6.0;
+    const double len = n.norm();
+    face_normals_[f] = len > 0.0 ? Vec3(n / len) : Vec3::Zero();
   }
   // Closed and consistently oriented: every directed edge once, and its reverse once. The
   // directed edges leaving each vertex, sorted by their other end (compressed rows: linear in
@@ -210,7 +250,8 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
   {
     std::vector<std::int64_t> fill(row.begin(), row.end() - 1);
     for (std::int64_t f = 0; f < nf; ++f)
-      for (int k = 0; k < 3; ++k) out[fill[faces_(f, k)]++] = {faces_(f, (k + 1) % 3), f};
+      for (int k = 0; k < 3; ++k)
+        out[fill[faces_(f, k)]++] = {static_cast<std::int32_t>(faces_(f, (k + 1) % 3)), static_cast<std::int32_t>(f)};
   }
   const auto by_end = [](const OutEdge& x, const OutEdge& y) { return x.to < y.to || (x.to == y.to && x.face < y.face); };
   for (std::int64_t a = 0; a < nv; ++a) {
@@ -225,61 +266,40 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
   // The face across directed edge (a, b): the one holding (b, a); -1 when there is none.
   const auto across = [&](std::int64_t a, std::int64_t b) -> std::int64_t {
     const auto first = out.begin() + row[b], last = out.begin() + row[b + 1];
-    const auto it = std::lower_bound(first, last, OutEdge{a, -1}, by_end);
+    const auto it = std::lower_bound(first, last, OutEdge{static_cast<std::int32_t>(a), -1}, by_end);
     return it != last && it->to == a ? it->face : -1;
   };
-  edge_normals_.resize(nf);
-  face_normals_.resize(nf);
-  neighbors_.resize(nf);
   // The one-ring of each vertex: the other ends of its outgoing directed edges (on a closed,
   // consistently oriented mesh every neighbour is the end of exactly one outgoing edge).
   ring_start_.assign(row.begin(), row.end());
-  ring_.resize(out.size());
-  for (std::size_t i = 0; i < out.size(); ++i) ring_[i] = out[i].to;
-  // Volume as a sum of tetrahedra on a reference point inside the bounding box: taken about the
-  // origin, the terms of an object far from it are huge and cancel to rounding noise.
-  const Vec3 ref = 0.5 * (vertices_.colwise().minCoeff() + vertices_.colwise().maxCoeff()).transpose();
+  ring_.reserve(out.size());
+  for (const OutEdge& e : out) ring_.push_back(e.to);
+  neighbors_.reserve(nf);
   for (std::int64_t f = 0; f < nf; ++f) {
-    const Vec3 a = vertices_.row(faces_(f, 0)), b = vertices_.row(faces_(f, 1)), c = vertices_.row(faces_(f, 2));
-    const Vec3 n = (b - a).cross(c - a);
-    volume_ += (a - ref).dot((b - ref).cross(c - ref)) / 6.0;
-    const double len = n.norm();
-    face_normals_[f] = len > 0.0 ? Vec3(n / len) : Vec3::Zero();
-  }
-  for (std::int64_t f = 0; f < nf; ++f)
+    std::array<std::int64_t, 3> across_edges;
     for (int k = 0; k < 3; ++k) {
       const std::int64_t a = faces_(f, k), b = faces_(f, (k + 1) % 3);
-      const std::int64_t g = across(a, b);
-      HUGGER_CHECK_ARGUMENT(g >= 0, "object mesh is not closed: edge (" << a << ", " << b << ") of face " << f
-                                                                       << " has no neighbouring face (a hole or a boundary)");
-      edge_normals_[f][k] = face_normals_[f] + face_normals_[g];
-      neighbors_[f][k] = g;
+      across_edges[k] = across(a, b);
+      HUGGER_CHECK_ARGUMENT(across_edges[k] >= 0, "object mesh is not closed: edge ("
+                                                      << a << ", " << b << ") of face " << f
+                                                      << " has no neighbouring face (a hole or a boundary)");
     }
+    neighbors_.push_back(across_edges);
+  }
   HUGGER_CHECK_ARGUMENT(volume_ > 0.0, "object mesh encloses a non-positive volume ("
                                            << volume_ << " m^3): its faces point inward (reverse the winding) or it is flat");
   check_surface(vertices_, faces_, row, out, neighbors_);
-  vertex_normals_.assign(nv, Vec3::Zero());
-  for (std::int64_t f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) {
-      const Vec3 p = vertices_.row(faces_(f, k)), q = vertices_.row(faces_((f), (k + 1) % 3)),
-                 r = vertices_.row(faces_(f, (k + 2) % 3));
-      const Vec3 e1 = q - p, e2 = r - p;
-      const double l1 = e1.norm(), l2 = e2.norm();
-      if (l1 > 0 && l2 > 0) {
-        const double angle = std::acos(std::clamp(e1.dot(e2) / (l1 * l2), -1.0, 1.0));
-        vertex_normals_[faces_(f, k)] += angle * face_normals_[f];
-      }
-    }
-  bvh_ = bvh.valid() ? bvh.get() : TriangleBvh(vertices_, faces_);
+  vertex_normals_ = angle_weighted_normals(vertices_, faces_, face_normals_);
 }
 
 double Object::sign_at(const Vec3& query, const Vec3& on_mesh, int triangle, TriangleFeature f) const {
   Vec3 n;
   switch (f) {
     case TriangleFeature::kFace: n = face_normals_[triangle]; break;
-    case TriangleFeature::kEdgeAB: n = edge_normals_[triangle][0]; break;
-    case TriangleFeature::kEdgeBC: n = edge_normals_[triangle][1]; break;
-    case TriangleFeature::kEdgeCA: n = edge_normals_[triangle][2]; break;
+    // An edge's pseudo-normal: the sum of its two faces' normals.
+    case TriangleFeature::kEdgeAB: n = face_normals_[triangle] + face_normals_[neighbors_[triangle][0]]; break;
+    case TriangleFeature::kEdgeBC: n = face_normals_[triangle] + face_normals_[neighbors_[triangle][1]]; break;
+    case TriangleFeature::kEdgeCA: n = face_normals_[triangle] + face_normals_[neighbors_[triangle][2]]; break;
     case TriangleFeature::kVertexA: n = vertex_normals_[faces_(triangle, 0)]; break;
     case TriangleFeature::kVertexB: n = vertex_normals_[faces_(triangle, 1)]; break;
     default: n = vertex_normals_[faces_(triangle, 2)]; break;

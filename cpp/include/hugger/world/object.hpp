@@ -65,6 +65,9 @@ class Object {
   std::uint64_t serial() const { return serial_; }
 
  private:
+  /// Face and vertex normals, volume, face adjacency and one-rings, and every check of the mesh
+  /// past its indices (the constructor's list).
+  void build_surface();
   bool inside_by_rays(const Vec3& p) const;
   double sign_at(const Vec3& query, const Vec3& on_mesh, int triangle, TriangleFeature f) const;
 
@@ -72,7 +75,6 @@ class Object {
   FacesN3 faces_;
   TriangleBvh bvh_;
   std::vector<Vec3> face_normals_;            ///< unit (zero for degenerate faces)
-  std::vector<std::array<Vec3, 3>> edge_normals_;  ///< per face, pseudo-normal of edges ab, bc, ca
   std::vector<Vec3> vertex_normals_;          ///< angle-weighted pseudo-normals
   std::vector<std::array<std::int64_t, 3>> neighbors_;  ///< per face, the face across edges ab, bc, ca
   std::vector<std::int64_t> ring_start_, ring_;          ///< per vertex, its one-ring (compressed rows)
