@@ -4,6 +4,7 @@
 
 #include <random>
 
+#include "hugger/geometry/order.hpp"
 #include "hugger/world/object.hpp"
 #include "hugger/world/simulated_world.hpp"
 #include "meshes.hpp"
@@ -81,9 +82,9 @@ TEST(TriangleBvh, TwoThreadsBuildTheSameTree) {
   }
 }
 
-// The BVH build's order of centres is a comparison sort's by (value, index), over values with
+// ascending_order (the BVH build's, the joining of points') is a comparison sort by (value, index), over values with
 // many ties, both zeros, subnormals, infinities and values of every magnitude and sign.
-TEST(TriangleBvh, AscendingOrderIsSortByValueThenIndex) {
+TEST(Order, AscendingOrderIsSortByValueThenIndex) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   std::uniform_int_distribution<int> pick(0, 9);

@@ -45,10 +45,6 @@ struct NearestResult {
   bool crosses = false;  ///< the query segment crosses (or touches) a triangle
 };
 
-/// The indices 0 .. n - 1 of `values` in ascending order of (value, index), with -0 equal to +0
-/// (a stable radix sort: linear in n). The values must not be NaN.
-std::vector<int> ascending_order(const std::vector<double>& values);
-
 class TriangleBvh {
  public:
   TriangleBvh() = default;

@@ -1,0 +1,14 @@
+/// \file order.hpp
+/// Sorting without comparisons, for the builds of the 3D and 2D trees and the joining of points.
+#pragma once
+
+#include <vector>
+
+namespace hugger {
+
+/// The indices 0 .. n - 1 of `values` in ascending order of (value, index), with -0 equal to +0
+/// (a stable radix sort: linear in n, and without the mispredicted branches of a comparison
+/// sort of such values). The values must not be NaN.
+std::vector<int> ascending_order(const std::vector<double>& values);
+
+}  // namespace hugger
