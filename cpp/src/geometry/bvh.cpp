@@ -46,20 +46,25 @@ int TriangleBvh::Builder::split(int begin, int end) {
   for (int k = 1; k < 3; ++k)
     if (extent[k] > extent[axis]) axis = k;
   const int mid = (begin + end) / 2;
-  for (int i = begin; i < end; ++i) lower[sorted[axis][i]] = i < mid;
+  // Raw pointers: stores through the flags (chars) could otherwise alias the vectors' own.
+  char* const low_flag = lower.data();
+  const int* const by_axis = sorted[axis].data();
+  for (int i = begin; i < mid; ++i) low_flag[by_axis[i]] = 1;
+  for (int i = mid; i < end; ++i) low_flag[by_axis[i]] = 0;
   // The other two lists, each split into its lower and upper half in order (stable).
+  int* const out = scratch.data();
   for (int k = 0; k < 3; ++k) {
     if (k == axis) continue;
-    std::vector<int>& list = sorted[k];
+    int* const list = sorted[k].data();
     int low = begin, high = mid;
     for (int i = begin; i < end; ++i) {
       const int t = list[i];
-      const int is_low = lower[t];
-      scratch[is_low ? low : high] = t;
+      const int is_low = low_flag[t];
+      out[is_low ? low : high] = t;
       low += is_low;
       high += 1 - is_low;
     }
-    std::copy(scratch.begin() + begin, scratch.begin() + end, list.begin() + begin);
+    std::copy(out + begin, out + end, list + begin);
   }
   return mid;
 }
