@@ -82,6 +82,23 @@ TEST(TriangleBvh, TwoThreadsBuildTheSameTree) {
   }
 }
 
+// Splitting by selection and by presorted lists finds the same halves and leaves in the same
+// order: the tree is the same wherever the build switches from one to the other (all selection,
+// all presorted, and switches at several depths), on one thread or two, on meshes with many tied
+// centres (an axis-aligned box, a sphere) and without.
+TEST(TriangleBvh, SelectionAndPresortedListsBuildTheSameTree) {
+  for (const test::Mesh& m : {test::icosphere(5, Vec3(0.05, 0.05, 0.05)), test::curvy(4), test::box(Vec3(0.03, 0.02, 0.01)),
+                              test::torus(0.05, 0.02, 128, 64), test::cylinder(0.03, 0.05, 48)}) {
+    const TriangleBvh reference(m.vertices, m.faces, 8, 1);
+    for (int presorted : {0, 1, 9, 100, 5000, 1 << 30})
+      for (int threads : {1, 2}) {
+        const TriangleBvh other(m.vertices, m.faces, 8, threads, presorted);
+        EXPECT_TRUE(reference.same_tree(other)) << m.faces.rows() << " triangles, presorted " << presorted << ", "
+                                                << threads << " thread(s)";
+      }
+  }
+}
+
 // ascending_order (the BVH build's, the joining of points') is a comparison sort by (value, index), over values with
 // many ties, both zeros, subnormals, infinities and values of every magnitude and sign.
 TEST(Order, AscendingOrderIsSortByValueThenIndex) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <future>
 #include <stdexcept>
 #include <system_error>
@@ -18,17 +19,15 @@ constexpr int kParallelBuild = 16384;
 
 }  // namespace
 
-TriangleBvh::Builder::Builder(const PointsN3& vertices_, const FacesN3& faces_, int leaf_size_)
-    : vertices(vertices_), faces(faces_), leaf_size(leaf_size_) {
+TriangleBvh::Builder::Builder(const PointsN3& vertices_, const FacesN3& faces_, int leaf_size_, int presorted_)
+    : vertices(vertices_), faces(faces_), leaf_size(leaf_size_), presorted(std::max(presorted_, leaf_size_)) {
   const int n = static_cast<int>(faces.rows());
-  for (std::vector<double>& c : centres) c.resize(n);
+  if (n <= presorted) return;  // presorted from the root: no selection, no items
+  items.resize(n);
   for (int i = 0; i < n; ++i) {
     const Vec3 c = box(i).centre();
-    for (int k = 0; k < 3; ++k) centres[k][i] = c[k];
+    items[i] = {{c.x(), c.y(), c.z()}, i};
   }
-  for (int k = 0; k < 3; ++k) sorted[k] = ascending_order(centres[k]);
-  scratch.resize(n);
-  lower.resize(n);
 }
 
 Aabb TriangleBvh::Builder::box(int t) const {
@@ -37,14 +36,101 @@ Aabb TriangleBvh::Builder::box(int t) const {
   return b;
 }
 
+namespace {
+
+/// Axis of the longest extent of a box (lo, hi), the first on ties (as Eigen's maxCoeff).
+int longest_axis(const double lo[3], const double hi[3]) {
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+  return axis;
+}
+
+}  // namespace
+
 int TriangleBvh::Builder::split(int begin, int end) {
   // An inner node's box is its children's union (the same box: min and max are exact), so only
-  // the centroids' box is needed here, for the split axis: the ends of each axis's list.
-  int axis = 0;  // the longest extent, the first axis on ties (as Eigen's maxCoeff)
-  double extent[3];
-  for (int k = 0; k < 3; ++k) extent[k] = centres[k][sorted[k][end - 1]] - centres[k][sorted[k][begin]];
-  for (int k = 1; k < 3; ++k)
-    if (extent[k] > extent[axis]) axis = k;
+  // the centroids' box is gathered here, for the split axis.
+  double lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+  for (int i = begin; i < end; ++i)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], items[i].c[k]);
+      hi[k] = std::max(hi[k], items[i].c[k]);
+    }
+  const int axis = longest_axis(lo, hi);
+  const int mid = (begin + end) / 2;
+  std::nth_element(items.begin() + begin, items.begin() + mid, items.begin() + end,
+                   [axis](const BuildItem& x, const BuildItem& y) {
+                     return x.c[axis] < y.c[axis] || (x.c[axis] == y.c[axis] && x.id < y.id);
+                   });
+  return mid;
+}
+
+namespace {
+
+/// A node of the tree from its children (an inner node's box is their union).
+template <class Node>
+int inner_node(std::vector<Node>& nodes, int index, int left, int right) {
+  Node& nd = nodes[index];
+  nd.left = left;
+  nd.right = right;
+  Aabb box = nodes[left].box;
+  box.grow(nodes[right].box);
+  nd.box = box;
+  nd.centre = box.centre();
+  nd.half = 0.5 * box.extent();
+  return index;
+}
+
+}  // namespace
+
+int TriangleBvh::Builder::build(int begin, int end, BuildOut& out, int depth) {
+  if (end - begin <= presorted) {
+    // The range's triangles in increasing index order (so that the stable sorts break ties by
+    // index): all of them from the root; else marked in a bitmap of all, then read off it.
+    std::vector<int> ids;
+    ids.reserve(end - begin);
+    if (items.empty()) {
+      for (int i = begin; i < end; ++i) ids.push_back(i);
+    } else {
+      std::vector<std::uint64_t> marks((items.size() + 63) / 64, 0);
+      for (int i = begin; i < end; ++i) marks[items[i].id >> 6] |= std::uint64_t{1} << (items[i].id & 63);
+      for (std::size_t w = 0; w < marks.size(); ++w)
+        for (std::uint64_t bits = marks[w]; bits != 0; bits &= bits - 1)
+          ids.push_back(static_cast<int>(64 * w) + __builtin_ctzll(bits));
+    }
+    return Presorted(*this, std::move(ids)).build(0, end - begin, out, depth);
+  }
+  out.depth = std::max(out.depth, depth);
+  const int index = static_cast<int>(out.nodes.size());
+  out.nodes.emplace_back();
+  const int mid = split(begin, end);
+  const int left = build(begin, mid, out, depth + 1);
+  const int right = build(mid, end, out, depth + 1);
+  return inner_node(out.nodes, index, left, right);
+}
+
+TriangleBvh::Presorted::Presorted(const Builder& builder_, std::vector<int> ids_)
+    : builder(builder_), ids(std::move(ids_)) {
+  const int m = static_cast<int>(ids.size());
+  for (int k = 0; k < 3; ++k) centres[k].resize(m);
+  for (int i = 0; i < m; ++i) {
+    const Vec3 c = builder.box(ids[i]).centre();  // as the Builder's items: the same bits
+    for (int k = 0; k < 3; ++k) centres[k][i] = c[k];
+  }
+  for (int k = 0; k < 3; ++k) sorted[k] = ascending_order(centres[k]);
+  scratch.resize(m);
+  lower.resize(m);
+}
+
+int TriangleBvh::Presorted::split(int begin, int end) {
+  // The centroids' box from the ends of each axis's list.
+  double lo[3], hi[3];
+  for (int k = 0; k < 3; ++k) {
+    lo[k] = centres[k][sorted[k][begin]];
+    hi[k] = centres[k][sorted[k][end - 1]];
+  }
+  const int axis = longest_axis(lo, hi);
   const int mid = (begin + end) / 2;
   // Raw pointers: stores through the flags (chars) could otherwise alias the vectors' own.
   char* const low_flag = lower.data();
@@ -69,46 +155,39 @@ int TriangleBvh::Builder::split(int begin, int end) {
   return mid;
 }
 
-int TriangleBvh::Builder::build(int begin, int end, BuildOut& out, int depth) {
+int TriangleBvh::Presorted::build(int begin, int end, BuildOut& out, int depth) {
   out.depth = std::max(out.depth, depth);
   const int index = static_cast<int>(out.nodes.size());
   out.nodes.emplace_back();
-  if (end - begin <= leaf_size) {
+  if (end - begin <= builder.leaf_size) {
     Aabb box;
-    for (int i = begin; i < end; ++i) box.grow(this->box(sorted[0][i]));
+    for (int i = begin; i < end; ++i) box.grow(builder.box(ids[sorted[0][i]]));
     Node& nd = out.nodes[index];
     nd.box = box;
     nd.centre = box.centre();
     nd.half = 0.5 * box.extent();
     nd.first = static_cast<int>(out.order.size());
     nd.count = end - begin;
-    for (int i = begin; i < end; ++i) out.order.push_back(sorted[0][i]);
+    for (int i = begin; i < end; ++i) out.order.push_back(ids[sorted[0][i]]);
     return index;
   }
   const int mid = split(begin, end);
   const int left = build(begin, mid, out, depth + 1);
   const int right = build(mid, end, out, depth + 1);
-  Node& nd = out.nodes[index];
-  nd.left = left;
-  nd.right = right;
-  Aabb box = out.nodes[left].box;
-  box.grow(out.nodes[right].box);
-  nd.box = box;
-  nd.centre = box.centre();
-  nd.half = 0.5 * box.extent();
-  return index;
+  return inner_node(out.nodes, index, left, right);
 }
 
-TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int leaf_size, int threads) {
+TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int leaf_size, int threads,
+                         int presorted) {
   const int n = static_cast<int>(faces.rows());
   leaf_size = std::max(1, leaf_size);
-  Builder builder(vertices, faces, leaf_size);
+  Builder builder(vertices, faces, leaf_size, presorted);
   // A median split makes leaves of more than leaf_size / 2 triangles: at most n / that leaves,
   // and one fewer inner nodes.
   const std::size_t capacity = 2 * static_cast<std::size_t>(std::max(1, n / ((leaf_size + 1) / 2))) + 1;
   BuildOut out;
   if (threads == 0) threads = n >= kParallelBuild && std::thread::hardware_concurrency() >= 2 ? 2 : 1;
-  if (threads >= 2 && n > leaf_size) {
+  if (threads >= 2 && n > builder.presorted) {
     // The root's halves side by side, then laid out as the single-threaded build lays them out
     // (root, the left subtree, the right subtree; leaves in the same order): the same tree.
     const int mid = builder.split(0, n);

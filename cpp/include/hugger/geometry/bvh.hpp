@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "hugger/geometry/distance.hpp"
@@ -48,11 +49,17 @@ struct NearestResult {
 class TriangleBvh {
  public:
   TriangleBvh() = default;
-  /// Builds over triangles `faces` of `vertices` (indices already validated). `threads`: 1
-  /// builds on this thread; 2 or more builds the root's two halves side by side; 0 chooses (two
-  /// for meshes of 16,384 triangles or more, where the hardware has two threads). The tree is the
-  /// same whatever the choice.
-  TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int leaf_size = 8, int threads = 0);
+  /// Ranges of at most this many triangles are presorted while building (below).
+  static constexpr int kPresorted = 1 << 15;
+
+  /// Builds over triangles `faces` of `vertices` (indices already validated). `presorted`:
+  /// ranges of at most this many triangles are split by sorted lists, larger ones by selection.
+  /// `threads`: 1 builds on this thread; 2 or more builds the root's two halves side by side
+  /// when the root is split by selection; 0 chooses (two for meshes of 16,384 triangles or more,
+  /// where the hardware has two threads). The tree is the same whatever the choices: they trade
+  /// speed alone.
+  TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int leaf_size = 8, int threads = 0,
+              int presorted = kPresorted);
 
   /// Nearest mesh point to segment [a, b] (a == b: a point query). Triangles farther than
   /// `max_distance` may be skipped; then `triangle` is -1 and `distance` is infinite.
@@ -131,28 +138,45 @@ class TriangleBvh {
     std::vector<int> order;
     int depth = 0;
   };
-  /// The triangles while building: their boxes' centres (by input index), and per axis the
-  /// triangles in (centre along the axis, index) order, each node's triangles a range of all
-  /// three lists. Sorted once (ascending_order), then each split keeps the halves' lists in
-  /// order by a stable partition: linear per level, without the mispredicted comparisons of a
-  /// selection per node (the same halves as one: the order is strict).
+  /// A triangle while building: its box's centre and its index (kept together, contiguous).
+  struct BuildItem {
+    double c[3];
+    int id;
+  };
+  /// Every split is about the median of a node's triangles along the longest axis of their
+  /// centres' box, by (centre, index): a strict total order, so the halves do not depend on how
+  /// they are found. A range of more than `presorted` triangles is split in place by selection
+  /// (nth_element: its memory is read in order); a smaller one is sorted once along each axis,
+  /// then each split keeps the halves' lists in order by a stable partition (linear per level,
+  /// without the mispredicted comparisons of a selection per node). A leaf's triangles are in
+  /// (centre along x, index) order either way.
   struct Builder {
     const PointsN3& vertices;
     const FacesN3& faces;
-    std::array<std::vector<double>, 3> centres;  ///< per axis
-    std::array<std::vector<int>, 3> sorted;
-    std::vector<int> scratch;     ///< partition space, the same ranges as `sorted`
-    std::vector<char> lower;      ///< per triangle: in the lower half of its node's last split
-    int leaf_size = 1;
+    std::vector<BuildItem> items;  ///< empty when the root's range is presorted
+    int leaf_size = 1, presorted = kPresorted;
 
-    Builder(const PointsN3& vertices, const FacesN3& faces, int leaf_size);
+    Builder(const PointsN3& vertices, const FacesN3& faces, int leaf_size, int presorted);
     /// Triangle t's bounding box.
     Aabb box(int t) const;
-    /// Splits range [begin, end) about its median along the longest axis of its centres' box
-    /// (by centre, then index: a strict total order) and keeps each half's lists in order;
-    /// returns the middle.
+    /// Orders items [begin, end) about their median; returns the middle.
     int split(int begin, int end);
-    /// Builds the subtree of range [begin, end) at `depth` into `out`; returns its root's index.
+    /// Builds the subtree of items [begin, end) at `depth` into `out`; returns its root's index.
+    int build(int begin, int end, BuildOut& out, int depth);
+  };
+  /// The triangles of one range, presorted: their indices `ids` in increasing order, their
+  /// centres and per axis their positions in `ids` in (centre along the axis, index) order; each
+  /// node's triangles a range of all three lists.
+  struct Presorted {
+    const Builder& builder;
+    std::vector<int> ids;
+    std::array<std::vector<double>, 3> centres;  ///< per axis
+    std::array<std::vector<int>, 3> sorted;
+    std::vector<int> scratch;          ///< partition space, the same ranges as `sorted`
+    std::vector<char> lower;           ///< per triangle: in the lower half of the last split
+
+    Presorted(const Builder& builder, std::vector<int> ids);
+    int split(int begin, int end);
     int build(int begin, int end, BuildOut& out, int depth);
   };
 
