@@ -119,6 +119,12 @@ TEST(Order, AscendingOrderIsSortByValueThenIndex) {
     std::sort(expected.begin(), expected.end(),
               [&](int a, int b) { return values[a] < values[b] || (values[a] == values[b] && a < b); });
     EXPECT_EQ(ascending_order(values), expected) << n << " values";
+    // Unsigned integers: many ties, and values that differ in one digit of the sort only.
+    std::vector<std::uint32_t> whole(static_cast<std::size_t>(n));
+    for (std::uint32_t& w : whole) w = pick(rng) < 5 ? static_cast<std::uint32_t>(pick(rng)) << (11 * pick(rng) % 32) : static_cast<std::uint32_t>(rng());
+    for (int i = 0; i < n; ++i) expected[i] = i;
+    std::stable_sort(expected.begin(), expected.end(), [&](int a, int b) { return whole[a] < whole[b]; });
+    EXPECT_EQ(ascending_order(whole), expected) << n << " integers";
   }
 }
 

@@ -16,21 +16,18 @@ std::uint64_t order_key(double x) {
   return bits >> 63 ? ~bits : bits | (std::uint64_t{1} << 63);
 }
 
-}  // namespace
-
-std::vector<int> ascending_order(const std::vector<double>& values) {
-  // A least-significant-digit radix sort of the keys' 11-bit digits, stable (so ties keep the
-  // indices' order); digits that all keys share are skipped. Branch-free, where a comparison
-  // sort of such values is a coin toss per comparison.
-  constexpr int kBits = 11, kDigits = (64 + kBits - 1) / kBits, kBuckets = 1 << kBits;
-  const int n = static_cast<int>(values.size());
-  std::vector<std::uint64_t> key(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) key[i] = order_key(values[i]);
+/// 0 .. n - 1 in (key, index) order: a least-significant-digit radix sort of the keys' 11-bit
+/// digits, stable (so ties keep the indices' order); digits that all keys share are skipped.
+/// Branch-free, where a comparison sort of such keys is a coin toss per comparison.
+template <class Key>
+std::vector<int> radix_order(const std::vector<Key>& key) {
+  constexpr int kBits = 11, kDigits = (8 * static_cast<int>(sizeof(Key)) + kBits - 1) / kBits,
+                kBuckets = 1 << kBits;
+  const int n = static_cast<int>(key.size());
   std::vector<int> order(static_cast<std::size_t>(n)), scratch(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) order[i] = i;
-  std::vector<std::array<int, kBuckets>> count(kDigits);
-  for (auto& c : count) c.fill(0);
-  for (const std::uint64_t k : key)
+  std::array<std::array<int, kBuckets>, kDigits> count{};
+  for (const Key k : key)
     for (int d = 0; d < kDigits; ++d) ++count[d][(k >> (kBits * d)) & (kBuckets - 1)];
   for (int d = 0; d < kDigits; ++d) {
     std::array<int, kBuckets>& c = count[d];
@@ -45,5 +42,15 @@ std::vector<int> ascending_order(const std::vector<double>& values) {
   }
   return order;
 }
+
+}  // namespace
+
+std::vector<int> ascending_order(const std::vector<double>& values) {
+  std::vector<std::uint64_t> key(values.size());
+  for (std::size_t i = 0; i < values.size(); ++i) key[i] = order_key(values[i]);
+  return radix_order(key);
+}
+
+std::vector<int> ascending_order(const std::vector<std::uint32_t>& values) { return radix_order(values); }
 
 }  // namespace hugger

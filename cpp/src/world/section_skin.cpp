@@ -10,6 +10,7 @@
 
 #include "hugger/check.hpp"
 #include "hugger/geometry/frame.hpp"
+#include "hugger/geometry/order.hpp"
 
 namespace hugger {
 
@@ -39,13 +40,32 @@ struct IdPoint {
   int id;
 };
 
-/// Calls f(i, j) (i < j, indices into pts, sorted by x then id) for every two points of `pts`
-/// within kJoin of each other: the same point computed twice, to rounding.
+/// Calls f(i, j) (i < j, indices into pts as reordered here) for every two points of `pts`
+/// within kJoin of each other: the same point computed twice, to rounding. The points are
+/// ordered by slabs across x of width h >= kJoin (a radix sort of the slabs' numbers, no
+/// comparisons); two points within kJoin lie in slabs at most one apart (two, allowing for
+/// rounding), so each point is compared with those of its own and the next two slabs.
 template <class F>
 void close_pairs(std::vector<IdPoint>& pts, F&& f) {
-  std::sort(pts.begin(), pts.end(), [](const IdPoint& a, const IdPoint& b) { return a.x < b.x || (a.x == b.x && a.id < b.id); });
+  if (pts.empty()) return;
+  double lo = pts[0].x, hi = pts[0].x;
+  for (const IdPoint& p : pts) {
+    lo = std::min(lo, p.x);
+    hi = std::max(hi, p.x);
+  }
+  const double h = std::max(kJoin, (hi - lo) * 0x1p-30);  // slab numbers below 2^30 + 1
+  std::vector<std::uint32_t> slab(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) slab[i] = static_cast<std::uint32_t>((pts[i].x - lo) / h);
+  const std::vector<int> order = ascending_order(slab);
+  std::vector<IdPoint> sorted(pts.size());
+  std::vector<std::uint32_t> sorted_slab(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    sorted[i] = pts[order[i]];
+    sorted_slab[i] = slab[order[i]];
+  }
+  pts.swap(sorted);
   for (std::size_t i = 0; i < pts.size(); ++i)
-    for (std::size_t j = i + 1; j < pts.size() && pts[j].x - pts[i].x <= kJoin; ++j) {
+    for (std::size_t j = i + 1; j < pts.size() && sorted_slab[j] <= sorted_slab[i] + 2; ++j) {
       const double dx = pts[j].x - pts[i].x, dy = pts[j].y - pts[i].y;
       if (dx * dx + dy * dy <= kJoin * kJoin) f(i, j);
     }
@@ -816,8 +836,9 @@ void PlaneRegion::build_pieces() {
   auto to_plane = [&](const Vec3& x) { return plane_.to_plane(x); };
   auto in_plane = [&](const Vec3& d) { return Vec2(d.dot(u), d.dot(p)); };
   const double nabs[3] = {std::abs(nu.x()), std::abs(nu.y()), std::abs(nu.z())};
-  // The faces within r of the plane (those whose pieces can meet it).
-  std::vector<int> band;
+  // The faces within r of the plane (those whose pieces can meet it), in increasing order (the
+  // pieces do not depend on the BVH): marked in a bitmap of the faces, then read off it.
+  std::vector<std::uint64_t> in_band((static_cast<std::size_t>(O.faces().rows()) + 63) / 64, 0);
   double bound = r;
   O.bvh().traverse(
       [&](const Aabb& box) {
@@ -826,10 +847,14 @@ void PlaneRegion::build_pieces() {
       },
       [&](const std::array<Vec3, 3>& t, int id) {
         const double s0 = height(t[0]), s1 = height(t[1]), s2 = height(t[2]);
-        if (std::min({s0, s1, s2}) <= r && std::max({s0, s1, s2}) >= -r) band.push_back(id);
+        if (std::min({s0, s1, s2}) <= r && std::max({s0, s1, s2}) >= -r)
+          in_band[id >> 6] |= std::uint64_t{1} << (id & 63);
       },
       bound);
-  std::sort(band.begin(), band.end());  // a fixed order: the pieces do not depend on the BVH
+  std::vector<int> band;
+  for (std::size_t w = 0; w < in_band.size(); ++w)
+    for (std::uint64_t bits = in_band[w]; bits != 0; bits &= bits - 1)
+      band.push_back(static_cast<int>(64 * w) + __builtin_ctzll(bits));
   const FacesN3& F = O.faces();
   const PointsN3& X = O.vertices();
   auto vertex = [&](std::int64_t i) { return Vec3(X.row(i).transpose()); };

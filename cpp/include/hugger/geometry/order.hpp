@@ -2,6 +2,7 @@
 /// Sorting without comparisons, for the builds of the 3D and 2D trees and the joining of points.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 namespace hugger {
@@ -10,5 +11,7 @@ namespace hugger {
 /// (a stable radix sort: linear in n, and without the mispredicted branches of a comparison
 /// sort of such values). The values must not be NaN.
 std::vector<int> ascending_order(const std::vector<double>& values);
+/// The same for unsigned integers.
+std::vector<int> ascending_order(const std::vector<std::uint32_t>& values);
 
 }  // namespace hugger
