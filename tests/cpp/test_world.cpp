@@ -150,64 +150,67 @@ TEST(Object, SignAgreesWithRayParityAndAnalyticEllipsoid) {
   EXPECT_GT(inside, 20);
 }
 
+// Every refusal, on a mesh small enough to be checked on the calling thread and one whose checks
+// run on a second thread beside the BVH (4,096 triangles or more: the error is rethrown).
 TEST(Object, RejectsBadMeshes) {
-  const auto mesh = test::icosphere(1);
-  auto expect_invalid = [](const PointsN3& v, const FacesN3& f, const std::string& what) {
-    try {
-      Object o(v, f);
-      ADD_FAILURE() << "accepted: " << what;
-    } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+  for (const test::Mesh& mesh : {test::icosphere(1), test::icosphere(4)}) {
+    auto expect_invalid = [](const PointsN3& v, const FacesN3& f, const std::string& what) {
+      try {
+        Object o(v, f);
+        ADD_FAILURE() << "accepted: " << what;
+      } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+      }
+    };
+    expect_invalid(PointsN3(0, 3), FacesN3(0, 3), "empty");
+    PointsN3 nan = mesh.vertices;
+    nan(3, 1) = std::numeric_limits<double>::quiet_NaN();
+    expect_invalid(nan, mesh.faces, "not finite");
+    FacesN3 out_of_range = mesh.faces;
+    out_of_range(2, 2) = mesh.vertices.rows() + 1000;
+    expect_invalid(mesh.vertices, out_of_range, "outside");
+    FacesN3 open = mesh.faces.topRows(mesh.faces.rows() - 1);
+    expect_invalid(mesh.vertices, open, "not closed");
+    FacesN3 flipped = mesh.faces;
+    std::swap(flipped(0, 1), flipped(0, 2));
+    expect_invalid(mesh.vertices, flipped, "consistently oriented");
+    FacesN3 inward = mesh.faces;
+    inward.col(1).swap(inward.col(2));
+    expect_invalid(mesh.vertices, inward, "inward");
+    // A face of zero area: one vertex moved onto another.
+    PointsN3 flat = mesh.vertices;
+    flat.row(mesh.faces(0, 0)) = flat.row(mesh.faces(0, 1));
+    expect_invalid(flat, mesh.faces, "degenerate: zero area");
+    // The same triangle twice over three new coincident vertices (a zero-volume pillow).
+    {
+      const Eigen::Index n = mesh.vertices.rows(), m = mesh.faces.rows();
+      PointsN3 v(n + 3, 3);
+      v << mesh.vertices, mesh.vertices.row(mesh.faces(0, 0)), mesh.vertices.row(mesh.faces(0, 1)),
+          mesh.vertices.row(mesh.faces(0, 2));
+      FacesN3 f(m + 2, 3);
+      f << mesh.faces, n, n + 1, n + 2, n, n + 2, n + 1;
+      expect_invalid(v, f, "same triangle");
+      // The same over three new vertices of their own (nothing coincides): the same indices twice.
+      v.bottomRows(3) *= 1.5;
+      expect_invalid(v, f, "same triangle");
     }
-  };
-  expect_invalid(PointsN3(0, 3), FacesN3(0, 3), "empty");
-  PointsN3 nan = mesh.vertices;
-  nan(3, 1) = std::numeric_limits<double>::quiet_NaN();
-  expect_invalid(nan, mesh.faces, "not finite");
-  FacesN3 out_of_range = mesh.faces;
-  out_of_range(2, 2) = 1000;
-  expect_invalid(mesh.vertices, out_of_range, "outside");
-  FacesN3 open = mesh.faces.topRows(mesh.faces.rows() - 1);
-  expect_invalid(mesh.vertices, open, "not closed");
-  FacesN3 flipped = mesh.faces;
-  std::swap(flipped(0, 1), flipped(0, 2));
-  expect_invalid(mesh.vertices, flipped, "consistently oriented");
-  FacesN3 inward = mesh.faces;
-  inward.col(1).swap(inward.col(2));
-  expect_invalid(mesh.vertices, inward, "inward");
-  // A face of zero area: one vertex moved onto another.
-  PointsN3 flat = mesh.vertices;
-  flat.row(mesh.faces(0, 0)) = flat.row(mesh.faces(0, 1));
-  expect_invalid(flat, mesh.faces, "degenerate: zero area");
-  // The same triangle twice over three new coincident vertices (a zero-volume pillow).
-  {
-    const Eigen::Index n = mesh.vertices.rows(), m = mesh.faces.rows();
-    PointsN3 v(n + 3, 3);
-    v << mesh.vertices, mesh.vertices.row(mesh.faces(0, 0)), mesh.vertices.row(mesh.faces(0, 1)),
-        mesh.vertices.row(mesh.faces(0, 2));
-    FacesN3 f(m + 2, 3);
-    f << mesh.faces, n, n + 1, n + 2, n, n + 2, n + 1;
-    expect_invalid(v, f, "same triangle");
-    // The same over three new vertices of their own (nothing coincides): the same indices twice.
-    v.bottomRows(3) *= 1.5;
-    expect_invalid(v, f, "same triangle");
-  }
-  // Two spheres sharing one vertex: the surface touches itself there (two fans of faces).
-  {
-    const Eigen::Index n = mesh.vertices.rows(), m = mesh.faces.rows();
-    Eigen::Index i = 0, j = 0;
-    mesh.vertices.col(0).maxCoeff(&i);
-    mesh.vertices.col(0).minCoeff(&j);
-    PointsN3 v(2 * n, 3);
-    v.topRows(n) = mesh.vertices;
-    v.bottomRows(n) = mesh.vertices.rowwise() + (mesh.vertices.row(i) - mesh.vertices.row(j));
-    FacesN3 f(2 * m, 3);
-    f.topRows(m) = mesh.faces;
-    f.bottomRows(m) = mesh.faces.array() + n;
-    for (Eigen::Index r = m; r < 2 * m; ++r)
-      for (int k = 0; k < 3; ++k)
-        if (f(r, k) == j + n) f(r, k) = i;
-    expect_invalid(v, f, "not manifold at vertex " + std::to_string(i) + ": 2 separate fans");
+    // Two spheres sharing one vertex: the surface touches itself there (two fans of faces).
+    {
+      const Eigen::Index n = mesh.vertices.rows(), m = mesh.faces.rows();
+      Eigen::Index i = 0, j = 0;
+      mesh.vertices.col(0).maxCoeff(&i);
+      mesh.vertices.col(0).minCoeff(&j);
+      PointsN3 v(2 * n, 3);
+      v.topRows(n) = mesh.vertices;
+      v.bottomRows(n) = mesh.vertices.rowwise() + (mesh.vertices.row(i) - mesh.vertices.row(j));
+      FacesN3 f(2 * m, 3);
+      f.topRows(m) = mesh.faces;
+      f.bottomRows(m) = mesh.faces.array() + n;
+      for (Eigen::Index r = m; r < 2 * m; ++r)
+        for (int k = 0; k < 3; ++k)
+          if (f(r, k) == j + n) f(r, k) = i;
+      expect_invalid(v, f, "not manifold at vertex " + std::to_string(i) + ": 2 separate fans");
+    }
   }
 }
 

@@ -27,7 +27,7 @@ std::atomic<std::uint64_t> next_serial{1};
 
 /// Meshes at least this large build their surface (normals, adjacency, checks) on a second
 /// thread beside the BVH (a smaller one builds in less time than a thread takes to start).
-constexpr std::int64_t kConcurrentBvh = 4096;
+constexpr std::int64_t kConcurrentSurface = 4096;
 
 /// A directed edge leaving a vertex: its other end and the face holding it.
 struct OutEdge {
@@ -212,7 +212,7 @@ Object::Object(const PointsN3& vertices, const FacesN3& faces)
   // A check that fails there is rethrown here once the BVH is built; should the BVH throw, the
   // future's destructor waits for the other thread first.
   std::future<void> surface;
-  if (nf >= kConcurrentBvh) {
+  if (nf >= kConcurrentSurface) {
     try {
       surface = std::async(std::launch::async, [this] { build_surface(); });
     } catch (const std::system_error&) {  // no thread to be had: built below, on this one
