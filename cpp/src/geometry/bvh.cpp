@@ -12,13 +12,6 @@
 
 namespace hugger {
 
-namespace {
-
-/// Meshes at least this large build their tree's two halves on two threads.
-constexpr int kParallelBuild = 16384;
-
-}  // namespace
-
 TriangleBvh::Builder::Builder(const PointsN3& vertices_, const FacesN3& faces_, int leaf_size_, int presorted_)
     : vertices(vertices_), faces(faces_), leaf_size(leaf_size_), presorted(std::max(presorted_, leaf_size_)) {
   const int n = static_cast<int>(faces.rows());
@@ -186,7 +179,7 @@ TriangleBvh::TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int lea
   // and one fewer inner nodes.
   const std::size_t capacity = 2 * static_cast<std::size_t>(std::max(1, n / ((leaf_size + 1) / 2))) + 1;
   BuildOut out;
-  if (threads == 0) threads = n >= kParallelBuild && std::thread::hardware_concurrency() >= 2 ? 2 : 1;
+  if (threads == 0) threads = std::thread::hardware_concurrency() >= 2 ? 2 : 1;
   if (threads >= 2 && n > builder.presorted) {
     // The root's halves side by side, then laid out as the single-threaded build lays them out
     // (root, the left subtree, the right subtree; leaves in the same order): the same tree.

@@ -55,9 +55,9 @@ class TriangleBvh {
   /// Builds over triangles `faces` of `vertices` (indices already validated). `presorted`:
   /// ranges of at most this many triangles are split by sorted lists, larger ones by selection.
   /// `threads`: 1 builds on this thread; 2 or more builds the root's two halves side by side
-  /// when the root is split by selection; 0 chooses (two for meshes of 16,384 triangles or more,
-  /// where the hardware has two threads). The tree is the same whatever the choices: they trade
-  /// speed alone.
+  /// when the root is split by selection (more than `presorted` triangles); 0 chooses two where
+  /// the hardware has two threads. The tree is the same whatever the choices: they trade speed
+  /// alone.
   TriangleBvh(const PointsN3& vertices, const FacesN3& faces, int leaf_size = 8, int threads = 0,
               int presorted = kPresorted);
 
