@@ -139,7 +139,9 @@ int TriangleBvh::Presorted::split(int begin, int end) {
     for (int i = begin; i < end; ++i) {
       const int t = list[i];
       const int is_low = low_flag[t];
-      out[is_low ? low : high] = t;
+      // The slot by arithmetic, not a conditional the compiler may turn into a branch (taken
+      // at random: half of them mispredicted).
+      out[high + ((low - high) & -is_low)] = t;
       low += is_low;
       high += 1 - is_low;
     }
