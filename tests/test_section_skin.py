@@ -9,6 +9,13 @@ import pytest
 import hugger
 
 
+def boundary_points(region, origin, u, v):
+    """Every end and middle of every segment of a region, in the world frame."""
+    seg = region["segments"]
+    pts = np.concatenate([seg[:, 0], seg[:, 1], seg.mean(axis=1)])
+    return origin + pts[:, :1] * u + pts[:, 1:] * v
+
+
 def test_skin_choice_is_recorded_and_checked():
     hand = hugger.Hand()
     obj = hugger.objects.sphere(0.04, subdivisions=3)
@@ -36,8 +43,7 @@ def test_region_boundary_is_a_link_radius_from_the_object():
     seg = region["segments"]
     assert seg.shape[1:] == (2, 2) and len(seg) > 50
     # Every end and middle of every segment: between r and r + flatten from the surface, outside.
-    pts = np.concatenate([seg[:, 0], seg[:, 1], seg.mean(axis=1)])
-    world = origin + pts[:, :1] * u + pts[:, 1:] * v
+    world = boundary_points(region, origin, u, v)
     d = obj._core.signed_distance(world)
     assert np.all(d >= r - 1e-9) and np.all(d <= r + flatten + 1e-9)
     # Outward normals point away from the object: one step along them increases the distance.
@@ -68,11 +74,10 @@ def test_region_boundary_never_lies_inside_r(name):
         v -= v.dot(u) * u
         v /= np.linalg.norm(v)
         r = 0.004 if k % 2 == 0 else 0.001
-        seg = obj._core.section_region(origin, u, v, r, flatten)["segments"]
-        if not len(seg):
+        region = obj._core.section_region(origin, u, v, r, flatten)
+        if not len(region["segments"]):
             continue
-        pts = np.concatenate([seg[:, 0], seg[:, 1], seg.mean(axis=1)])
-        d = obj.signed_distance(origin + pts[:, :1] * u + pts[:, 1:] * v)
+        d = obj.signed_distance(boundary_points(region, origin, u, v))
         # Ends of segments may dip into R by tens of nanometres where a crossing at a shallow
         # angle meets them (31 nm at most here); before the fix, whole pieces lay microns deep.
         assert d.min() >= r - 1e-7, f"plane {k}: a boundary point {r - d.min():.3g} m inside R"

@@ -80,19 +80,28 @@ int inner_node(std::vector<Node>& nodes, int index, int left, int right) {
 int TriangleBvh::Builder::build(int begin, int end, BuildOut& out, int depth) {
   if (end - begin <= presorted) {
     // The range's triangles in increasing index order (so that the stable sorts break ties by
-    // index): all of them from the root; else marked in a bitmap of all, then read off it.
-    std::vector<int> ids;
-    ids.reserve(end - begin);
+    // index), with their centres: all of them from the root, else the items' in order of id.
+    const int m = end - begin;
+    std::vector<int> ids(static_cast<std::size_t>(m));
+    std::array<std::vector<double>, 3> centres;
+    for (std::vector<double>& c : centres) c.resize(m);
     if (items.empty()) {
-      for (int i = begin; i < end; ++i) ids.push_back(i);
+      for (int i = 0; i < m; ++i) {
+        ids[i] = begin + i;
+        const Vec3 c = box(ids[i]).centre();
+        for (int k = 0; k < 3; ++k) centres[k][i] = c[k];
+      }
     } else {
-      std::vector<std::uint64_t> marks((items.size() + 63) / 64, 0);
-      for (int i = begin; i < end; ++i) marks[items[i].id >> 6] |= std::uint64_t{1} << (items[i].id & 63);
-      for (std::size_t w = 0; w < marks.size(); ++w)
-        for (std::uint64_t bits = marks[w]; bits != 0; bits &= bits - 1)
-          ids.push_back(static_cast<int>(64 * w) + __builtin_ctzll(bits));
+      std::vector<std::uint32_t> id_of(static_cast<std::size_t>(m));
+      for (int i = 0; i < m; ++i) id_of[i] = static_cast<std::uint32_t>(items[begin + i].id);
+      const std::vector<int> by_id = ascending_order(id_of);
+      for (int i = 0; i < m; ++i) {
+        const BuildItem& it = items[begin + by_id[i]];
+        ids[i] = it.id;
+        for (int k = 0; k < 3; ++k) centres[k][i] = it.c[k];
+      }
     }
-    return Presorted(*this, std::move(ids)).build(0, end - begin, out, depth);
+    return Presorted(*this, std::move(ids), std::move(centres)).build(0, m, out, depth);
   }
   out.depth = std::max(out.depth, depth);
   const int index = static_cast<int>(out.nodes.size());
@@ -103,17 +112,12 @@ int TriangleBvh::Builder::build(int begin, int end, BuildOut& out, int depth) {
   return inner_node(out.nodes, index, left, right);
 }
 
-TriangleBvh::Presorted::Presorted(const Builder& builder_, std::vector<int> ids_)
-    : builder(builder_), ids(std::move(ids_)) {
-  const int m = static_cast<int>(ids.size());
-  for (int k = 0; k < 3; ++k) centres[k].resize(m);
-  for (int i = 0; i < m; ++i) {
-    const Vec3 c = builder.box(ids[i]).centre();  // as the Builder's items: the same bits
-    for (int k = 0; k < 3; ++k) centres[k][i] = c[k];
-  }
+TriangleBvh::Presorted::Presorted(const Builder& builder_, std::vector<int> ids_,
+                                  std::array<std::vector<double>, 3> centres_)
+    : builder(builder_), ids(std::move(ids_)), centres(std::move(centres_)) {
   for (int k = 0; k < 3; ++k) sorted[k] = ascending_order(centres[k]);
-  scratch.resize(m);
-  lower.resize(m);
+  scratch.resize(ids.size());
+  lower.resize(ids.size());
 }
 
 int TriangleBvh::Presorted::split(int begin, int end) {

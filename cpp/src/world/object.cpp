@@ -293,17 +293,13 @@ void Object::build_surface() {
 }
 
 double Object::sign_at(const Vec3& query, const Vec3& on_mesh, int triangle, TriangleFeature f) const {
-  Vec3 n;
-  switch (f) {
-    case TriangleFeature::kFace: n = face_normals_[triangle]; break;
-    // An edge's pseudo-normal: the sum of its two faces' normals.
-    case TriangleFeature::kEdgeAB: n = face_normals_[triangle] + face_normals_[neighbors_[triangle][0]]; break;
-    case TriangleFeature::kEdgeBC: n = face_normals_[triangle] + face_normals_[neighbors_[triangle][1]]; break;
-    case TriangleFeature::kEdgeCA: n = face_normals_[triangle] + face_normals_[neighbors_[triangle][2]]; break;
-    case TriangleFeature::kVertexA: n = vertex_normals_[faces_(triangle, 0)]; break;
-    case TriangleFeature::kVertexB: n = vertex_normals_[faces_(triangle, 1)]; break;
-    default: n = vertex_normals_[faces_(triangle, 2)]; break;
-  }
+  // The feature's pseudo-normal: a face's own, an edge's the sum of its two faces' (edge k runs
+  // from corner k to k + 1, its other face is neighbors_[k]), a vertex's angle-weighted one.
+  const int k = static_cast<int>(f);
+  const Vec3 n = f == TriangleFeature::kFace ? face_normals_[triangle]
+                 : f <= TriangleFeature::kEdgeCA
+                     ? Vec3(face_normals_[triangle] + face_normals_[neighbors_[triangle][k - 1]])
+                     : vertex_normals_[faces_(triangle, k - static_cast<int>(TriangleFeature::kVertexA))];
   return (query - on_mesh).dot(n) < 0.0 ? -1.0 : 1.0;
 }
 

@@ -175,7 +175,7 @@ class TriangleBvh {
     std::vector<int> scratch;          ///< partition space, the same ranges as `sorted`
     std::vector<char> lower;           ///< per triangle: in the lower half of the last split
 
-    Presorted(const Builder& builder, std::vector<int> ids);
+    Presorted(const Builder& builder, std::vector<int> ids, std::array<std::vector<double>, 3> centres);
     int split(int begin, int end);
     int build(int begin, int end, BuildOut& out, int depth);
   };
