@@ -282,9 +282,67 @@ TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
   }
 }
 
-// prepare() builds the regions of several planes side by side: the same regions, segment for
-// segment, as region() builds one at a time, and a plane given twice is built once; a plane that
-// cannot be built makes prepare() throw, and the skin still answers in the other planes.
+// Contact is decided in space: on random links in random planes (not through the centre, so that
+// O's surface is oblique to them) at sensing distances from 0.1 mm to 2% of the object's size,
+// the section skin's contact_gap is at most delta exactly when the mesh world's 3D gap is (up to
+// the flattening, which errs toward contact), though the in-plane gap alone misses some of those
+// contacts; capped, it keeps its decision, and where it says no contact, it shrinks no faster
+// than the link moves in the plane (the FROZEN fingers' bounds rely on it).
+TEST(SectionSkin, ContactGapDecidesContactInSpace) {
+  long contacts = 0, missed_in_plane = 0, checked = 0;
+  for (const test::Mesh& m : {test::curvy(4), test::icosphere(3, Vec3(0.05, 0.03, 0.02)), test::box(Vec3(0.03, 0.02, 0.05))}) {
+    const auto object = std::make_shared<Object>(m.vertices, m.faces);
+    const SectionSkin skin(object, kFlatten);
+    const SimulatedWorld& mesh = skin.mesh_world();
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    const Vec3 c = object->bounds().centre();
+    const double size = object->bounds().extent().maxCoeff();
+    for (int k = 0; k < 12; ++k) {
+      const FingerPlane pl = test::random_plane(rng, c + 0.3 * size * Vec3(U(rng) - 0.5, U(rng) - 0.5, U(rng) - 0.5));
+      const double r = 0.05 * size, delta = k % 3 == 0 ? 1e-4 : (k % 3 == 1 ? 1e-3 : 0.02 * size);
+      for (int q = 0; q < 80; ++q) {
+        Vec2 a = pl.to_plane(c) + Vec2(U(rng) - 0.5, U(rng) - 0.5) * 1.4 * size;
+        // Every other point query near contact: a point whose 3D gap is within 2 delta.
+        for (int tries = 0; q % 2 == 0 && tries < 400; ++tries) {
+          const Vec3 A = pl.to_world(a);
+          const double g = mesh.capsule(A, A, r).gap;
+          if (g >= 0.0 && g <= 2.0 * delta) break;
+          a = pl.to_plane(c) + Vec2(U(rng) - 0.5, U(rng) - 0.5) * 1.4 * size;
+        }
+        const double len = q % 2 == 0 ? 0.0 : U(rng) * 0.3 * size, ang = U(rng) * 2 * kPi;
+        const Vec2 b = a + len * Vec2(std::cos(ang), std::sin(ang));
+        const double g3 = mesh.capsule(pl.to_world(a), pl.to_world(b), r).gap;
+        const double g = skin.contact_gap(pl, a, b, r, delta);
+        ++checked;
+        EXPECT_EQ(mesh.contact_gap(pl, a, b, r, delta), mesh.link(pl, a, b, r).gap);
+        if (g <= delta) {
+          ++contacts;
+          EXPECT_LE(g3, delta + kFlatten + 1e-9) << "plane " << k << " query " << q;
+          if (skin.link(pl, a, b, r).gap > delta) ++missed_in_plane;
+        } else {
+          EXPECT_GT(g3, delta - 1e-9) << "plane " << k << " query " << q;
+        }
+        EXPECT_EQ(skin.contact_gap(pl, a, b, r, delta, delta) <= delta, g <= delta);
+        if (g > delta) EXPECT_GT(skin.contact_gap(pl, a, b, r, delta, 0.5 * g), 0.5 * g);
+        // Moved within the plane by v: where g - |v| still says no contact, the gap shrank by at
+        // most |v|.
+        const Vec2 v = 0.01 * size * Vec2(U(rng) - 0.5, U(rng) - 0.5);
+        if (g - v.norm() > delta) EXPECT_GE(skin.contact_gap(pl, a + v, b + v, r, delta), g - v.norm() - 1e-12);
+      }
+    }
+  }
+  std::printf("  %ld queries, %ld contacts, %ld of them with an in-plane gap beyond delta\n", checked, contacts,
+              missed_in_plane);
+  EXPECT_GE(checked, 2500);
+  EXPECT_GE(contacts, 100);
+  EXPECT_GE(missed_in_plane, 20);  // the case the region of radius r + delta is for
+}
+
+// prepare() builds the regions of several planes side by side, for the links and for contact:
+// the same regions, segment for segment, as region() builds one at a time, and a plane given
+// twice is built once; a plane that cannot be built makes prepare() throw, and the skin still
+// answers in the other planes.
 TEST(SectionSkin, PrepareBuildsTheSameRegionsSideBySide) {
   const auto m = test::curvy(4);
   const auto object = std::make_shared<Object>(m.vertices, m.faces);
@@ -294,26 +352,30 @@ TEST(SectionSkin, PrepareBuildsTheSameRegionsSideBySide) {
     planes.push_back(test::random_plane(rng, object->bounds().centre()));
   }
   planes.push_back(planes[2]);
-  const double r = 0.004;
+  const double r = 0.004, delta = 1e-4;
   const SectionSkin together(object, kFlatten), alone(object, kFlatten);
-  together.prepare(planes, r);
+  together.prepare(planes, r, delta);
   for (std::size_t k = 0; k < planes.size(); ++k) {
-    const PlaneRegion* a = together.region(planes[k], r);
-    const PlaneRegion* b = alone.region(planes[k], r);
-    ASSERT_NE(a, nullptr);
-    ASSERT_NE(b, nullptr);
-    ASSERT_EQ(a->segments().size(), b->segments().size()) << "plane " << k;
-    for (std::size_t i = 0; i < a->segments().size(); ++i) {
-      EXPECT_EQ(a->segments()[i].a, b->segments()[i].a);
-      EXPECT_EQ(a->segments()[i].b, b->segments()[i].b);
-      EXPECT_EQ(a->segments()[i].normal, b->segments()[i].normal);
+    for (const double rho : {r, r + delta}) {
+      const PlaneRegion* a = together.region(planes[k], rho);
+      const PlaneRegion* b = alone.region(planes[k], rho);
+      ASSERT_NE(a, nullptr);
+      ASSERT_NE(b, nullptr);
+      ASSERT_EQ(a->segments().size(), b->segments().size()) << "plane " << k << ", radius " << rho;
+      for (std::size_t i = 0; i < a->segments().size(); ++i) {
+        EXPECT_EQ(a->segments()[i].a, b->segments()[i].a);
+        EXPECT_EQ(a->segments()[i].b, b->segments()[i].b);
+        EXPECT_EQ(a->segments()[i].normal, b->segments()[i].normal);
+      }
     }
   }
   EXPECT_EQ(together.region(planes[2], r), together.region(planes[6], r));
+  EXPECT_EQ(together.region(planes[2], r + delta), together.region(planes[6], r + delta));
+  EXPECT_NE(together.region(planes[2], r), together.region(planes[2], r + delta));
   FingerPlane bad = planes[0];
   bad.u = bad.p;  // not a frame
   const SectionSkin skin(object, kFlatten);
-  EXPECT_THROW(skin.prepare({planes[0], bad, planes[1]}, r), std::invalid_argument);
+  EXPECT_THROW(skin.prepare({planes[0], bad, planes[1]}, r, delta), std::invalid_argument);
   EXPECT_NE(skin.region(planes[1], r), nullptr);
 }
 

@@ -165,7 +165,7 @@ void Planner::plan_phase1(const Pose& start) {
   states_.assign(hand_.fingers(), TipState::kFrozen);
   anchors_.assign(hand_.fingers(), Vec2(kInf, kInf));
   stalled_.assign(hand_.fingers(), 0);
-  frozen_lb_.assign(static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1), -kInf);
+  frozen_lb_.assign(2 * static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1), -kInf);
   closing_.assign(hand_.fingers(), 0);
   closed_.assign(hand_.fingers(), 0);
   opened_.assign(hand_.fingers(), 0);
@@ -202,13 +202,19 @@ double Planner::link_gap(int m, const Vec2& a, const Vec2& b, double cap) const 
   return sensing_->link(planes_[m], a, b, hand_.link_radius(), cap).gap;
 }
 
-double Planner::frozen_gap(int m, int n, double need) {
-  double& lb = frozen_lb_[static_cast<std::size_t>(m) * (hand_.links() + 1) + n];
+double Planner::contact_gap(int m, const Vec2& a, const Vec2& b, double cap) const {
+  return sensing_->contact_gap(planes_[m], a, b, hand_.link_radius(), params_.contact_tolerance, cap);
+}
+
+double Planner::frozen_gap(int m, int n, double need, bool contact) {
+  const std::size_t parts = static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1);
+  double& lb = frozen_lb_[(contact ? parts : 0) + static_cast<std::size_t>(m) * (hand_.links() + 1) + n];
   if (lb > need) return lb;
   // Ask with a wider cap than needed, so that the bound lasts several palm steps.
   const double cap = std::max(need, 4.0 * params_.step);
   const Chain& c = chains_[m];
-  const double g = n < hand_.links() ? link_gap(m, c[n], c[n + 1], cap) : link_gap(m, c[0], c[0], cap);
+  const Vec2 &a = n < hand_.links() ? c[n] : c[0], &b = n < hand_.links() ? c[n + 1] : c[0];
+  const double g = contact ? contact_gap(m, a, b, cap) : link_gap(m, a, b, cap);
   lb = std::min(g, cap);  // beyond the cap the answer is only known to be at least the cap
   return lb;
 }
@@ -339,7 +345,7 @@ bool Planner::close_step(int m, Chain& chain) const {
   const double s = params_.step, delta = params_.contact_tolerance, r = hand_.link_radius();
   int first = 0;  // the first joint that may flex: distal to the distal-most touching link
   for (int n = N - 1; n >= 0; --n)
-    if (link_gap(m, chain[n], chain[n + 1], delta) <= delta) {
+    if (contact_gap(m, chain[n], chain[n + 1], delta) <= delta) {
       first = n + 1;
       break;
     }
@@ -500,7 +506,7 @@ void Planner::phase2_iteration() {
   const bool hug = params_.rules == Rules::kHug;
   const long it = stats_.phase2_iterations;
   if (!phase2_started_) {
-    sensing_->prepare(planes_, r);  // a hint: a skin may build its per-plane structures now
+    sensing_->prepare(planes_, r, delta);  // a hint: a skin may build its per-plane structures now
     phase2_started_ = true;
   }
   // A FROZEN finger becomes CONTACT (palm contact, or the hand blocked); under the hug rules it
@@ -525,7 +531,7 @@ void Planner::phase2_iteration() {
   for (int m = 0; m < M; ++m) {
     if (states_[m] != TipState::kFrozen) continue;
     for (int n = 0; n < N; ++n)
-      if (frozen_gap(m, n, delta) <= delta) {
+      if (frozen_gap(m, n, delta, true) <= delta) {
         states_[m] = TipState::kContact;
         break;
       }
@@ -571,7 +577,7 @@ void Planner::phase2_iteration() {
     }
     const Vec2 tip = old[m][N];
     Vec2 head = tip;
-    if (link_gap(m, tip, tip, delta) <= delta) {
+    if (contact_gap(m, tip, tip, delta) <= delta) {
       FollowRequest fr;
       fr.plane = planes_[m];
       fr.tip = tip;

@@ -1570,20 +1570,27 @@ const PlaneRegion* SectionSkin::region(const FingerPlane& plane, double radius) 
   }
 }
 
-void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius) const {
-  std::vector<const FingerPlane*> todo;
-  for (const FingerPlane& p : planes) {
-    if (!finite_plane(p, radius) || find(p, radius)) continue;
-    bool twice = false;
-    for (const FingerPlane* q : todo) twice = twice || same_plane(*q, radius, p, radius);
-    if (!twice) todo.push_back(&p);
+void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius, double delta) const {
+  // The regions of the links, then those of contact (radius + delta), each plane's once.
+  struct Job {
+    const FingerPlane* plane;
+    double radius;
+  };
+  std::vector<Job> todo;
+  for (const double rho : {radius, radius + delta}) {
+    for (const FingerPlane& p : planes) {
+      if (!finite_plane(p, rho) || find(p, rho)) continue;
+      bool twice = false;
+      for (const Job& q : todo) twice = twice || same_plane(*q.plane, q.radius, p, rho);
+      if (!twice) todo.push_back({&p, rho});
+    }
   }
   const std::size_t room = static_cast<std::size_t>(std::max(0, kMaxRegions - count_.load(std::memory_order_acquire)));
   if (todo.size() > room) todo.resize(room);
   const unsigned hardware = std::thread::hardware_concurrency();
   const std::size_t threads = std::min<std::size_t>(todo.size(), hardware > 1 ? hardware : 1);
   if (threads < 2) {
-    for (const FingerPlane* p : todo) region(*p, radius);
+    for (const Job& j : todo) region(*j.plane, j.radius);
     return;
   }
   std::vector<std::unique_ptr<Entry>> built(todo.size());
@@ -1592,7 +1599,7 @@ void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius)
   auto work = [&] {
     for (std::size_t i; (i = next.fetch_add(1)) < todo.size();) {
       try {
-        built[i] = std::make_unique<Entry>(object_, *todo[i], radius, flatten_);
+        built[i] = std::make_unique<Entry>(object_, *todo[i].plane, todo[i].radius, flatten_);
       } catch (...) {
         errors[i] = std::current_exception();
       }
@@ -1654,6 +1661,17 @@ Touch SectionSkin::link(const FingerPlane& plane, const Vec2& a, const Vec2& b, 
   const Vec2 g = (nr.on_query - nr.on_region) / nr.distance;
   t.normal = dir(inside ? Vec2(-g) : g);
   return t;
+}
+
+double SectionSkin::contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                                double delta, double cap) const {
+  if (!(delta > 0.0) || !std::isfinite(delta)) return Sensing::contact_gap(plane, a, b, radius, delta, cap);
+  // Within delta of O in space exactly when the axis meets the region of radius + delta; the
+  // in-plane gap to that region, plus delta, shrinks no faster than the link moves in the plane.
+  const double g = link(plane, a, b, radius + delta, std::max(cap - delta, 0.0)).gap;
+  const double out = delta + g;
+  // Beyond the inner cap link() reports some value above it: keep the sum above cap.
+  return g > cap - delta && !(out > cap) ? std::nextafter(cap, kInf) : out;
 }
 
 bool SectionSkin::link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,

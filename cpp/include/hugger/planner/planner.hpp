@@ -144,9 +144,13 @@ class Planner {
   bool reclose_step(int m, Chain& chain, const std::vector<Chain>& others) const;
   bool fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const;
   double link_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
-  /// A lower bound of the gap of FROZEN finger m's link n (n == N: its root, as a sphere), exact
-  /// when at most `need`: from the bound kept since the last query when that exceeds `need`.
-  double frozen_gap(int m, int n, double need);
+  /// Sensing::contact_gap of finger m's link [a, b] at the contact tolerance: at most that
+  /// tolerance exactly when the link touches O.
+  double contact_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
+  /// A lower bound of the gap (`contact`: of the contact gap) of FROZEN finger m's link n (n == N:
+  /// its root, as a sphere), exact when at most `need`: from the bound kept since the last query
+  /// when that exceeds `need`.
+  double frozen_gap(int m, int n, double need, bool contact = false);
 
   HandModel hand_;
   std::shared_ptr<const Sensing> sensing_;
@@ -166,7 +170,8 @@ class Planner {
   std::vector<Vec2> anchors_;  ///< per finger, where its tip was when it last made progress
   std::vector<int> stalled_;   ///< per finger, iterations since then
   /// Per finger, N + 1 lower bounds of the gaps of its links and root while it is FROZEN (they
-  /// move rigidly with the palm: each palm step sigma lowers them by sigma). -inf: unknown.
+  /// move rigidly with the palm: each palm step sigma lowers them by sigma), then as many of
+  /// their contact gaps. -inf: unknown.
   std::vector<double> frozen_lb_;
   double eta_ = 0.0;
   bool palm_touched_ = false;

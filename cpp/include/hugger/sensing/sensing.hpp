@@ -65,7 +65,7 @@ struct RotateRequest {
   double front = -kInf;          ///< neither end may pass behind this eta
   double max_angle = kPi;        ///< search range (radians)
   double tolerance = 1e-5;       ///< rotate_until_free: the result's gap (or end motion) resolution, metres
-  double touch_gap = 1e-4;       ///< rotate_until_touch: stop when the gap is at most this
+  double touch_gap = 1e-4;       ///< rotate_until_touch: stop on contact (contact_gap at most this)
   double level = 5e-5;           ///< rotate_until_touch: never come closer than this
   double sample_angle = 0.05;    ///< rotate_until_free: coarse search increment (radians)
 };
@@ -100,6 +100,17 @@ class Sensing {
                               double below) const {
     return link(plane, a, b, radius, below).gap < below;
   }
+  /// The gap that decides contact (the sensing distance `delta` > 0): at most delta exactly when
+  /// the link lies within delta of O in space, and it shrinks no faster than the link moves
+  /// within its plane. Exact when at most `cap`; otherwise any value above cap. The default is
+  /// link()'s gap, exact for a skin that measures in space; the section skin, whose in-plane
+  /// gaps exceed the gap in space where O's surface is oblique to the plane, answers from the
+  /// region of radius + delta instead.
+  virtual double contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double delta,
+                             double cap = kInf) const {
+    (void)delta;
+    return link(plane, a, b, radius, cap).gap;
+  }
   /// True when the capsule does not penetrate O (gap >= 0). `a_outside`: the caller knows that
   /// the point a lies outside O (the end of a link just found free, say), so a capsule that
   /// comes no closer than `radius` to O's surface is clear without an inside test. Override
@@ -123,11 +134,13 @@ class Sensing {
                                  double allow) const;
 
   /// A hint, once at the start of Phase 2: link queries in these finger planes, for links of
-  /// `radius`, follow. A skin that builds a structure per plane (the section skin) may build them
-  /// now, side by side; the default does nothing. Answers never depend on it.
-  virtual void prepare(const std::vector<FingerPlane>& planes, double radius) const {
+  /// `radius`, and contact queries at the sensing distance `delta`, follow. A skin that builds a
+  /// structure per plane (the section skin) may build them now, side by side; the default does
+  /// nothing. Answers never depend on it.
+  virtual void prepare(const std::vector<FingerPlane>& planes, double radius, double delta) const {
     (void)planes;
     (void)radius;
+    (void)delta;
   }
 
   /// Slide the fingertip along O's boundary in its plane, counter-clockwise (interior on the

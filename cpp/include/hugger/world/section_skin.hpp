@@ -239,6 +239,11 @@ class SectionSkin final : public Sensing {
   Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap = kInf) const override;
   bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
                  bool a_outside = false) const override;
+  /// delta plus the in-plane gap of the link to the region of radius + delta (built on first use
+  /// like the link's): at most delta exactly when the axis meets that region, i.e. when the link
+  /// lies within delta of O in space (up to the region's flattening, which errs toward contact).
+  double contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double delta,
+                     double cap = kInf) const override;
   /// As link(...).gap < below, stopping at the first boundary piece closer than `below`.
   bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                       double below) const override;
@@ -255,9 +260,10 @@ class SectionSkin final : public Sensing {
   /// query. Falls back to the generic search where the plane has no region or the check fails.
   RotateResult rotate_until_free(const RotateRequest& req) const override;
 
-  /// Builds the regions of these planes not built yet, on up to one thread per plane (at most
-  /// the hardware's threads; one region per plane whatever the thread count).
-  void prepare(const std::vector<FingerPlane>& planes, double radius) const override;
+  /// Builds the regions of these planes not built yet, for links of `radius` and for contact
+  /// (radius + delta), on up to one thread per region (at most the hardware's threads; one
+  /// region per plane and radius whatever the thread count).
+  void prepare(const std::vector<FingerPlane>& planes, double radius, double delta) const override;
 
   /// The region of a plane and radius, built on first use; nullptr past kMaxRegions regions
   /// (queries in further planes then go to the mesh world).
