@@ -165,8 +165,8 @@ RotateResult Sensing::rotate_until_touch(const RotateRequest& req) const {
     out.end = end;
     out.angle = angle;
     out.gap = gap;
-    if (gap <= req.touch_gap ||
-        contact_gap(req.plane, req.pivot, end, req.radius, req.touch_gap, req.touch_gap) <= req.touch_gap) {
+    // Uncapped, like the gap above: a skin whose contact gap is its gap gets the same answer.
+    if (gap <= req.touch_gap || contact_gap(req.plane, req.pivot, end, req.radius, req.touch_gap) <= req.touch_gap) {
       out.ok = true;
       break;
     }
