@@ -70,6 +70,7 @@ bool place(const Sensing& sensing, const SnakeRequest& req, const Chain& old, in
   rr.tolerance = req.tolerance;
   rr.sample_angle = req.sample_angle;
   rr.max_angle = req.max_rotation;
+  rr.pivot_outside = pivot_outside;
   const RotateResult r = sensing.rotate_until_free(rr);
   if (!r.ok) return false;
   Vec2 freed = r.end - chain[from];

@@ -1716,7 +1716,7 @@ RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
     const double within = pass == 0 ? narrow : req.max_angle;
     spans.clear();
     if (!R->spans(req.pivot, u, len, within, &spans)) return out;  // touches the pivot: all blocked
-    if (pass == 0 && R->inside(req.pivot)) return out;
+    if (pass == 0 && !req.pivot_outside && R->inside(req.pivot)) return out;
     if (k > -1.0) {
       const double p0 = PlaneRegion::pseudo_angle(u, f0), p1 = PlaneRegion::pseudo_angle(u, f1);
       if (p0 <= p1) {

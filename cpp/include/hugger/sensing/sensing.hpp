@@ -68,6 +68,8 @@ struct RotateRequest {
   double touch_gap = 1e-4;       ///< rotate_until_touch: stop on contact (contact_gap at most this)
   double level = 5e-5;           ///< rotate_until_touch: never come closer than this
   double sample_angle = 0.05;    ///< rotate_until_free: coarse search increment (radians)
+  bool pivot_outside = false;    ///< rotate_until_free: the caller knows the pivot's ball of `radius`
+                                 ///< is clear of O (the end of a link found free), as link_free's a_outside
 };
 struct RotateResult {
   bool ok = false;         ///< a free position was found (until_free) / the link touched (until_touch)

@@ -258,6 +258,7 @@ class SectionSkin final : public Sensing {
   /// the smallest rotation out of the blocked run containing the link's direction, plus a
   /// margin that leaves the link resting within `tolerance` of R, is checked with one link
   /// query. Falls back to the generic search where the plane has no region or the check fails.
+  /// The pivot's inside test is left out where the request says it is outside (pivot_outside).
   RotateResult rotate_until_free(const RotateRequest& req) const override;
 
   /// Builds the regions of these planes not built yet, for links of `radius` and for contact
