@@ -108,6 +108,25 @@ def test_former_stalls_end_promptly(name, normal, rules, checker, tmp_path):
     assert not same[traj.phase[1:] == 2].any(), "a configuration repeats the one before"
 
 
+@pytest.mark.parametrize("skin", ["section", "mesh"])
+@pytest.mark.parametrize("rules", RULES)
+def test_wide_oscillation_ends(rules, skin, checker, tmp_path):
+    """A case of the planner fuzz test (a 7 x 8 hand of 2.2 mm links on a 1 cm cylinder, the
+    palm landed): one finger went round a cycle of 14 iterations, its tip 0.3 mm wide (wider than
+    the overextension window's 2 s), drifting by 0.4 nm a round, until max_iterations. A finger
+    that keeps coming back to within epsilon of a chain it had, the palm still, is at rest."""
+    rng = np.random.default_rng(100)
+    obj, _ = helpers.random_object(rng, "cylinder", 0.01)
+    target = 0.4375 * obj.vertices[rng.integers(len(obj.vertices))]
+    hand = helpers.random_hand(rng, 0.01)
+    pose = helpers.safe_start(rng, obj, hand, target)
+    planner = hugger.Planner(hand, obj, target, pose, rules=rules, skin=skin, max_iterations=2000)
+    traj = planner.plan()
+    checked(traj, checker, tmp_path, swept_every=5)
+    assert traj.status == "done"
+    assert planner.stats["phase2_iterations"] < 1000
+
+
 @pytest.mark.parametrize("rules", RULES)
 def test_far_start_approaches_by_the_free_distance(rules, checker, tmp_path):
     """A start 20 m away: the approach is one iteration of as many configurations (each palm

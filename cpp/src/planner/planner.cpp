@@ -40,6 +40,9 @@ namespace {
 constexpr double kMaxSwingFlexion = kPi / 2.0;
 /// Iterations a CONTACT tip may stay within 2 steps of one place before it counts as overextended.
 constexpr int kStallWindow = 20;
+/// How many configurations back, while the palm is still, a repeated hand is recognised (a cycle
+/// of at most this many iterations).
+constexpr std::size_t kCycleMemory = 64;
 /// No joint may move more than this many steps s in one Phase 2 iteration (a little under the
 /// checker's 4, for rounding).
 constexpr double kMaxJointSteps = 4.0 * (1.0 - 1e-6);
@@ -164,6 +167,8 @@ void Planner::plan_phase1(const Pose& start) {
   }
   states_.assign(hand_.fingers(), TipState::kFrozen);
   anchors_.assign(hand_.fingers(), Vec2(kInf, kInf));
+  recent_chains_.assign(hand_.fingers(), {});
+  cycle_repeats_.assign(hand_.fingers(), 0);
   stalled_.assign(hand_.fingers(), 0);
   frozen_lb_.assign(2 * static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1), -kInf);
   closing_.assign(hand_.fingers(), 0);
@@ -200,6 +205,24 @@ Configuration Planner::make_configuration(int phase) const {
 
 double Planner::link_gap(int m, const Vec2& a, const Vec2& b, double cap) const {
   return sensing_->link(planes_[m], a, b, hand_.link_radius(), cap).gap;
+}
+
+int Planner::note_chain(int m, const Chain& chain) {
+  std::vector<Chain>& seen = recent_chains_[m];
+  const double tol2 = params_.epsilon * params_.epsilon;
+  bool back = false;
+  for (const Chain& c : seen) {
+    bool near = true;
+    for (std::size_t i = 0; i < c.size() && near; ++i) near = (c[i] - chain[i]).squaredNorm() < tol2;
+    if (near) {
+      back = true;
+      break;
+    }
+  }
+  if (seen.size() >= kCycleMemory) seen.erase(seen.begin());
+  seen.push_back(chain);
+  cycle_repeats_[m] = back ? cycle_repeats_[m] + 1 : 0;
+  return cycle_repeats_[m];
 }
 
 double Planner::contact_gap(int m, const Vec2& a, const Vec2& b, double cap) const {
@@ -750,6 +773,12 @@ void Planner::phase2_iteration() {
       opened_[m] = 1;
       ++stats_.fingers_opened;
     }
+  // Cycles (below) are looked for while the palm is still.
+  if (sigma > 0.0)
+    for (int m = 0; m < M; ++m) {
+      recent_chains_[m].clear();
+      cycle_repeats_[m] = 0;
+    }
   bool starts_closing = false;  // a finger starts closing: the next iteration moves it
   for (int m = 0; m < M; ++m) {
     if (next_states[m] != TipState::kContact) continue;
@@ -771,6 +800,11 @@ void Planner::phase2_iteration() {
     } else if (++stalled_[m] >= kStallWindow) {
       rest = true;
     }
+    // A cycle: with the palm still, the finger comes back to within epsilon (every joint) of a
+    // chain it had within the last kCycleMemory iterations, kStallWindow iterations running. It
+    // goes round without getting anywhere (an oscillation wider than the window's 2 s, which ends
+    // those within it first), so it is at rest.
+    if (sigma == 0.0 && note_chain(m, next[m]) >= kStallWindow) rest = true;
     if (!rest) continue;
     if (hug && opened_[m] && !reclosing_[m] && !palm_touched_) {
       // Hug rule H5: an opened finger at rest with the palm off O closes again first.

@@ -144,6 +144,10 @@ class Planner {
   bool reclose_step(int m, Chain& chain, const std::vector<Chain>& others) const;
   bool fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const;
   double link_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
+  /// Remembers CONTACT finger m's chain of this iteration, the palm still, and returns for how
+  /// many iterations running the finger has come back to within epsilon (every joint) of one of
+  /// its last kCycleMemory chains (0: somewhere new).
+  int note_chain(int m, const Chain& chain);
   /// Sensing::contact_gap of finger m's link [a, b] at the contact tolerance: at most that
   /// tolerance exactly when the link touches O.
   double contact_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
@@ -169,6 +173,8 @@ class Planner {
   std::vector<TipState> states_;
   std::vector<Vec2> anchors_;  ///< per finger, where its tip was when it last made progress
   std::vector<int> stalled_;   ///< per finger, iterations since then
+  std::vector<std::vector<Chain>> recent_chains_;  ///< note_chain: per finger, its last chains, the palm still
+  std::vector<int> cycle_repeats_;                 ///< note_chain: per finger, returns running
   /// Per finger, N + 1 lower bounds of the gaps of its links and root while it is FROZEN (they
   /// move rigidly with the palm: each palm step sigma lowers them by sigma), then as many of
   /// their contact gaps. -inf: unknown.
