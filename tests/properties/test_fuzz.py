@@ -451,7 +451,10 @@ def test_random_valid_case_plans_to_a_known_end(checker, kind, seed, size, step_
     hand = helpers.random_hand(rng, size)
     pose = helpers.safe_start(rng, obj, hand, target)
     step = None if step_fraction is None else step_fraction * float(hand.link_lengths.min())
-    planner = hugger.Planner(hand, obj, target, pose, step=step)
+    # The default contact tolerance (0.1 mm) must be below the step: links under 2 mm need less.
+    s = float(hand.link_lengths.min()) / 20.0 if step is None else step
+    tolerance = None if s > 1e-4 else 0.5 * s
+    planner = hugger.Planner(hand, obj, target, pose, step=step, contact_tolerance=tolerance)
     traj = planner.plan()
     note(f"{kind} size {size:.3f}, {hand}, step {step}: {traj.status}, {planner.stats}")
     event(f"plan status: {traj.status}")
