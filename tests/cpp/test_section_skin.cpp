@@ -54,6 +54,25 @@ std::string shared_dir() {
   return "";
 }
 
+/// A mesh's object, its section skin and the mesh world, the object's centre and size, and a
+/// seeded generator: what random queries about it need.
+struct Scene {
+  Scene(const test::Mesh& m, unsigned seed)
+      : object(std::make_shared<Object>(m.vertices, m.faces)),
+        skin(object, kFlatten),
+        mesh(skin.mesh_world()),
+        c(object->bounds().centre()),
+        size(object->bounds().extent().maxCoeff()),
+        rng(seed) {}
+  double u() { return std::uniform_real_distribution<double>(0.0, 1.0)(rng); }  ///< uniform in [0, 1)
+  std::shared_ptr<const Object> object;
+  SectionSkin skin;
+  const SimulatedWorld& mesh;
+  Vec3 c;
+  double size;
+  std::mt19937 rng;
+};
+
 struct Tally {
   long queries = 0, clear_disagree = 0, blocked_disagree = 0, inside_disagree = 0;
   double worst_clear_penetration = 0.0;  ///< deepest 3D penetration of a link the skin called clear
@@ -252,26 +271,20 @@ TEST(SectionSkin, RegionSizeBarelyGrowsWithTheMesh) {
 // for bounds at and next to the link's own gap, where a shortcut would first disagree.
 TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
   for (const test::Mesh& m : {test::icosphere(3, Vec3::Constant(0.04)), test::curvy(4)}) {
-    const auto object = std::make_shared<Object>(m.vertices, m.faces);
-    const SectionSkin skin(object, kFlatten);
-    const SimulatedWorld& mesh = skin.mesh_world();
-    std::mt19937 rng(7);
-    std::uniform_real_distribution<double> U(0.0, 1.0);
-    const Vec3 c = object->bounds().centre();
-    const double size = object->bounds().extent().maxCoeff();
+    Scene s(m, 7);
     long checked = 0;
     for (int k = 0; k < 12; ++k) {
-      const FingerPlane pl = test::random_plane(rng, c);
-      const double r = (k % 3) * 0.03 * size;
+      const FingerPlane pl = test::random_plane(s.rng, s.c);
+      const double r = (k % 3) * 0.03 * s.size;
       for (int q = 0; q < 60; ++q) {
-        const Vec2 a = Vec2(U(rng) - 0.5, U(rng) - 0.5) * 1.4 * size;
-        const double len = q % 3 == 0 ? 0.0 : U(rng) * 0.4 * size, ang = U(rng) * 2 * kPi;
+        const Vec2 a = Vec2(s.u() - 0.5, s.u() - 0.5) * 1.4 * s.size;
+        const double len = q % 3 == 0 ? 0.0 : s.u() * 0.4 * s.size, ang = s.u() * 2 * kPi;
         const Vec2 b = a + len * Vec2(std::cos(ang), std::sin(ang));
-        for (const Sensing* s : {static_cast<const Sensing*>(&skin), static_cast<const Sensing*>(&mesh)}) {
-          const double g = s->link(pl, a, b, r).gap;
-          for (double below : {0.01 * size, 0.1 * size, g, std::nextafter(g, kInf), std::nextafter(g, 0.0)}) {
+        for (const Sensing* sense : {static_cast<const Sensing*>(&s.skin), static_cast<const Sensing*>(&s.mesh)}) {
+          const double g = sense->link(pl, a, b, r).gap;
+          for (double below : {0.01 * s.size, 0.1 * s.size, g, std::nextafter(g, kInf), std::nextafter(g, 0.0)}) {
             if (!(below > 0.0) || !std::isfinite(below)) continue;
-            EXPECT_EQ(s->link_gap_below(pl, a, b, r, below), s->link(pl, a, b, r, below).gap < below)
+            EXPECT_EQ(sense->link_gap_below(pl, a, b, r, below), sense->link(pl, a, b, r, below).gap < below)
                 << "plane " << k << " query " << q << " below " << below;
             ++checked;
           }
@@ -291,44 +304,38 @@ TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
 TEST(SectionSkin, ContactGapDecidesContactInSpace) {
   long contacts = 0, missed_in_plane = 0, checked = 0;
   for (const test::Mesh& m : {test::curvy(4), test::icosphere(3, Vec3(0.05, 0.03, 0.02)), test::box(Vec3(0.03, 0.02, 0.05))}) {
-    const auto object = std::make_shared<Object>(m.vertices, m.faces);
-    const SectionSkin skin(object, kFlatten);
-    const SimulatedWorld& mesh = skin.mesh_world();
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<double> U(0.0, 1.0);
-    const Vec3 c = object->bounds().centre();
-    const double size = object->bounds().extent().maxCoeff();
+    Scene s(m, 5);
     for (int k = 0; k < 12; ++k) {
-      const FingerPlane pl = test::random_plane(rng, c + 0.3 * size * Vec3(U(rng) - 0.5, U(rng) - 0.5, U(rng) - 0.5));
-      const double r = 0.05 * size, delta = k % 3 == 0 ? 1e-4 : (k % 3 == 1 ? 1e-3 : 0.02 * size);
+      const FingerPlane pl = test::random_plane(s.rng, s.c + 0.3 * s.size * Vec3(s.u() - 0.5, s.u() - 0.5, s.u() - 0.5));
+      const double r = 0.05 * s.size, delta = k % 3 == 0 ? 1e-4 : (k % 3 == 1 ? 1e-3 : 0.02 * s.size);
       for (int q = 0; q < 80; ++q) {
-        Vec2 a = pl.to_plane(c) + Vec2(U(rng) - 0.5, U(rng) - 0.5) * 1.4 * size;
+        Vec2 a = pl.to_plane(s.c) + Vec2(s.u() - 0.5, s.u() - 0.5) * 1.4 * s.size;
         // Every other point query near contact: a point whose 3D gap is within 2 delta.
         for (int tries = 0; q % 2 == 0 && tries < 400; ++tries) {
           const Vec3 A = pl.to_world(a);
-          const double g = mesh.capsule(A, A, r).gap;
+          const double g = s.mesh.capsule(A, A, r).gap;
           if (g >= 0.0 && g <= 2.0 * delta) break;
-          a = pl.to_plane(c) + Vec2(U(rng) - 0.5, U(rng) - 0.5) * 1.4 * size;
+          a = pl.to_plane(s.c) + Vec2(s.u() - 0.5, s.u() - 0.5) * 1.4 * s.size;
         }
-        const double len = q % 2 == 0 ? 0.0 : U(rng) * 0.3 * size, ang = U(rng) * 2 * kPi;
+        const double len = q % 2 == 0 ? 0.0 : s.u() * 0.3 * s.size, ang = s.u() * 2 * kPi;
         const Vec2 b = a + len * Vec2(std::cos(ang), std::sin(ang));
-        const double g3 = mesh.capsule(pl.to_world(a), pl.to_world(b), r).gap;
-        const double g = skin.contact_gap(pl, a, b, r, delta);
+        const double g3 = s.mesh.capsule(pl.to_world(a), pl.to_world(b), r).gap;
+        const double g = s.skin.contact_gap(pl, a, b, r, delta);
         ++checked;
-        EXPECT_EQ(mesh.contact_gap(pl, a, b, r, delta), mesh.link(pl, a, b, r).gap);
+        EXPECT_EQ(s.mesh.contact_gap(pl, a, b, r, delta), s.mesh.link(pl, a, b, r).gap);
         if (g <= delta) {
           ++contacts;
           EXPECT_LE(g3, delta + kFlatten + 1e-9) << "plane " << k << " query " << q;
-          if (skin.link(pl, a, b, r).gap > delta) ++missed_in_plane;
+          if (s.skin.link(pl, a, b, r).gap > delta) ++missed_in_plane;
         } else {
           EXPECT_GT(g3, delta - 1e-9) << "plane " << k << " query " << q;
         }
-        EXPECT_EQ(skin.contact_gap(pl, a, b, r, delta, delta) <= delta, g <= delta);
-        if (g > delta) EXPECT_GT(skin.contact_gap(pl, a, b, r, delta, 0.5 * g), 0.5 * g);
+        EXPECT_EQ(s.skin.contact_gap(pl, a, b, r, delta, delta) <= delta, g <= delta);
+        if (g > delta) EXPECT_GT(s.skin.contact_gap(pl, a, b, r, delta, 0.5 * g), 0.5 * g);
         // Moved within the plane by v: where g - |v| still says no contact, the gap shrank by at
         // most |v|.
-        const Vec2 v = 0.01 * size * Vec2(U(rng) - 0.5, U(rng) - 0.5);
-        if (g - v.norm() > delta) EXPECT_GE(skin.contact_gap(pl, a + v, b + v, r, delta), g - v.norm() - 1e-12);
+        const Vec2 v = 0.01 * s.size * Vec2(s.u() - 0.5, s.u() - 0.5);
+        if (g - v.norm() > delta) EXPECT_GE(s.skin.contact_gap(pl, a + v, b + v, r, delta), g - v.norm() - 1e-12);
       }
     }
   }
