@@ -272,7 +272,8 @@ class SectionSkin final : public Sensing {
   const Object& object() const { return *object_; }
   const SimulatedWorld& mesh_world() const { return mesh_; }
   double flatten() const { return flatten_; }
-  static constexpr int kMaxRegions = 64;
+  /// Two regions per finger plane (the links' and contact's) for the largest hand.
+  static constexpr int kMaxRegions = 2 * kMaxFingers;
 
  private:
   struct Entry;
