@@ -168,6 +168,7 @@ void Planner::plan_phase1(const Pose& start) {
   states_.assign(hand_.fingers(), TipState::kFrozen);
   anchors_.assign(hand_.fingers(), Vec2(kInf, kInf));
   recent_chains_.assign(hand_.fingers(), {});
+  recent_next_.assign(hand_.fingers(), 0);
   cycle_repeats_.assign(hand_.fingers(), 0);
   stalled_.assign(hand_.fingers(), 0);
   frozen_lb_.assign(2 * static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1), -kInf);
@@ -219,10 +220,26 @@ int Planner::note_chain(int m, const Chain& chain) {
       break;
     }
   }
-  if (seen.size() >= kCycleMemory) seen.erase(seen.begin());
-  seen.push_back(chain);
+  if (seen.size() < kCycleMemory) {
+    seen.push_back(chain);
+  } else {  // in place of the oldest
+    seen[recent_next_[m]] = chain;
+    recent_next_[m] = (recent_next_[m] + 1) % kCycleMemory;
+  }
   cycle_repeats_[m] = back ? cycle_repeats_[m] + 1 : 0;
   return cycle_repeats_[m];
+}
+
+void Planner::forget_chains(int m) {
+  recent_chains_[m].clear();
+  recent_next_[m] = 0;
+  cycle_repeats_[m] = 0;
+}
+
+void Planner::restart_windows(int m, const Vec2& tip) {
+  anchors_[m] = tip;
+  stalled_[m] = 0;
+  forget_chains(m);
 }
 
 double Planner::contact_gap(int m, const Vec2& a, const Vec2& b, double cap) const {
@@ -775,10 +792,7 @@ void Planner::phase2_iteration() {
     }
   // Cycles (below) are looked for while the palm is still.
   if (sigma > 0.0)
-    for (int m = 0; m < M; ++m) {
-      recent_chains_[m].clear();
-      cycle_repeats_[m] = 0;
-    }
+    for (int m = 0; m < M; ++m) forget_chains(m);
   bool starts_closing = false;  // a finger starts closing: the next iteration moves it
   for (int m = 0; m < M; ++m) {
     if (next_states[m] != TipState::kContact) continue;
@@ -800,26 +814,24 @@ void Planner::phase2_iteration() {
     } else if (++stalled_[m] >= kStallWindow) {
       rest = true;
     }
-    // A cycle: with the palm still, the finger comes back to within epsilon (every joint) of a
-    // chain it had within the last kCycleMemory iterations, kStallWindow iterations running. It
-    // goes round without getting anywhere (an oscillation wider than the window's 2 s, which ends
-    // those within it first), so it is at rest.
+    // A cycle: with the palm still, the finger comes back to within epsilon (every joint) of one
+    // of the last kCycleMemory chains it had since the palm stopped (or it last started closing),
+    // kStallWindow iterations running. It goes round without getting anywhere (an oscillation
+    // wider than the window's 2 s, which ends those within it first), so it is at rest.
     if (sigma == 0.0 && note_chain(m, next[m]) >= kStallWindow) rest = true;
     if (!rest) continue;
     if (hug && opened_[m] && !reclosing_[m] && !palm_touched_) {
       // Hug rule H5: an opened finger at rest with the palm off O closes again first.
       reclosing_[m] = 1;
       starts_closing = true;
-      stalled_[m] = 0;
-      anchors_[m] = next[m][N];
+      restart_windows(m, next[m][N]);
     } else if (hug && !closed_[m]) {
       // Hug rule: before it is DONE, a finger closes the joints beyond its distal-most touching
       // link until they touch too (close-until-contact, clinging), once.
       closing_[m] = 1;
       closed_[m] = 1;
       starts_closing = true;
-      stalled_[m] = 0;
-      anchors_[m] = next[m][N];
+      restart_windows(m, next[m][N]);
     } else {
       next_states[m] = TipState::kDone;
     }

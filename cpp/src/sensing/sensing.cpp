@@ -152,7 +152,9 @@ FollowResult Sensing::follow_boundary(const FollowRequest& req) const {
   return out;
 }
 
-RotateResult Sensing::rotate_until_touch(const RotateRequest& req) const {
+RotateResult Sensing::rotate_until_touch(const RotateRequest& req) const { return touch_rotation(req, false); }
+
+RotateResult Sensing::touch_rotation(const RotateRequest& req, bool contact_in_space) const {
   RotateResult out;
   const Vec2 arm = req.end - req.pivot;
   const double len = arm.norm();
@@ -165,8 +167,9 @@ RotateResult Sensing::rotate_until_touch(const RotateRequest& req) const {
     out.end = end;
     out.angle = angle;
     out.gap = gap;
-    // Uncapped, like the gap above: a skin whose contact gap is its gap gets the same answer.
-    if (gap <= req.touch_gap || contact_gap(req.plane, req.pivot, end, req.radius, req.touch_gap) <= req.touch_gap) {
+    if (gap <= req.touch_gap ||
+        (contact_in_space &&
+         contact_gap(req.plane, req.pivot, end, req.radius, req.touch_gap, req.touch_gap) <= req.touch_gap)) {
       out.ok = true;
       break;
     }

@@ -148,6 +148,10 @@ class Planner {
   /// many iterations running the finger has come back to within epsilon (every joint) of one of
   /// its last kCycleMemory chains (0: somewhere new).
   int note_chain(int m, const Chain& chain);
+  /// Forgets finger m's remembered chains (the palm moved, or the finger starts closing).
+  void forget_chains(int m);
+  /// Starts finger m's overextension window and cycle memory afresh, its tip at `tip`.
+  void restart_windows(int m, const Vec2& tip);
   /// Sensing::contact_gap of finger m's link [a, b] at the contact tolerance: at most that
   /// tolerance exactly when the link touches O.
   double contact_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
@@ -174,6 +178,7 @@ class Planner {
   std::vector<Vec2> anchors_;  ///< per finger, where its tip was when it last made progress
   std::vector<int> stalled_;   ///< per finger, iterations since then
   std::vector<std::vector<Chain>> recent_chains_;  ///< note_chain: per finger, its last chains, the palm still
+  std::vector<std::size_t> recent_next_;           ///< note_chain: per finger, the oldest once full
   std::vector<int> cycle_repeats_;                 ///< note_chain: per finger, returns running
   /// Per finger, N + 1 lower bounds of the gaps of its links and root while it is FROZEN (they
   /// move rigidly with the palm: each palm step sigma lowers them by sigma), then as many of

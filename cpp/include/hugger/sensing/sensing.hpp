@@ -65,7 +65,7 @@ struct RotateRequest {
   double front = -kInf;          ///< neither end may pass behind this eta
   double max_angle = kPi;        ///< search range (radians)
   double tolerance = 1e-5;       ///< rotate_until_free: the result's gap (or end motion) resolution, metres
-  double touch_gap = 1e-4;       ///< rotate_until_touch: stop on contact (contact_gap at most this)
+  double touch_gap = 1e-4;       ///< rotate_until_touch: stop on contact (a gap at most this)
   double level = 5e-5;           ///< rotate_until_touch: never come closer than this
   double sample_angle = 0.05;    ///< rotate_until_free: coarse search increment (radians)
   bool pivot_outside = false;    ///< rotate_until_free: the caller knows the pivot's ball of `radius`
@@ -148,7 +148,8 @@ class Sensing {
   /// Slide the fingertip along O's boundary in its plane, counter-clockwise (interior on the
   /// left), to the first point whose chord from the tip is `step`.
   virtual FollowResult follow_boundary(const FollowRequest& req) const;
-  /// Flex the link about its pivot (counter-clockwise) until it touches O, up to max_angle.
+  /// Flex the link about its pivot (counter-clockwise) until it touches O, up to max_angle: the
+  /// gap link() measures is at most touch_gap.
   virtual RotateResult rotate_until_touch(const RotateRequest& req) const;
   /// Rotate a colliding link about its pivot by the smallest angle (at most max_angle) that frees
   /// it, leaving it resting on O (gap at most `tolerance`, or the end within `tolerance` of the
@@ -158,6 +159,12 @@ class Sensing {
   /// refines. Smallest up to `sample_angle`: a free window narrower than it may be missed, and a
   /// Newton result beyond one sample angle is kept only if no sample nearer zero is free.
   virtual RotateResult rotate_until_free(const RotateRequest& req) const;
+
+ protected:
+  /// rotate_until_touch's search (conservative advancement on link()'s gap). `contact_in_space`:
+  /// it also stops where contact_gap says the link touches, for a skin whose link gaps are
+  /// measured within the plane and can exceed the gap in space.
+  RotateResult touch_rotation(const RotateRequest& req, bool contact_in_space) const;
 };
 
 // The checks of what crosses the interface from outside the engine (a Python caller's query, a

@@ -241,9 +241,13 @@ class SectionSkin final : public Sensing {
                  bool a_outside = false) const override;
   /// delta plus the in-plane gap of the link to the region of radius + delta (built on first use
   /// like the link's): at most delta exactly when the axis meets that region, i.e. when the link
-  /// lies within delta of O in space (up to the region's flattening, which errs toward contact).
+  /// lies within delta of O in space, up to the region's boundary: at most `flatten` outside the
+  /// exact one (contact a little early) and a few nanometres inside it.
   double contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double delta,
                      double cap = kInf) const override;
+  /// The generic search on the in-plane gaps, stopping also where contact_gap says the link
+  /// touches O in space.
+  RotateResult rotate_until_touch(const RotateRequest& req) const override { return touch_rotation(req, true); }
   /// As link(...).gap < below, stopping at the first boundary piece closer than `below`.
   bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                       double below) const override;
@@ -269,6 +273,8 @@ class SectionSkin final : public Sensing {
   /// The region of a plane and radius, built on first use; nullptr past kMaxRegions regions
   /// (queries in further planes then go to the mesh world).
   const PlaneRegion* region(const FingerPlane& plane, double radius) const;
+  /// How many regions are built so far.
+  int regions() const { return count_.load(std::memory_order_acquire); }
   const Object& object() const { return *object_; }
   const SimulatedWorld& mesh_world() const { return mesh_; }
   double flatten() const { return flatten_; }
