@@ -1526,20 +1526,17 @@ bool finite_plane(const FingerPlane& plane, double radius) {
 
 const PlaneRegion* SectionSkin::find(const FingerPlane& plane, double radius) const {
   const int n = count_.load(std::memory_order_acquire);
-  // Queries come in runs in one plane, alternating between its links' and its contact region:
-  // try this thread's last two hits first (hints, checked like every other slot; entries are
-  // unique, so any match is the one).
-  thread_local int last[2] = {0, 0};
-  for (const int i : last)
-    if (i < n) {
-      const Entry* e = slots_[i].load(std::memory_order_acquire);
-      if (same_plane(e->plane, e->radius, plane, radius)) return &e->region;
-    }
+  // Queries come in runs in one plane: try this thread's last hit first (a hint, checked like
+  // every other slot; entries are unique, so any match is the one).
+  thread_local int last = 0;
+  if (last < n) {
+    const Entry* e = slots_[last].load(std::memory_order_acquire);
+    if (same_plane(e->plane, e->radius, plane, radius)) return &e->region;
+  }
   for (int i = 0; i < n; ++i) {
     const Entry* e = slots_[i].load(std::memory_order_acquire);
     if (same_plane(e->plane, e->radius, plane, radius)) {
-      last[1] = last[0];
-      last[0] = i;
+      last = i;
       return &e->region;
     }
   }
