@@ -40,8 +40,8 @@ namespace {
 constexpr double kMaxSwingFlexion = kPi / 2.0;
 /// Iterations a CONTACT tip may stay within 2 steps of one place before it counts as overextended.
 constexpr int kStallWindow = 20;
-/// How many configurations back, while the palm is still, a repeated hand is recognised (a cycle
-/// of at most this many iterations).
+/// How many of a finger's last chains, the palm still, are remembered to recognise a cycle (of at
+/// most this many iterations).
 constexpr std::size_t kCycleMemory = 64;
 /// No joint may move more than this many steps s in one Phase 2 iteration (a little under the
 /// checker's 4, for rounding).
