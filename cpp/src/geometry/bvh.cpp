@@ -61,6 +61,14 @@ int TriangleBvh::Builder::split(int begin, int end) {
 
 namespace {
 
+/// A node's box, with the centre and half extent its tests use.
+template <class Node>
+void set_box(Node& nd, const Aabb& box) {
+  nd.box = box;
+  nd.centre = box.centre();
+  nd.half = 0.5 * box.extent();
+}
+
 /// A node of the tree from its children (an inner node's box is their union).
 template <class Node>
 int inner_node(std::vector<Node>& nodes, int index, int left, int right) {
@@ -69,9 +77,7 @@ int inner_node(std::vector<Node>& nodes, int index, int left, int right) {
   nd.right = right;
   Aabb box = nodes[left].box;
   box.grow(nodes[right].box);
-  nd.box = box;
-  nd.centre = box.centre();
-  nd.half = 0.5 * box.extent();
+  set_box(nd, box);
   return index;
 }
 
@@ -162,9 +168,7 @@ int TriangleBvh::Presorted::build(int begin, int end, BuildOut& out, int depth) 
     Aabb box;
     for (int i = begin; i < end; ++i) box.grow(builder.box(ids[sorted[0][i]]));
     Node& nd = out.nodes[index];
-    nd.box = box;
-    nd.centre = box.centre();
-    nd.half = 0.5 * box.extent();
+    set_box(nd, box);
     nd.first = static_cast<int>(out.order.size());
     nd.count = end - begin;
     for (int i = begin; i < end; ++i) out.order.push_back(ids[sorted[0][i]]);

@@ -1577,7 +1577,7 @@ void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius,
     double radius;
   };
   std::vector<Job> todo;
-  for (const double rho : {radius, radius + delta}) {
+  for (const double rho : {radius, contact_radius(radius, delta)}) {
     for (const FingerPlane& p : planes) {
       if (!finite_plane(p, rho) || find(p, rho)) continue;
       bool twice = false;
@@ -1668,7 +1668,7 @@ double SectionSkin::contact_gap(const FingerPlane& plane, const Vec2& a, const V
   if (!(delta > 0.0) || !std::isfinite(delta)) return Sensing::contact_gap(plane, a, b, radius, delta, cap);
   // Within delta of O in space exactly when the axis meets the region of radius + delta; the
   // in-plane gap to that region, plus delta, shrinks no faster than the link moves in the plane.
-  const double g = link(plane, a, b, radius + delta, std::max(cap - delta, 0.0)).gap;
+  const double g = link(plane, a, b, contact_radius(radius, delta), std::max(cap - delta, 0.0)).gap;
   const double out = delta + g;
   // Beyond the inner cap link() reports some value above it: keep the sum above cap.
   return g > cap - delta && !(out > cap) ? std::nextafter(cap, kInf) : out;

@@ -282,6 +282,8 @@ class SectionSkin final : public Sensing {
   static constexpr int kMaxRegions = 2 * kMaxFingers;
 
  private:
+  /// The radius of the region that decides contact at sensing distance delta (links of `radius`).
+  static double contact_radius(double radius, double delta) { return radius + delta; }
   struct Entry;
   /// The region of the plane and radius if built, else nullptr (no lock).
   const PlaneRegion* find(const FingerPlane& plane, double radius) const;
