@@ -1571,19 +1571,18 @@ const PlaneRegion* SectionSkin::region(const FingerPlane& plane, double radius) 
 }
 
 void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius, double delta) const {
-  // The regions of the links, then those of contact (radius + delta), each plane's once.
+  // Contact needs no region of its own (contact_gap): the links' regions, each plane's once.
+  (void)delta;
   struct Job {
     const FingerPlane* plane;
     double radius;
   };
   std::vector<Job> todo;
-  for (const double rho : {radius, contact_radius(radius, delta)}) {
-    for (const FingerPlane& p : planes) {
-      if (!finite_plane(p, rho) || find(p, rho)) continue;
-      bool twice = false;
-      for (const Job& q : todo) twice = twice || same_plane(*q.plane, q.radius, p, rho);
-      if (!twice) todo.push_back({&p, rho});
-    }
+  for (const FingerPlane& p : planes) {
+    if (!finite_plane(p, radius) || find(p, radius)) continue;
+    bool twice = false;
+    for (const Job& q : todo) twice = twice || same_plane(*q.plane, q.radius, p, radius);
+    if (!twice) todo.push_back({&p, radius});
   }
   const std::size_t room = static_cast<std::size_t>(std::max(0, kMaxRegions - count_.load(std::memory_order_acquire)));
   if (todo.size() > room) todo.resize(room);
@@ -1666,12 +1665,13 @@ Touch SectionSkin::link(const FingerPlane& plane, const Vec2& a, const Vec2& b, 
 double SectionSkin::contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                                 double delta, double cap) const {
   if (!(delta > 0.0) || !std::isfinite(delta)) return Sensing::contact_gap(plane, a, b, radius, delta, cap);
-  // Within delta of O in space exactly when the axis meets the region of radius + delta; the
-  // in-plane gap to that region, plus delta, shrinks no faster than the link moves in the plane.
-  const double g = link(plane, a, b, contact_radius(radius, delta), std::max(cap - delta, 0.0)).gap;
-  const double out = delta + g;
-  // Beyond the inner cap link() reports some value above it: keep the sum above cap.
-  return g > cap - delta && !(out > cap) ? std::nextafter(cap, kInf) : out;
+  // The in-plane gap is never below the gap in space (less the flattening): at most delta, the
+  // link touches. Beyond delta, where O's surface is oblique to the plane, the gap in space can
+  // still be at most delta: it is measured in 3D, and the smaller of the two is the answer (both
+  // shrink no faster than the link moves in its plane, and both are exact up to the cap).
+  const double in_plane = link(plane, a, b, radius, cap).gap;
+  if (in_plane <= delta) return in_plane;
+  return std::min(in_plane, mesh_.link(plane, a, b, radius, cap).gap);
 }
 
 bool SectionSkin::link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,

@@ -239,10 +239,10 @@ class SectionSkin final : public Sensing {
   Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap = kInf) const override;
   bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
                  bool a_outside = false) const override;
-  /// delta plus the in-plane gap of the link to the region of radius + delta (built on first use
-  /// like the link's): at most delta exactly when the axis meets that region, i.e. when the link
-  /// lies within delta of O in space, up to the region's boundary: at most `flatten` outside the
-  /// exact one (contact a little early) and a few nanometres inside it.
+  /// The in-plane gap where it is at most delta (the gap in space is then at most delta, up to
+  /// `flatten`), else the smaller of it and the mesh world's gap in space: at most delta exactly
+  /// when the link lies within delta of O in space (contact at most `flatten` early), where O's
+  /// surface is oblique to the plane too.
   double contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double delta,
                      double cap = kInf) const override;
   /// The generic search on the in-plane gaps, stopping also where contact_gap says the link
@@ -265,9 +265,9 @@ class SectionSkin final : public Sensing {
   /// The pivot's inside test is left out where the request says it is outside (pivot_outside).
   RotateResult rotate_until_free(const RotateRequest& req) const override;
 
-  /// Builds the regions of these planes not built yet, for links of `radius` and for contact
-  /// (radius + delta), on up to one thread per region (at most the hardware's threads; one
-  /// region per plane and radius whatever the thread count).
+  /// Builds the regions of these planes not built yet, for links of `radius`, on up to one
+  /// thread per region (at most the hardware's threads; one region per plane and radius whatever
+  /// the thread count). Contact needs none of its own (contact_gap): `delta` is not used.
   void prepare(const std::vector<FingerPlane>& planes, double radius, double delta) const override;
 
   /// The region of a plane and radius, built on first use; nullptr past kMaxRegions regions
@@ -278,12 +278,11 @@ class SectionSkin final : public Sensing {
   const Object& object() const { return *object_; }
   const SimulatedWorld& mesh_world() const { return mesh_; }
   double flatten() const { return flatten_; }
-  /// Two regions per finger plane (the links' and contact's) for the largest hand.
+  /// Room for two radii in every finger plane of the largest hand (a caller may ask about links
+  /// of another radius; the planner asks about one).
   static constexpr int kMaxRegions = 2 * kMaxFingers;
 
  private:
-  /// The radius of the region that decides contact at sensing distance delta (links of `radius`).
-  static double contact_radius(double radius, double delta) { return radius + delta; }
   struct Entry;
   /// The region of the plane and radius if built, else nullptr (no lock).
   const PlaneRegion* find(const FingerPlane& plane, double radius) const;
