@@ -215,8 +215,9 @@ Result run(const Scenario& sc, const std::string& skin, int repeats) {
       Planner planner(hand, sensing, target, start);
       const double t_planner = seconds_since(t1);
       if (skin == "section") {
-        // The finger planes' regions, built here as the planner's first Phase 2 iteration would (SectionSkin::prepare: side by side, one thread per region
-        // up to the hardware's): the planes of Phase 2, where Phase 1 left the palm.
+        // The finger planes' regions, built here as the planner's first Phase 2 iteration would
+        // (SectionSkin::prepare: side by side, one thread per region up to the hardware's): the
+        // planes of Phase 2, where Phase 1 left the palm.
         const auto* section = static_cast<const SectionSkin*>(sensing.get());
         const Pose palm2 = planner.history().back().palm;
         std::vector<FingerPlane> planes;
