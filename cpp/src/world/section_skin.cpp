@@ -1671,7 +1671,12 @@ double SectionSkin::contact_gap(const FingerPlane& plane, const Vec2& a, const V
   // shrink no faster than the link moves in its plane, and both are exact up to the cap).
   const double in_plane = link(plane, a, b, radius, cap).gap;
   if (in_plane <= delta) return in_plane;
-  return std::min(in_plane, mesh_.link(plane, a, b, radius, cap).gap);
+  // The axis is outside R, so outside O: its gap in space exceeds the cap exactly when no
+  // triangle comes within radius + cap of it, a test that stops at the first one.
+  const Vec3 wa = plane.to_world(a), wb = plane.to_world(b);
+  if (!object_->bvh().any_within(wa, wb, std::nextafter(radius + std::max(cap, 0.0), kInf)))
+    return std::min(in_plane, std::nextafter(std::max(cap, 0.0), kInf));
+  return std::min(in_plane, mesh_.capsule(wa, wb, radius, cap).gap);
 }
 
 bool SectionSkin::link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
