@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
 #include <exception>
 #include <stdexcept>
 #include <string>
@@ -229,6 +230,12 @@ inline bool farther_than(const Query& q, const Vec2& p0, const Vec2& p1, const V
 // --- PlaneRegion --------------------------------------------------------------------------
 
 PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane& plane, double radius, double flatten)
+    : PlaneRegion(std::move(object), plane, radius, flatten, FirstStage{}) {
+  finish();
+}
+
+PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane& plane, double radius, double flatten,
+                         FirstStage)
     : object_(std::move(object)), plane_(plane), radius_(radius), flatten_(flatten) {
   HUGGER_CHECK_ARGUMENT(object_, "PlaneRegion needs an object");
   check_plane_frame(plane.origin, plane.u, plane.p);
@@ -238,9 +245,13 @@ PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane
                         "PlaneRegion: the flattening tolerance must be positive, got " << flatten);
   build_pieces();
   mark_crossings();
-  std::vector<char> tested = drop_inner_segments();
+  tested_ = drop_inner_segments();
+}
+
+void PlaneRegion::finish() {
   // The chains may move out by what the arcs' flattening left of the tolerance (at least half).
-  simplify(flatten_ - std::min(arc_deviation_, 0.5 * flatten_), &tested);
+  simplify(flatten_ - std::min(arc_deviation_, 0.5 * flatten_), &tested_);
+  tested_ = std::vector<char>();
   build_bvh();
   build_cells();
   link_segments();
@@ -1498,6 +1509,9 @@ bool PlaneRegion::inside(const Vec2& x) const {
 struct SectionSkin::Entry {
   Entry(std::shared_ptr<const Object> object, const FingerPlane& p, double r, double flatten)
       : plane(p), radius(r), region(std::move(object), p, r, flatten) {}
+  Entry(std::shared_ptr<const Object> object, const FingerPlane& p, double r, double flatten,
+        PlaneRegion::FirstStage first)
+      : plane(p), radius(r), region(std::move(object), p, r, flatten, first) {}
   FingerPlane plane;
   double radius;
   PlaneRegion region;
@@ -1592,15 +1606,40 @@ void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius,
     for (const Job& j : todo) region(*j.plane, j.radius);
     return;
   }
+  // Each region in two stages (PlaneRegion::FirstStage): every thread takes first stages while
+  // any is left, then second stages in the same order, each once its first stage is done. The
+  // short second stages fill the time a thread would otherwise wait for the last first stage
+  // (five planes on two threads: about 2.5 regions' time instead of 3).
   std::vector<std::unique_ptr<Entry>> built(todo.size());
   std::vector<std::exception_ptr> errors(todo.size());
-  std::atomic<std::size_t> next{0};
+  std::vector<char> first_done(todo.size(), 0);  // guarded by `stage`
+  std::mutex stage;
+  std::condition_variable first_stage_done;
+  std::atomic<std::size_t> next_first{0}, next_second{0};
   auto work = [&] {
-    for (std::size_t i; (i = next.fetch_add(1)) < todo.size();) {
+    for (std::size_t i; (i = next_first.fetch_add(1)) < todo.size();) {
       try {
-        built[i] = std::make_unique<Entry>(object_, *todo[i].plane, todo[i].radius, flatten_);
+        built[i] =
+            std::make_unique<Entry>(object_, *todo[i].plane, todo[i].radius, flatten_, PlaneRegion::FirstStage{});
       } catch (...) {
         errors[i] = std::current_exception();
+      }
+      {
+        std::lock_guard<std::mutex> lock(stage);
+        first_done[i] = 1;
+      }
+      first_stage_done.notify_all();
+    }
+    for (std::size_t j; (j = next_second.fetch_add(1)) < todo.size();) {
+      {
+        std::unique_lock<std::mutex> lock(stage);
+        first_stage_done.wait(lock, [&] { return first_done[j] != 0; });
+      }
+      if (errors[j]) continue;
+      try {
+        built[j]->region.finish();
+      } catch (...) {
+        errors[j] = std::current_exception();
       }
     }
   };

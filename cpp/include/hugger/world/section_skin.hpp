@@ -66,6 +66,13 @@ class PlaneRegion {
   /// Builds R for the plane and `radius` (>= 0). `flatten` (> 0): how far outside R the boundary
   /// segments may lie (metres): arcs' tangent polygons and the simplified chains together.
   PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane& plane, double radius, double flatten);
+  /// The same build in two stages, for a builder that runs the stages of several regions side
+  /// by side (SectionSkin::prepare): this constructor stops after the pieces, their crossings and
+  /// the parts dropped inside R; finish() (private: the builder's) then simplifies the chains and
+  /// builds the tree, the cells and the links. Not to be queried before finish().
+  struct FirstStage {};
+  PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane& plane, double radius, double flatten,
+              FirstStage);
 
   /// Nearest boundary piece to segment [a, b] (a == b: a point) within `cap`; distance is +inf
   /// when nothing is within cap.
@@ -137,6 +144,9 @@ class PlaneRegion {
   long fallbacks() const { return fallbacks_.load(std::memory_order_relaxed); }
 
  private:
+  friend class SectionSkin;
+  /// The second stage of the build (see FirstStage).
+  void finish();
   struct Node {
     double lo[2], hi[2];
     double c[2], h[2];  ///< centre and half extent, (lo + hi) / 2 and (hi - lo) / 2
@@ -200,6 +210,7 @@ class PlaneRegion {
     bool operator<(const Cut& o) const { return segment < o.segment || (segment == o.segment && t < o.t); }
   };
   std::vector<Cut> cuts_;
+  std::vector<char> tested_;  ///< while building: drop_inner_segments' answer, for simplify
   std::vector<std::array<Vec2, 2>> piece_ends_;  ///< while building: first and last point of each piece
   int depth_ = 0;
   double arc_deviation_ = 0.0;  ///< while building: how far the flattened arcs lie out, at most
@@ -265,9 +276,10 @@ class SectionSkin final : public Sensing {
   /// The pivot's inside test is left out where the request says it is outside (pivot_outside).
   RotateResult rotate_until_free(const RotateRequest& req) const override;
 
-  /// Builds the regions of these planes not built yet, for links of `radius`, on up to one
-  /// thread per region (at most the hardware's threads; one region per plane and radius whatever
-  /// the thread count). Contact needs none of its own (contact_gap): `delta` is not used.
+  /// Builds the regions of these planes not built yet, for links of `radius`, side by side on up
+  /// to one thread per region (at most the hardware's threads), each in its two stages
+  /// (PlaneRegion::FirstStage); the regions are those region() builds, whatever the thread count.
+  /// Contact needs none of its own (contact_gap): `delta` is not used.
   void prepare(const std::vector<FingerPlane>& planes, double radius, double delta) const override;
 
   /// The region of a plane and radius, built on first use; nullptr past kMaxRegions regions
