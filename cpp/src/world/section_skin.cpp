@@ -1644,6 +1644,7 @@ void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius,
     }
   };
   std::vector<std::thread> pool;
+  pool.reserve(threads - 1);  // no allocation between starting threads and joining them
   for (std::size_t t = 1; t < threads; ++t) {
     try {
       pool.emplace_back(work);
