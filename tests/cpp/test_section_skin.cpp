@@ -330,8 +330,14 @@ TEST(SectionSkin, ContactGapDecidesContactInSpace) {
         } else {
           EXPECT_GT(g3, delta) << "plane " << k << " query " << q;
         }
-        EXPECT_EQ(s.skin.contact_gap(pl, a, b, r, delta, delta) <= delta, g <= delta);
-        if (g > delta) EXPECT_GT(s.skin.contact_gap(pl, a, b, r, delta, 0.5 * g), 0.5 * g);
+        // Capped: exact up to the cap, above it beyond; the decision whatever the cap (one below
+        // delta included). (A cap equal to the gap may fall on either side by rounding.)
+        for (const double cap : {-1.0, 0.0, 0.5 * delta, delta, 0.5 * g, 1.5 * g}) {
+          const double capped = s.skin.contact_gap(pl, a, b, r, delta, cap);
+          EXPECT_EQ(capped <= delta, g <= delta) << "cap " << cap;
+          if (g <= std::max(cap, delta)) EXPECT_EQ(capped, g) << "cap " << cap;
+          else EXPECT_GT(capped, cap) << "cap " << cap;
+        }
         // Moved within the plane by v: where g - |v| still says no contact, the gap shrank by at
         // most |v|.
         const Vec2 v = 0.01 * s.size * Vec2(s.u() - 0.5, s.u() - 0.5);
@@ -345,42 +351,57 @@ TEST(SectionSkin, ContactGapDecidesContactInSpace) {
   EXPECT_GE(missed_in_plane, 20);  // the case the gap in space is measured for
 }
 
-// prepare() builds the regions of several planes side by side: the same regions, segment for segment, as region() builds one at a time, and a plane given
-// twice is built once; a plane that cannot be built makes prepare() throw, and the skin still
-// answers in the other planes.
+// prepare() builds the regions of several planes side by side, each in two stages, on 1, 2 and 3
+// threads (more planes than threads): the same regions as region() builds one at a time, segment
+// for segment and answer for answer (nearest pieces and inside tests of random points: the tree,
+// cells and links of the second stage); a plane given twice is built once; a plane that cannot
+// be built makes prepare() throw, and the skin still answers in the other planes.
 TEST(SectionSkin, PrepareBuildsTheSameRegionsSideBySide) {
   const auto m = test::curvy(4);
   const auto object = std::make_shared<Object>(m.vertices, m.faces);
   std::mt19937 rng(11);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
   std::vector<FingerPlane> planes;
   for (int k = 0; k < 6; ++k) {
     planes.push_back(test::random_plane(rng, object->bounds().centre()));
   }
   planes.push_back(planes[2]);
-  const double r = 0.004, delta = 1e-4;
-  const SectionSkin together(object, kFlatten), alone(object, kFlatten);
-  together.prepare(planes, r, delta);
-  EXPECT_EQ(together.regions(), 6);  // 6 planes (one given twice); contact needs no region of its own
-  for (std::size_t k = 0; k < planes.size(); ++k) {
-    const PlaneRegion* a = together.region(planes[k], r);
-    const PlaneRegion* b = alone.region(planes[k], r);
-    ASSERT_NE(a, nullptr);
-    ASSERT_NE(b, nullptr);
-    ASSERT_EQ(a->segments().size(), b->segments().size()) << "plane " << k;
-    for (std::size_t i = 0; i < a->segments().size(); ++i) {
-      EXPECT_EQ(a->segments()[i].a, b->segments()[i].a);
-      EXPECT_EQ(a->segments()[i].b, b->segments()[i].b);
-      EXPECT_EQ(a->segments()[i].normal, b->segments()[i].normal);
+  const double r = 0.004, delta = 1e-4, size = object->bounds().extent().maxCoeff();
+  const SectionSkin alone(object, kFlatten);
+  for (const int threads : {1, 2, 3}) {
+    SectionSkin together(object, kFlatten);
+    together.set_build_threads(threads);
+    together.prepare(planes, r, delta);
+    EXPECT_EQ(together.regions(), 6) << threads << " threads";  // 6 planes, one given twice
+    for (std::size_t k = 0; k < planes.size(); ++k) {
+      const PlaneRegion* a = together.region(planes[k], r);
+      const PlaneRegion* b = alone.region(planes[k], r);
+      ASSERT_NE(a, nullptr);
+      ASSERT_NE(b, nullptr);
+      ASSERT_EQ(a->segments().size(), b->segments().size()) << "plane " << k << ", " << threads << " threads";
+      for (std::size_t i = 0; i < a->segments().size(); ++i) {
+        EXPECT_EQ(a->segments()[i].a, b->segments()[i].a);
+        EXPECT_EQ(a->segments()[i].b, b->segments()[i].b);
+        EXPECT_EQ(a->segments()[i].normal, b->segments()[i].normal);
+      }
+      for (int q = 0; q < 50; ++q) {
+        const Vec2 x = 0.6 * size * Vec2(U(rng), U(rng)), y = x + 0.1 * size * Vec2(U(rng), U(rng));
+        const PlaneRegion::Near na = a->nearest(x, y), nb = b->nearest(x, y);
+        EXPECT_EQ(na.distance, nb.distance);
+        EXPECT_EQ(na.segment, nb.segment);
+        EXPECT_EQ(a->inside(x), b->inside(x));
+      }
     }
+    EXPECT_EQ(together.region(planes[2], r), together.region(planes[6], r));
+    EXPECT_NE(together.region(planes[2], r), together.region(planes[2], r + delta));  // another radius, built now
+    EXPECT_EQ(together.regions(), 7);
+    FingerPlane bad = planes[0];
+    bad.u = bad.p;  // not a frame
+    SectionSkin skin(object, kFlatten);
+    skin.set_build_threads(threads);
+    EXPECT_THROW(skin.prepare({planes[0], bad, planes[1]}, r, delta), std::invalid_argument);
+    EXPECT_NE(skin.region(planes[1], r), nullptr);
   }
-  EXPECT_EQ(together.region(planes[2], r), together.region(planes[6], r));
-  EXPECT_NE(together.region(planes[2], r), together.region(planes[2], r + delta));  // another radius, built now
-  EXPECT_EQ(together.regions(), 7);
-  FingerPlane bad = planes[0];
-  bad.u = bad.p;  // not a frame
-  const SectionSkin skin(object, kFlatten);
-  EXPECT_THROW(skin.prepare({planes[0], bad, planes[1]}, r, delta), std::invalid_argument);
-  EXPECT_NE(skin.region(planes[1], r), nullptr);
 }
 
 // rotate_until_free in closed form: against a brute-force sweep of fine angles both ways (the

@@ -1600,7 +1600,8 @@ void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius,
   }
   const std::size_t room = static_cast<std::size_t>(std::max(0, kMaxRegions - count_.load(std::memory_order_acquire)));
   if (todo.size() > room) todo.resize(room);
-  const unsigned hardware = std::thread::hardware_concurrency();
+  const unsigned hardware =
+      build_threads_ > 0 ? static_cast<unsigned>(build_threads_) : std::thread::hardware_concurrency();
   const std::size_t threads = std::min<std::size_t>(todo.size(), hardware > 1 ? hardware : 1);
   if (threads < 2) {
     for (const Job& j : todo) region(*j.plane, j.radius);
@@ -1704,7 +1705,11 @@ Touch SectionSkin::link(const FingerPlane& plane, const Vec2& a, const Vec2& b, 
 
 double SectionSkin::contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                                 double delta, double cap) const {
-  if (!(delta > 0.0) || !std::isfinite(delta)) return Sensing::contact_gap(plane, a, b, radius, delta, cap);
+  // Without a region for the plane (past kMaxRegions), link() measures in space already.
+  if (!(delta > 0.0) || !std::isfinite(delta) || !region(plane, radius))
+    return Sensing::contact_gap(plane, a, b, radius, delta, cap);
+  // Below delta a capped answer would not decide contact: the cap is at least delta.
+  cap = std::max(cap, delta);
   // The in-plane gap is never below the gap in space (less the flattening): at most delta, the
   // link touches. Beyond delta, where O's surface is oblique to the plane, the gap in space can
   // still be at most delta: it is measured in 3D, and the smaller of the two is the answer (both
@@ -1714,8 +1719,8 @@ double SectionSkin::contact_gap(const FingerPlane& plane, const Vec2& a, const V
   // The axis is outside R, so outside O: its gap in space exceeds the cap exactly when no
   // triangle comes within radius + cap of it, a test that stops at the first one.
   const Vec3 wa = plane.to_world(a), wb = plane.to_world(b);
-  if (!object_->bvh().any_within(wa, wb, std::nextafter(radius + std::max(cap, 0.0), kInf)))
-    return std::min(in_plane, std::nextafter(std::max(cap, 0.0), kInf));
+  if (!object_->bvh().any_within(wa, wb, std::nextafter(radius + cap, kInf)))
+    return std::min(in_plane, std::nextafter(cap, kInf));
   return std::min(in_plane, mesh_.capsule(wa, wb, radius, cap).gap);
 }
 

@@ -103,8 +103,10 @@ class Sensing {
     return link(plane, a, b, radius, below).gap < below;
   }
   /// The gap that decides contact (the sensing distance `delta` > 0): at most delta exactly when
-  /// the link lies within delta of O in space, and it shrinks no faster than the link moves
-  /// within its plane. Exact when at most `cap`; otherwise any value above cap. The default is
+  /// the link lies within delta of O in space (whatever the cap), and where it exceeds delta it
+  /// shrinks no faster than the link moves within its plane (a FROZEN finger's bound lasts while
+  /// it moves less than the bound's excess over delta). Exact when at most `cap`; otherwise any
+  /// value above cap. The default is
   /// link()'s gap, exact for a skin that measures in space; the section skin, whose in-plane
   /// gaps exceed the gap in space where O's surface is oblique to the plane, measures the gap in
   /// space where the in-plane one exceeds delta.

@@ -21,6 +21,7 @@
 /// mesh size. Gaps it reports are measured within the plane (never smaller than the 3D gap).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <atomic>
@@ -66,13 +67,11 @@ class PlaneRegion {
   /// Builds R for the plane and `radius` (>= 0). `flatten` (> 0): how far outside R the boundary
   /// segments may lie (metres): arcs' tangent polygons and the simplified chains together.
   PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane& plane, double radius, double flatten);
-  /// The same build in two stages, for a builder that runs the stages of several regions side
-  /// by side (SectionSkin::prepare): this constructor stops after the pieces, their crossings and
-  /// the parts dropped inside R; finish() (private: the builder's) then simplifies the chains and
-  /// builds the tree, the cells and the links. Not to be queried before finish().
+  /// The same build in two stages, for SectionSkin::prepare, which runs the stages of several
+  /// regions side by side: the (private) constructor taking FirstStage stops after the pieces,
+  /// their crossings and the parts dropped inside R; finish() then simplifies the chains and
+  /// builds the tree, the cells and the links.
   struct FirstStage {};
-  PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane& plane, double radius, double flatten,
-              FirstStage);
 
   /// Nearest boundary piece to segment [a, b] (a == b: a point) within `cap`; distance is +inf
   /// when nothing is within cap.
@@ -145,6 +144,8 @@ class PlaneRegion {
 
  private:
   friend class SectionSkin;
+  PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane& plane, double radius, double flatten,
+              FirstStage);
   /// The second stage of the build (see FirstStage).
   void finish();
   struct Node {
@@ -251,9 +252,10 @@ class SectionSkin final : public Sensing {
   bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
                  bool a_outside = false) const override;
   /// The in-plane gap where it is at most delta (the gap in space is then at most delta, up to
-  /// `flatten`), else the smaller of it and the mesh world's gap in space: at most delta exactly
-  /// when the link lies within delta of O in space (contact at most `flatten` early), where O's
-  /// surface is oblique to the plane too.
+  /// `flatten`), else the smaller of it and the mesh world's gap in space (a threshold test on the
+  /// object's BVH first: nothing within radius + cap, a value above the cap): at most delta
+  /// exactly when the link lies within delta of O in space (contact at most `flatten` early),
+  /// where O's surface is oblique to the plane too. A cap below delta is taken as delta.
   double contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double delta,
                      double cap = kInf) const override;
   /// The generic search on the in-plane gaps, stopping also where contact_gap says the link
@@ -290,6 +292,9 @@ class SectionSkin final : public Sensing {
   const Object& object() const { return *object_; }
   const SimulatedWorld& mesh_world() const { return mesh_; }
   double flatten() const { return flatten_; }
+  /// How many threads prepare() may use: 0 (the default) as many as the hardware has. The
+  /// regions are the same whatever it is.
+  void set_build_threads(int threads) { build_threads_ = std::max(threads, 0); }
   /// Room for two radii in every finger plane of the largest hand (a caller may ask about links
   /// of another radius; the planner asks about one).
   static constexpr int kMaxRegions = 2 * kMaxFingers;
@@ -309,6 +314,7 @@ class SectionSkin final : public Sensing {
   mutable std::vector<std::unique_ptr<Entry>> owned_;
   mutable std::array<std::atomic<const Entry*>, kMaxRegions> slots_{};
   mutable std::atomic<int> count_{0};
+  int build_threads_ = 0;
 };
 
 }  // namespace hugger
