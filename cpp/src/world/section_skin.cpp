@@ -1587,16 +1587,12 @@ const PlaneRegion* SectionSkin::region(const FingerPlane& plane, double radius) 
 void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius, double delta) const {
   // Contact needs no region of its own (contact_gap): the links' regions, each plane's once.
   (void)delta;
-  struct Job {
-    const FingerPlane* plane;
-    double radius;
-  };
-  std::vector<Job> todo;
+  std::vector<const FingerPlane*> todo;
   for (const FingerPlane& p : planes) {
     if (!finite_plane(p, radius) || find(p, radius)) continue;
     bool twice = false;
-    for (const Job& q : todo) twice = twice || same_plane(*q.plane, q.radius, p, radius);
-    if (!twice) todo.push_back({&p, radius});
+    for (const FingerPlane* q : todo) twice = twice || same_plane(*q, radius, p, radius);
+    if (!twice) todo.push_back(&p);
   }
   const std::size_t room = static_cast<std::size_t>(std::max(0, kMaxRegions - count_.load(std::memory_order_acquire)));
   if (todo.size() > room) todo.resize(room);
@@ -1604,7 +1600,7 @@ void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius,
       build_threads_ > 0 ? static_cast<unsigned>(build_threads_) : std::thread::hardware_concurrency();
   const std::size_t threads = std::min<std::size_t>(todo.size(), hardware > 1 ? hardware : 1);
   if (threads < 2) {
-    for (const Job& j : todo) region(*j.plane, j.radius);
+    for (const FingerPlane* p : todo) region(*p, radius);
     return;
   }
   // Each region in two stages (PlaneRegion::FirstStage): every thread takes first stages while
@@ -1620,8 +1616,7 @@ void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius,
   auto work = [&] {
     for (std::size_t i; (i = next_first.fetch_add(1)) < todo.size();) {
       try {
-        built[i] =
-            std::make_unique<Entry>(object_, *todo[i].plane, todo[i].radius, flatten_, PlaneRegion::FirstStage{});
+        built[i] = std::make_unique<Entry>(object_, *todo[i], radius, flatten_, PlaneRegion::FirstStage{});
       } catch (...) {
         errors[i] = std::current_exception();
       }

@@ -106,10 +106,9 @@ class Sensing {
   /// the link lies within delta of O in space (whatever the cap), and where it exceeds delta it
   /// shrinks no faster than the link moves within its plane (a FROZEN finger's bound lasts while
   /// it moves less than the bound's excess over delta). Exact when at most `cap`; otherwise any
-  /// value above cap. The default is
-  /// link()'s gap, exact for a skin that measures in space; the section skin, whose in-plane
-  /// gaps exceed the gap in space where O's surface is oblique to the plane, measures the gap in
-  /// space where the in-plane one exceeds delta.
+  /// value above cap. The default is link()'s gap, exact for a skin that measures in space; the
+  /// section skin, whose in-plane gaps exceed the gap in space where O's surface is oblique to
+  /// the plane, measures the gap in space where the in-plane one exceeds delta.
   virtual double contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double delta,
                              double cap = kInf) const {
     (void)delta;
