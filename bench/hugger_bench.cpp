@@ -223,7 +223,7 @@ Result run(const Scenario& sc, const std::string& skin, int repeats) {
         std::vector<FingerPlane> planes;
         for (int m = 0; m < hand.fingers(); ++m) planes.push_back(hand.plane(palm2, m));
         const auto ts = Clock::now();
-        section->prepare(planes, hand.link_radius(), planner.params().contact_tolerance);
+        section->prepare(planes, hand.link_radius());
         sections_s.push_back(seconds_since(ts));
       }
       const auto t2 = Clock::now();

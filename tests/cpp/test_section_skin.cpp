@@ -371,7 +371,7 @@ TEST(SectionSkin, PrepareBuildsTheSameRegionsSideBySide) {
   for (const int threads : {1, 2, 3}) {
     SectionSkin together(object, kFlatten);
     together.set_build_threads(threads);
-    together.prepare(planes, r, delta);
+    together.prepare(planes, r);
     EXPECT_EQ(together.regions(), 6) << threads << " threads";  // 6 planes, one given twice
     for (std::size_t k = 0; k < planes.size(); ++k) {
       const PlaneRegion* a = together.region(planes[k], r);
@@ -399,7 +399,7 @@ TEST(SectionSkin, PrepareBuildsTheSameRegionsSideBySide) {
     bad.u = bad.p;  // not a frame
     SectionSkin skin(object, kFlatten);
     skin.set_build_threads(threads);
-    EXPECT_THROW(skin.prepare({planes[0], bad, planes[1]}, r, delta), std::invalid_argument);
+    EXPECT_THROW(skin.prepare({planes[0], bad, planes[1]}, r), std::invalid_argument);
     EXPECT_NE(skin.region(planes[1], r), nullptr);
   }
 }

@@ -210,16 +210,8 @@ double Planner::link_gap(int m, const Vec2& a, const Vec2& b, double cap) const 
 
 int Planner::note_chain(int m, const Chain& chain) {
   std::vector<Chain>& seen = recent_chains_[m];
-  const double tol2 = params_.epsilon * params_.epsilon;
-  bool back = false;
-  for (const Chain& c : seen) {
-    bool near = true;
-    for (std::size_t i = 0; i < c.size() && near; ++i) near = (c[i] - chain[i]).squaredNorm() < tol2;
-    if (near) {
-      back = true;
-      break;
-    }
-  }
+  const bool back = std::any_of(seen.begin(), seen.end(),
+                                [&](const Chain& c) { return largest_move(c, chain) < params_.epsilon; });
   if (seen.size() < kCycleMemory) {
     seen.push_back(chain);
   } else {  // in place of the oldest
@@ -546,7 +538,7 @@ void Planner::phase2_iteration() {
   const bool hug = params_.rules == Rules::kHug;
   const long it = stats_.phase2_iterations;
   if (!phase2_started_) {
-    sensing_->prepare(planes_, r, delta);  // a hint: a skin may build its per-plane structures now
+    sensing_->prepare(planes_, r);  // a hint: a skin may build its per-plane structures now
     phase2_started_ = true;
   }
   // A FROZEN finger becomes CONTACT (palm contact, or the hand blocked); under the hug rules it

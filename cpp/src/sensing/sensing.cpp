@@ -152,9 +152,18 @@ FollowResult Sensing::follow_boundary(const FollowRequest& req) const {
   return out;
 }
 
-RotateResult Sensing::rotate_until_touch(const RotateRequest& req) const { return touch_rotation(req, false); }
+double Sensing::contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double delta,
+                            double cap) const {
+  // Below delta a capped answer would not decide contact: the cap is at least delta.
+  cap = std::max(cap, delta);
+  // link()'s gap is never below the gap in space (less a skin's flattening): at most delta, the
+  // link touches. Beyond it, a skin that measures within the plane adds the gap in space.
+  const double g = link(plane, a, b, radius, cap).gap;
+  if (g <= delta || !(g > 0.0)) return g;
+  return std::min(g, gap_in_space(plane, a, b, radius, cap));
+}
 
-RotateResult Sensing::touch_rotation(const RotateRequest& req, bool contact_in_space) const {
+RotateResult Sensing::rotate_until_touch(const RotateRequest& req) const {
   RotateResult out;
   const Vec2 arm = req.end - req.pivot;
   const double len = arm.norm();
@@ -168,8 +177,7 @@ RotateResult Sensing::touch_rotation(const RotateRequest& req, bool contact_in_s
     out.angle = angle;
     out.gap = gap;
     if (gap <= req.touch_gap ||
-        (contact_in_space &&
-         contact_gap(req.plane, req.pivot, end, req.radius, req.touch_gap, req.touch_gap) <= req.touch_gap)) {
+        (gap > 0.0 && gap_in_space(req.plane, req.pivot, end, req.radius, req.touch_gap) <= req.touch_gap)) {
       out.ok = true;
       break;
     }

@@ -1507,11 +1507,10 @@ bool PlaneRegion::inside(const Vec2& x) const {
 // --- SectionSkin --------------------------------------------------------------------------
 
 struct SectionSkin::Entry {
-  Entry(std::shared_ptr<const Object> object, const FingerPlane& p, double r, double flatten)
-      : plane(p), radius(r), region(std::move(object), p, r, flatten) {}
-  Entry(std::shared_ptr<const Object> object, const FingerPlane& p, double r, double flatten,
-        PlaneRegion::FirstStage first)
-      : plane(p), radius(r), region(std::move(object), p, r, flatten, first) {}
+  /// `stage`: none (the whole build) or PlaneRegion::FirstStage.
+  template <class... Stage>
+  Entry(std::shared_ptr<const Object> object, const FingerPlane& p, double r, double flatten, Stage... stage)
+      : plane(p), radius(r), region(std::move(object), p, r, flatten, stage...) {}
   FingerPlane plane;
   double radius;
   PlaneRegion region;
@@ -1584,9 +1583,7 @@ const PlaneRegion* SectionSkin::region(const FingerPlane& plane, double radius) 
   }
 }
 
-void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius, double delta) const {
-  // Contact needs no region of its own (contact_gap): the links' regions, each plane's once.
-  (void)delta;
+void SectionSkin::prepare(const std::vector<FingerPlane>& planes, double radius) const {
   std::vector<const FingerPlane*> todo;
   for (const FingerPlane& p : planes) {
     if (!finite_plane(p, radius) || find(p, radius)) continue;
@@ -1698,25 +1695,15 @@ Touch SectionSkin::link(const FingerPlane& plane, const Vec2& a, const Vec2& b, 
   return t;
 }
 
-double SectionSkin::contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
-                                double delta, double cap) const {
-  // Without a region for the plane (past kMaxRegions), link() measures in space already.
-  if (!(delta > 0.0) || !std::isfinite(delta) || !region(plane, radius))
-    return Sensing::contact_gap(plane, a, b, radius, delta, cap);
-  // Below delta a capped answer would not decide contact: the cap is at least delta.
-  cap = std::max(cap, delta);
-  // The in-plane gap is never below the gap in space (less the flattening): at most delta, the
-  // link touches. Beyond delta, where O's surface is oblique to the plane, the gap in space can
-  // still be at most delta: it is measured in 3D, and the smaller of the two is the answer (both
-  // shrink no faster than the link moves in its plane, and both are exact up to the cap).
-  const double in_plane = link(plane, a, b, radius, cap).gap;
-  if (in_plane <= delta) return in_plane;
+double SectionSkin::gap_in_space(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                                 double cap) const {
+  if (!region(plane, radius)) return kInf;  // link() measured in space already
   // The axis is outside R, so outside O: its gap in space exceeds the cap exactly when no
   // triangle comes within radius + cap of it, a test that stops at the first one.
+  const double c = std::max(cap, 0.0);
   const Vec3 wa = plane.to_world(a), wb = plane.to_world(b);
-  if (!object_->bvh().any_within(wa, wb, std::nextafter(radius + cap, kInf)))
-    return std::min(in_plane, std::nextafter(cap, kInf));
-  return std::min(in_plane, mesh_.capsule(wa, wb, radius, cap).gap);
+  if (!object_->bvh().any_within(wa, wb, std::nextafter(radius + c, kInf))) return std::nextafter(c, kInf);
+  return mesh_.capsule(wa, wb, radius, cap).gap;
 }
 
 bool SectionSkin::link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,

@@ -103,17 +103,14 @@ class Sensing {
     return link(plane, a, b, radius, below).gap < below;
   }
   /// The gap that decides contact (the sensing distance `delta` > 0): at most delta exactly when
-  /// the link lies within delta of O in space (whatever the cap), and where it exceeds delta it
-  /// shrinks no faster than the link moves within its plane (a FROZEN finger's bound lasts while
-  /// it moves less than the bound's excess over delta). Exact when at most `cap`; otherwise any
-  /// value above cap. The default is link()'s gap, exact for a skin that measures in space; the
-  /// section skin, whose in-plane gaps exceed the gap in space where O's surface is oblique to
-  /// the plane, measures the gap in space where the in-plane one exceeds delta.
-  virtual double contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double delta,
-                             double cap = kInf) const {
-    (void)delta;
-    return link(plane, a, b, radius, cap).gap;
-  }
+  /// the link lies within delta of O in space (whatever the cap: one below delta is taken as
+  /// delta), and where it exceeds delta it shrinks no faster than the link moves within its plane
+  /// (a FROZEN finger's bound lasts while it moves less than the bound's excess over delta).
+  /// Exact when at most `cap`; otherwise any value above cap. It is link()'s gap where that is at
+  /// most delta, else the smaller of it and gap_in_space() (nothing more for a skin whose link()
+  /// measures in space).
+  double contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double delta,
+                     double cap = kInf) const;
   /// True when the capsule does not penetrate O (gap >= 0). `a_outside`: the caller knows that
   /// the point a lies outside O (the end of a link just found free, say), so a capsule that
   /// comes no closer than `radius` to O's surface is clear without an inside test. Override
@@ -137,20 +134,18 @@ class Sensing {
                                  double allow) const;
 
   /// A hint, once at the start of Phase 2: link queries in these finger planes, for links of
-  /// `radius`, and contact queries at the sensing distance `delta`, follow. A skin that builds a
-  /// structure per plane (the section skin) may build them now, side by side; the default does
-  /// nothing. Answers never depend on it.
-  virtual void prepare(const std::vector<FingerPlane>& planes, double radius, double delta) const {
+  /// `radius`, follow. A skin that builds a structure per plane (the section skin) may build them
+  /// now, side by side; the default does nothing. Answers never depend on it.
+  virtual void prepare(const std::vector<FingerPlane>& planes, double radius) const {
     (void)planes;
     (void)radius;
-    (void)delta;
   }
 
   /// Slide the fingertip along O's boundary in its plane, counter-clockwise (interior on the
   /// left), to the first point whose chord from the tip is `step`.
   virtual FollowResult follow_boundary(const FollowRequest& req) const;
   /// Flex the link about its pivot (counter-clockwise) until it touches O, up to max_angle: the
-  /// gap link() measures is at most touch_gap.
+  /// gap link() measures, or gap_in_space(), is at most touch_gap.
   virtual RotateResult rotate_until_touch(const RotateRequest& req) const;
   /// Rotate a colliding link about its pivot by the smallest angle (at most max_angle) that frees
   /// it, leaving it resting on O (gap at most `tolerance`, or the end within `tolerance` of the
@@ -162,10 +157,19 @@ class Sensing {
   virtual RotateResult rotate_until_free(const RotateRequest& req) const;
 
  protected:
-  /// rotate_until_touch's search (conservative advancement on link()'s gap). `contact_in_space`:
-  /// it also stops where contact_gap says the link touches, for a skin whose link gaps are
-  /// measured within the plane and can exceed the gap in space.
-  RotateResult touch_rotation(const RotateRequest& req, bool contact_in_space) const;
+  /// For a skin whose link() gaps are measured within the finger plane (larger than in space
+  /// where O's surface is oblique to it): the link's gap in space, asked only where link()'s gap
+  /// is positive (the axis lies outside O). Exact when at most `cap`; otherwise any value above
+  /// cap. The default, for a skin whose link() measures in space already: +inf, nothing to add.
+  virtual double gap_in_space(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                              double cap) const {
+    (void)plane;
+    (void)a;
+    (void)b;
+    (void)radius;
+    (void)cap;
+    return kInf;
+  }
 };
 
 // The checks of what crosses the interface from outside the engine (a Python caller's query, a

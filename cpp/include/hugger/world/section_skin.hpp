@@ -251,16 +251,6 @@ class SectionSkin final : public Sensing {
   Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double cap = kInf) const override;
   bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
                  bool a_outside = false) const override;
-  /// The in-plane gap where it is at most delta (the gap in space is then at most delta, up to
-  /// `flatten`), else the smaller of it and the mesh world's gap in space (a threshold test on the
-  /// object's BVH first: nothing within radius + cap, a value above the cap): at most delta
-  /// exactly when the link lies within delta of O in space (contact at most `flatten` early),
-  /// where O's surface is oblique to the plane too. A cap below delta is taken as delta.
-  double contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double delta,
-                     double cap = kInf) const override;
-  /// The generic search on the in-plane gaps, stopping also where contact_gap says the link
-  /// touches O in space.
-  RotateResult rotate_until_touch(const RotateRequest& req) const override { return touch_rotation(req, true); }
   /// As link(...).gap < below, stopping at the first boundary piece closer than `below`.
   bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                       double below) const override;
@@ -281,8 +271,7 @@ class SectionSkin final : public Sensing {
   /// Builds the regions of these planes not built yet, for links of `radius`, side by side on up
   /// to one thread per region (at most the hardware's threads), each in its two stages
   /// (PlaneRegion::FirstStage); the regions are those region() builds, whatever the thread count.
-  /// Contact needs none of its own (contact_gap): `delta` is not used.
-  void prepare(const std::vector<FingerPlane>& planes, double radius, double delta) const override;
+  void prepare(const std::vector<FingerPlane>& planes, double radius) const override;
 
   /// The region of a plane and radius, built on first use; nullptr past kMaxRegions regions
   /// (queries in further planes then go to the mesh world).
@@ -295,9 +284,15 @@ class SectionSkin final : public Sensing {
   /// How many threads prepare() may use: 0 (the default) as many as the hardware has. The
   /// regions are the same whatever it is.
   void set_build_threads(int threads) { build_threads_ = std::max(threads, 0); }
-  /// Room for two radii in every finger plane of the largest hand (a caller may ask about links
-  /// of another radius; the planner asks about one).
-  static constexpr int kMaxRegions = 2 * kMaxFingers;
+  static constexpr int kMaxRegions = 64;
+
+ protected:
+  /// Contact (Sensing::contact_gap) where the in-plane gap exceeds the sensing distance: the mesh
+  /// world's gap in space, after a threshold test on the object's BVH (nothing within radius +
+  /// cap: a value above the cap, without the inside test the gap would ask for beyond the cap;
+  /// the axis is outside O). +inf in a plane without a region (link() measured in space).
+  double gap_in_space(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                      double cap) const override;
 
  private:
   struct Entry;
