@@ -1,7 +1,10 @@
 // Hand model: forward kinematics and the inverse (angles from joints) round trip.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
 #include <random>
+#include <vector>
 
 #include "hugger/hand/hand_model.hpp"
 #include "meshes.hpp"
@@ -43,6 +46,51 @@ TEST(Kinematics, RoundTripAndInvariants) {
       }
     }
   }
+}
+
+// planar_angles wraps each relative angle into [-pi, pi] by one exact turn: the same bits as
+// std::remainder(rel, 2 pi), the sign of a zero included, on random chains and on chains whose
+// links point along the axes (absolute angles of exactly 0, +-pi/2 and +-pi, differences of +-pi
+// and +-2 pi).
+TEST(Kinematics, PlanarAnglesMatchRemainderBitForBit) {
+  long wrapped = 0, turns = 0, negative_zeros = 0;  // the edge cases, counted to show they ran
+  auto reference = [&](const std::vector<Vec2>& j, std::vector<double>* out) {
+    double prev = 0.0;
+    for (std::size_t n = 0; n + 1 < j.size(); ++n) {
+      const Vec2 d = j[n + 1] - j[n];
+      const double abs_angle = std::atan2(-d.x(), d.y());
+      const double rel = abs_angle - prev;
+      wrapped += std::abs(rel) > kPi;
+      turns += std::abs(rel) == 2.0 * kPi;
+      out->push_back(std::remainder(rel, 2.0 * kPi));
+      negative_zeros += out->back() == 0.0 && std::signbit(out->back());
+      prev = abs_angle;
+    }
+  };
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(-1, 1);
+  // Joints on a lattice that holds signed zeros: links along the axes, with -0.0 - +0.0 = -0.0
+  // giving the direction whose absolute angle is +pi, and +0.0 - +0.0 the one at -pi.
+  const double xs[4] = {-0.0, 0.0, -1.0, 1.0}, ys[4] = {-1.0, 0.0, 1.0, 2.0};
+  std::uniform_int_distribution<int> pick(0, 3);
+  long compared = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    std::vector<Vec2> j;
+    for (int n = 0; n <= 6; ++n)
+      j.push_back(trial % 2 ? Vec2(xs[pick(rng)], ys[pick(rng)]) : Vec2(U(rng), U(rng)));
+    std::vector<double> want;
+    reference(j, &want);
+    double got[6];
+    HandModel::planar_angles(j, got);
+    for (int n = 0; n < 6; ++n) {
+      ++compared;
+      EXPECT_EQ(std::memcmp(&got[n], &want[n], sizeof(double)), 0) << got[n] << " vs " << want[n];
+    }
+  }
+  EXPECT_EQ(compared, 120000);
+  EXPECT_GT(wrapped, 1000);
+  EXPECT_GT(turns, 0);
+  EXPECT_GT(negative_zeros, 0);
 }
 
 TEST(Kinematics, ConventionsOfDesignSection2) {

@@ -221,8 +221,12 @@ void HandModel::planar_angles(const std::vector<Vec2>& joints, double* angles) {
   for (std::size_t n = 0; n + 1 < joints.size(); ++n) {
     const Vec2 d = joints[n + 1] - joints[n];
     const double abs_angle = std::atan2(-d.x(), d.y());
+    // Into [-pi, pi]: both angles lie in [-pi, pi], so rel lies in [-2 pi, 2 pi], where one
+    // turn taken off its magnitude is exact (Sterbenz) and gives std::remainder(rel, 2 pi) bit
+    // for bit, the sign of a zero included.
     double rel = abs_angle - prev;
-    rel = std::remainder(rel, 2.0 * kPi);
+    if (rel > kPi) rel -= 2.0 * kPi;
+    else if (rel < -kPi) rel = -(-rel - 2.0 * kPi);
     angles[n] = rel;
     prev = abs_angle;
   }

@@ -278,12 +278,12 @@ bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>&
   const double r = hand_.link_radius();
   const double sep = std::max(2.0 * r, 1e-7);
   const double sep2 = sep * sep;
-  auto to_world = [&](int k, const Chain& c, std::vector<Vec3>& out, Aabb& box) {
-    out.resize(N + 1);
+  // On the stack, as in motion_ok.
+  auto to_world = [&](int k, const Chain& c, std::array<Vec3, kMaxLinks + 1>& out, Aabb& box) {
     box = Aabb();
     for (int n = 0; n <= N; ++n) box.grow(out[n] = planes_[k].to_world(c[n]));
   };
-  std::vector<Vec3> mine, theirs;
+  std::array<Vec3, kMaxLinks + 1> mine, theirs;
   Aabb my_box, their_box;
   to_world(m, chain, mine, my_box);
   for (int a = 0; a < N; ++a)

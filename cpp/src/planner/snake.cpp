@@ -1,6 +1,7 @@
 #include "hugger/planner/snake.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace hugger {
@@ -44,7 +45,7 @@ namespace {
 /// Head2Tail (to == from - 1) turns the ray of link `to` so that joint `from` (between it and
 /// the link placed before it) is within its limits, and leaves the freeing rotation free:
 /// Tail2Head, whose chain is the one emitted, enforces them.
-bool place(const Sensing& sensing, const SnakeRequest& req, const Chain& old, int from, int to, double L,
+bool place(const Sensing& sensing, const SnakeRequest& req, const Vec2* old, int from, int to, double L,
            bool pivot_outside, Chain& chain) {
   Vec2 dir = old[to] - chain[from];
   if (dir.norm() < 1e-15) dir = old[to] - old[from];
@@ -82,21 +83,23 @@ bool place(const Sensing& sensing, const SnakeRequest& req, const Chain& old, in
 }  // namespace
 
 bool head_to_tail(const Sensing& sensing, const SnakeRequest& req, const Vec2& head, Chain& chain) {
-  const Chain old = chain;
   const int N = static_cast<int>(chain.size()) - 1;
+  std::array<Vec2, kMaxLinks + 1> old;  // on the stack: this runs for every finger, every iteration
+  std::copy(chain.begin(), chain.end(), old.begin());
   chain[N] = head;
   for (int n = N - 1; n >= 0; --n)
     // Every pivot after the first is the end of a link just placed free: outside O.
-    if (!place(sensing, req, old, n + 1, n, req.lengths[n], req.start_outside || n + 1 < N, chain)) return false;
+    if (!place(sensing, req, old.data(), n + 1, n, req.lengths[n], req.start_outside || n + 1 < N, chain)) return false;
   return true;
 }
 
 bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& root, Chain& chain) {
-  const Chain old = chain;
   const int N = static_cast<int>(chain.size()) - 1;
+  std::array<Vec2, kMaxLinks + 1> old;
+  std::copy(chain.begin(), chain.end(), old.begin());
   chain[0] = root;
   for (int n = 0; n < N; ++n)
-    if (!place(sensing, req, old, n, n + 1, req.lengths[n], req.start_outside || n > 0, chain)) return false;
+    if (!place(sensing, req, old.data(), n, n + 1, req.lengths[n], req.start_outside || n > 0, chain)) return false;
   return true;
 }
 

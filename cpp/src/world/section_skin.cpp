@@ -104,8 +104,12 @@ std::vector<std::array<double, 2>> allowed_intervals(const Harmonic* hs, int n) 
   std::array<double, 2>* next = room > kSmall ? large.data() + room : small[1];
   int nc = 0;
   cur[nc++] = {0.0, kTwoPi};
+  // Into [0, 2 pi): t = phi +- dphi lies in [-2 pi, 2 pi], where one turn taken off its
+  // magnitude is exact (Sterbenz) and gives std::fmod(t, 2 pi) bit for bit, a zero's sign
+  // included.
   auto wrap = [](double t) {
-    t = std::fmod(t, kTwoPi);
+    if (t >= kTwoPi) t -= kTwoPi;
+    else if (t <= -kTwoPi) t = -(-t - kTwoPi);
     return t < 0.0 ? t + kTwoPi : t;
   };
   for (int i = 0; i < n && nc > 0; ++i) {
@@ -1527,7 +1531,10 @@ SectionSkin::~SectionSkin() = default;
 namespace {
 
 bool same_plane(const FingerPlane& x, double rx, const FingerPlane& y, double ry) {
-  return rx == ry && x.origin == y.origin && x.u == y.u && x.p == y.p;
+  // Scalar comparisons that stop at the first difference, u first: a hand's finger planes
+  // differ in u and often share the origin and p (the palm's centre and axis).
+  auto same = [](const Vec3& a, const Vec3& b) { return a.x() == b.x() && a.y() == b.y() && a.z() == b.z(); };
+  return same(x.u, y.u) && rx == ry && same(x.origin, y.origin) && same(x.p, y.p);
 }
 
 bool finite_plane(const FingerPlane& plane, double radius) {

@@ -10,7 +10,8 @@
 
 namespace hugger {
 
-/// Joint positions of one finger in its plane, tail (index 0) to tip (index N).
+/// Joint positions of one finger in its plane, tail (index 0) to tip (index N); N is at most
+/// kMaxLinks (the hand's).
 using Chain = std::vector<Vec2>;
 
 /// Settings of one propagation.
