@@ -79,24 +79,29 @@ inline Mesh box(const Vec3& half, const Vec3& centre = Vec3::Zero()) {
 }
 
 /// A cylinder of `radius` and half-height `half` about the z axis: `n` sides, each cap a fan about
-/// a centre vertex (of degree n: a vertex of high degree), outward normals.
-inline Mesh cylinder(double radius, double half, int n) {
+/// a centre vertex (of degree n: a vertex of high degree), outward normals. `bands` rings of
+/// quads along z (more than one puts rings of vertices inside the side, as the built-in cylinder).
+inline Mesh cylinder(double radius, double half, int n, int bands = 1) {
   std::vector<Vec3> v;
+  const int rings = bands + 1;
   for (int k = 0; k < n; ++k) {
     const double t = 2.0 * kPi * k / n;
-    v.emplace_back(radius * std::cos(t), radius * std::sin(t), -half);  // 2 k: bottom ring
-    v.emplace_back(radius * std::cos(t), radius * std::sin(t), half);   // 2 k + 1: top ring
+    for (int j = 0; j < rings; ++j)  // rings * k + j: ring j, from the bottom
+      v.emplace_back(radius * std::cos(t), radius * std::sin(t), -half + 2.0 * half * j / bands);
   }
-  const std::int64_t bottom = 2 * n, top = 2 * n + 1;
+  const std::int64_t bottom = static_cast<std::int64_t>(v.size()), top = bottom + 1;
   v.emplace_back(0.0, 0.0, -half);
   v.emplace_back(0.0, 0.0, half);
   std::vector<std::array<std::int64_t, 3>> f;
   for (std::int64_t k = 0; k < n; ++k) {
-    const std::int64_t b0 = 2 * k, t0 = 2 * k + 1, b1 = 2 * ((k + 1) % n), t1 = b1 + 1;
-    f.push_back({b0, b1, t1});
-    f.push_back({b0, t1, t0});
-    f.push_back({top, t0, t1});
-    f.push_back({bottom, b1, b0});
+    const std::int64_t k1 = (k + 1) % n;
+    for (std::int64_t j = 0; j < bands; ++j) {
+      const std::int64_t b0 = rings * k + j, t0 = b0 + 1, b1 = rings * k1 + j, t1 = b1 + 1;
+      f.push_back({b0, b1, t1});
+      f.push_back({b0, t1, t0});
+    }
+    f.push_back({top, rings * k + bands, rings * k1 + bands});
+    f.push_back({bottom, rings * k1, rings * k});
   }
   return to_mesh(v, f);
 }

@@ -568,6 +568,77 @@ TEST(SectionSkin, BoundaryLiesJustOutsideRIn3D) {
   EXPECT_LE(worst_in, 1e-8);
 }
 
+// Planes that meet the mesh in a degenerate way, as a symmetric object's middle planes do: the
+// plane z = 0 through the middle ring of a banded cylinder (perpendicular to the side's edges
+// there, so that the arcs of the two edges above and below each ring vertex and the vertex's own
+// arc coincide) and planes through the axis that hold side edges (each edge's line and a face's
+// piece coincide). Coincident copies are left out: R's boundary has no two segments between the
+// same end points on the same side, it lies at r from O (to the flattening), the side test agrees
+// with 3D, and the boundary is about as small as that of a plane moved off the degenerate place
+// by a hair (with the copies, every vertex was a junction: no chain was simplified, and every
+// segment asked a 3D test).
+TEST(SectionSkin, DegeneratePlanesGiveNoCoincidentPieces) {
+  const test::Mesh m = test::cylinder(0.035, 0.0125, 48, 2);
+  auto object = std::make_shared<Object>(m.vertices, m.faces);
+  const double r = 0.004;
+  auto plane = [](const Vec3& origin, const Vec3& u, const Vec3& p) {
+    FingerPlane pl;
+    pl.origin = origin;
+    pl.u = u.normalized();
+    pl.p = p.normalized();
+    return pl;
+  };
+  const double tilt = 1e-3;  // a hair off: no longer through the ring or the edges
+  const std::vector<std::pair<FingerPlane, FingerPlane>> cases = {
+      {plane(Vec3::Zero(), Vec3::UnitX(), Vec3::UnitY()), plane(Vec3(0, 0, 1e-4), Vec3(1, 0, tilt), Vec3::UnitY())},
+      {plane(Vec3::Zero(), Vec3::UnitX(), Vec3::UnitZ()), plane(Vec3::Zero(), Vec3(1, tilt, 0), Vec3::UnitZ())},
+      {plane(Vec3::Zero(), Vec3(std::cos(kPi / 8), std::sin(kPi / 8), 0), Vec3::UnitZ()),
+       plane(Vec3::Zero(), Vec3(std::cos(kPi / 8 + tilt), std::sin(kPi / 8 + tilt), 0), Vec3::UnitZ())}};
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(-0.05, 0.05);
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    const PlaneRegion R(object, cases[k].first, r, kFlatten), near(object, cases[k].second, r, kFlatten);
+    const FingerPlane& pl = cases[k].first;
+    const auto& segs = R.segments();
+    ASSERT_FALSE(segs.empty());
+    long copies = 0;
+    for (std::size_t i = 0; i < segs.size(); ++i)
+      for (std::size_t j = i + 1; j < segs.size(); ++j) {
+        const auto &x = segs[i], &y = segs[j];
+        const bool same = ((x.a - y.a).norm() < 1e-9 && (x.b - y.b).norm() < 1e-9) ||
+                          ((x.a - y.b).norm() < 1e-9 && (x.b - y.a).norm() < 1e-9);
+        copies += same && x.normal.dot(y.normal) > 0.0;
+      }
+    double worst_in = 0.0, worst_out = 0.0;
+    for (const auto& sg : segs)
+      for (double t : {0.0, 0.5, 1.0}) {
+        const Vec3 X = pl.to_world(sg.a + t * (sg.b - sg.a));
+        const double d = object->nearest(X, X).signed_distance;
+        worst_in = std::max(worst_in, r - d);
+        worst_out = std::max(worst_out, d - r);
+      }
+    long sides = 0, disagree = 0;
+    for (int q = 0; q < 2000; ++q) {
+      const Vec2 x(U(rng), U(rng));
+      const Vec3 X = pl.to_world(x);
+      const double d = std::max(object->nearest(X, X).signed_distance, 0.0);
+      if (std::abs(d - r) <= 1e-6) continue;
+      ++sides;
+      disagree += R.inside(x) != (d <= r);
+    }
+    std::printf("  plane %zu: %zu segments (%zu a hair off), %ld copies, inside R by %.3g m, outside by %.3g m, "
+                "%ld of %ld side tests disagree\n",
+                k, segs.size(), near.segments().size(), copies, worst_in, worst_out, disagree, sides);
+    EXPECT_EQ(copies, 0) << "plane " << k;
+    EXPECT_LE(worst_in, 1e-8) << "plane " << k;
+    EXPECT_LE(worst_out, kFlatten + 1e-12) << "plane " << k;
+    EXPECT_EQ(disagree, 0) << "plane " << k;
+    EXPECT_GT(sides, 1500) << "plane " << k;
+    EXPECT_LE(static_cast<double>(segs.size()), 1.5 * static_cast<double>(near.segments().size()) + 8.0)
+        << "plane " << k;
+  }
+}
+
 // A closed loop of pieces that crosses nothing can lie inside R: a sphere of radius 8 mm in the
 // hole of a torus (tube from 10 to 30 mm from the axis) gives, in the torus's plane with r = 4 mm,
 // the sphere's circle at 12 mm (inside the torus) and the torus's inner circle at 6 mm (inside

@@ -446,6 +446,34 @@ void PlaneRegion::simplify(double tol, std::vector<char>* tested_in) {
   std::vector<int> degree(2 * n, 0);
   for (int e = 0; e < 2 * n; ++e)
     if (!used[e / 2]) ++degree[vertex[e]];
+  // Coincident pieces: where the plane meets the mesh in a degenerate way (through a ring of
+  // vertices, perpendicular to the edges there, as a symmetric object's middle plane does), the
+  // arcs of two edges and of their shared vertex, or a face's piece and the line of an edge
+  // parallel to the plane, are the same segment between the same two vertices. Such a copy with
+  // the same outward side adds nothing to R's boundary, but would make each of its vertices a
+  // junction (and so every segment a 3D test, and no chain longer than a segment): the first of
+  // them is kept, the others left out. A copy is between two vertices of degree 3 or more, so
+  // only their segments are compared.
+  {
+    std::vector<std::array<int, 3>> between;  // the two vertices (lower first) and the segment
+    for (int i = 0; i < n; ++i) {
+      const int v0 = vertex[2 * i], v1 = vertex[2 * i + 1];
+      if (!used[i] && degree[v0] > 2 && degree[v1] > 2) between.push_back({std::min(v0, v1), std::max(v0, v1), i});
+    }
+    std::sort(between.begin(), between.end());
+    for (std::size_t k = 0; k < between.size();) {
+      std::size_t end = k + 1;
+      while (end < between.size() && between[end][0] == between[k][0] && between[end][1] == between[k][1]) ++end;
+      for (std::size_t j = k + 1; j < end; ++j) {
+        const int i = between[j][2];
+        if (segments_[i].normal.dot(segments_[between[k][2]].normal) <= 0.0) continue;  // R on both sides: kept
+        used[i] = 1;
+        --degree[between[j][0]];
+        --degree[between[j][1]];
+      }
+      k = end;
+    }
+  }
   // A run of pieces can go on into R beyond a crossing without crossing anything itself (the
   // pieces of features that another feature covers): drop_inner_segments flags only the piece
   // crossed. With the parts inside R dropped, such a run is left with a loose end (a vertex of
