@@ -257,7 +257,7 @@ SnakeRequest Planner::snake_request(int m, double front) const {
   req.lengths = hand_.link_lengths().row(m).data();
   req.radius = hand_.link_radius();
   req.front = front;
-  req.tolerance = params_.contact_tolerance / 8.0;
+  req.tolerance = snake_tolerance();
   double shortest = kInf;
   for (int n = 0; n < hand_.links(); ++n) shortest = std::min(shortest, hand_.link_length(m, n));
   req.sample_angle = std::min(0.1, params_.step / (2.0 * shortest));
@@ -333,7 +333,7 @@ bool Planner::swept_link_ok(int m, const Vec2& a, const Vec2& b) const {
   return sensing_->link_depth_within(planes_[m], a, b, r, 0.25 * std::max(0.02 * r, 5e-5));
 }
 
-bool Planner::motion_ok(int m, const Chain& old, const Chain& next) const {
+bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* rests) const {
   const int N = hand_.links();
   const double s = params_.step, r = hand_.link_radius();
   if (largest_move(old, next) > kMaxJointSteps * s) return false;
@@ -348,14 +348,17 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next) const {
   double cum = 0.0, reach = 0.0, bound = d_root;
   // Link n moves no farther than its distal joint, by at most D_n; a link whose gap at the new
   // configuration is at least D_n is clear all along (the gap shrinks no faster than the link
-  // moves), and is not sampled.
+  // moves), and is not sampled. A link that clinging left resting on O has a gap of at most the
+  // clinging tolerance: below a D_n of twice that without asking. (Sampling a link that needed
+  // none changes no answer: its samples are clear.)
+  const double rest_gap = 2.0 * snake_tolerance();
   bool any = false;
   for (int n = 0; n < N; ++n) {
     cum += a1[n] - a0[n];
     reach += hand_.link_length(m, n) * std::abs(cum);
     const double D = d_root + reach;
     bound = std::max(bound, D);
-    sample[n] = sensing_->link_gap_below(planes_[m], next[n], next[n + 1], r, D);
+    sample[n] = (rests != nullptr && rests[n] && D > rest_gap) || sensing_->link_gap_below(planes_[m], next[n], next[n + 1], r, D);
     any = any || sample[n];
   }
   if (!any) return true;
@@ -428,8 +431,9 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
     std::vector<double> b = a;
     b[0] -= phi;
     Chain c = hand_.forward_planar(m, root, b.data());
-    if (!tail_to_head(*sensing_, snake_request(m, new_eta), root, c)) continue;
-    if (!motion_ok(m, old, c) || !fingers_clear(m, c, others)) continue;
+    std::array<char, kMaxLinks> rests;
+    if (!tail_to_head(*sensing_, snake_request(m, new_eta), root, c, rests.data())) continue;
+    if (!motion_ok(m, old, c, rests.data()) || !fingers_clear(m, c, others)) continue;
     out = std::move(c);
     return true;
   }
@@ -449,11 +453,12 @@ bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others
   std::vector<double> b = a;
   b[0] += inc;
   Chain c = hand_.forward_planar(m, chain[0], b.data());
-  if (!tail_to_head(*sensing_, snake_request(m, chain[0].y()), chain[0], c)) return false;
+  std::array<char, kMaxLinks> rests;
+  if (!tail_to_head(*sensing_, snake_request(m, chain[0].y()), chain[0], c, rests.data())) return false;
   if (largest_move(chain, c) < params_.epsilon) return false;
   // A step the motion rules or the other fingers would refuse ends the closing here, so that the
   // ordinary rules move the finger in this same iteration.
-  if (!motion_ok(m, chain, c) || !fingers_clear(m, c, others)) return false;
+  if (!motion_ok(m, chain, c, rests.data()) || !fingers_clear(m, c, others)) return false;
   chain = std::move(c);
   return true;
 }
@@ -703,6 +708,7 @@ void Planner::phase2_iteration() {
     out = old;
     st = states_;
     const double new_eta = eta_ + sig;
+    std::array<char, kMaxLinks> rests;  // Tail2Head's turned links, for the motion check
     for (int m = 0; m < M; ++m) {
       Chain c;
       bool checked = false;  // c was found clear of the other fingers and itself, against `out`
@@ -724,9 +730,9 @@ void Planner::phase2_iteration() {
           for (int pass = 0; pass < 2 && !ok; ++pass) {
             if (pass == 1 && (sig == 0.0 || cand[m] == old[m])) break;  // the same chain again
             c = pass == 0 ? cand[m] : old[m];
-            ok = tail_to_head(*sensing_, snake_request(m, new_eta), root2d(m, new_eta), c);
+            ok = tail_to_head(*sensing_, snake_request(m, new_eta), root2d(m, new_eta), c, rests.data());
             if (!ok) ++stats_.clinging_failures;
-            if (ok && !motion_ok(m, old[m], c)) {
+            if (ok && !motion_ok(m, old[m], c, rests.data())) {
               ok = false;
               ++stats_.motion_rejections;
             }

@@ -46,7 +46,7 @@ namespace {
 /// the link placed before it) is within its limits, and leaves the freeing rotation free:
 /// Tail2Head, whose chain is the one emitted, enforces them.
 bool place(const Sensing& sensing, const SnakeRequest& req, const Vec2* old, int from, int to, double L,
-           bool pivot_outside, Chain& chain) {
+           bool pivot_outside, Chain& chain, char* turned) {
   Vec2 dir = old[to] - chain[from];
   if (dir.norm() < 1e-15) dir = old[to] - old[from];
   dir.normalize();
@@ -61,6 +61,7 @@ bool place(const Sensing& sensing, const SnakeRequest& req, const Vec2* old, int
     dir = -e;
   }
   chain[to] = chain[from] + L * dir;
+  *turned = 0;
   if (sensing.link_free(req.plane, chain[from], chain[to], req.radius, req.front, pivot_outside)) return true;
   RotateRequest rr;
   rr.plane = req.plane;
@@ -77,6 +78,7 @@ bool place(const Sensing& sensing, const SnakeRequest& req, const Vec2* old, int
   Vec2 freed = r.end - chain[from];
   if (to > from && !joint_within_limits(req, chain, from, freed, false)) return false;
   chain[to] = r.end;
+  *turned = 1;
   return true;
 }
 
@@ -87,19 +89,24 @@ bool head_to_tail(const Sensing& sensing, const SnakeRequest& req, const Vec2& h
   std::array<Vec2, kMaxLinks + 1> old;  // on the stack: this runs for every finger, every iteration
   std::copy(chain.begin(), chain.end(), old.begin());
   chain[N] = head;
+  char turned;
   for (int n = N - 1; n >= 0; --n)
     // Every pivot after the first is the end of a link just placed free: outside O.
-    if (!place(sensing, req, old.data(), n + 1, n, req.lengths[n], req.start_outside || n + 1 < N, chain)) return false;
+    if (!place(sensing, req, old.data(), n + 1, n, req.lengths[n], req.start_outside || n + 1 < N, chain, &turned))
+      return false;
   return true;
 }
 
-bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& root, Chain& chain) {
+bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& root, Chain& chain, char* turned) {
   const int N = static_cast<int>(chain.size()) - 1;
   std::array<Vec2, kMaxLinks + 1> old;
   std::copy(chain.begin(), chain.end(), old.begin());
   chain[0] = root;
+  char scratch;
   for (int n = 0; n < N; ++n)
-    if (!place(sensing, req, old.data(), n, n + 1, req.lengths[n], req.start_outside || n > 0, chain)) return false;
+    if (!place(sensing, req, old.data(), n, n + 1, req.lengths[n], req.start_outside || n > 0, chain,
+               turned != nullptr ? turned + n : &scratch))
+      return false;
   return true;
 }
 

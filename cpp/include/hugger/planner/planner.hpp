@@ -113,6 +113,8 @@ class Planner {
   void phase2_iteration();
   bool chain_free(int m, const Chain& chain) const;
   SnakeRequest snake_request(int m, double front) const;
+  /// Clinging's resolution (m of link-end motion): an eighth of the sensing distance.
+  double snake_tolerance() const { return params_.contact_tolerance / 8.0; }
   /// Finger m's root in its plane with the palm moved eta along p.
   Vec2 root2d(int m, double eta) const;
   /// The approach before any contact (decision 1): translate by the free distance, emitting as
@@ -123,7 +125,8 @@ class Planner {
   double translation_free(int m, const Chain& chain, double sigma) const;
   /// The motion old -> next of finger m (root moved by d_eta, joint angles interpolated
   /// linearly, as a robot executes it) keeps every joint within 4 s and is collision-free.
-  bool motion_ok(int m, const Chain& old, const Chain& next) const;
+  /// `rests` (N entries, or nullptr): Tail2Head's `turned` for next, the links known to rest on O.
+  bool motion_ok(int m, const Chain& old, const Chain& next, const char* rests = nullptr) const;
   /// A link sampled on such a motion: clear of O, or into it by at most a quarter of the
   /// collision tolerance.
   bool swept_link_ok(int m, const Vec2& a, const Vec2& b) const;
