@@ -333,7 +333,7 @@ bool Planner::swept_link_ok(int m, const Vec2& a, const Vec2& b) const {
   return sensing_->link_depth_within(planes_[m], a, b, r, 0.25 * std::max(0.02 * r, 5e-5));
 }
 
-bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* rests) const {
+bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* turned) const {
   const int N = hand_.links();
   const double s = params_.step, r = hand_.link_radius();
   if (largest_move(old, next) > kMaxJointSteps * s) return false;
@@ -358,7 +358,8 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
     reach += hand_.link_length(m, n) * std::abs(cum);
     const double D = d_root + reach;
     bound = std::max(bound, D);
-    sample[n] = (rests != nullptr && rests[n] && D > rest_gap) || sensing_->link_gap_below(planes_[m], next[n], next[n + 1], r, D);
+    sample[n] = (turned != nullptr && turned[n] && D > rest_gap) ||
+                sensing_->link_gap_below(planes_[m], next[n], next[n + 1], r, D);
     any = any || sample[n];
   }
   if (!any) return true;
@@ -431,9 +432,9 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
     std::vector<double> b = a;
     b[0] -= phi;
     Chain c = hand_.forward_planar(m, root, b.data());
-    std::array<char, kMaxLinks> rests;
-    if (!tail_to_head(*sensing_, snake_request(m, new_eta), root, c, rests.data())) continue;
-    if (!motion_ok(m, old, c, rests.data()) || !fingers_clear(m, c, others)) continue;
+    std::array<char, kMaxLinks> turned;
+    if (!tail_to_head(*sensing_, snake_request(m, new_eta), root, c, turned.data())) continue;
+    if (!motion_ok(m, old, c, turned.data()) || !fingers_clear(m, c, others)) continue;
     out = std::move(c);
     return true;
   }
@@ -453,12 +454,12 @@ bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others
   std::vector<double> b = a;
   b[0] += inc;
   Chain c = hand_.forward_planar(m, chain[0], b.data());
-  std::array<char, kMaxLinks> rests;
-  if (!tail_to_head(*sensing_, snake_request(m, chain[0].y()), chain[0], c, rests.data())) return false;
+  std::array<char, kMaxLinks> turned;
+  if (!tail_to_head(*sensing_, snake_request(m, chain[0].y()), chain[0], c, turned.data())) return false;
   if (largest_move(chain, c) < params_.epsilon) return false;
   // A step the motion rules or the other fingers would refuse ends the closing here, so that the
   // ordinary rules move the finger in this same iteration.
-  if (!motion_ok(m, chain, c, rests.data()) || !fingers_clear(m, c, others)) return false;
+  if (!motion_ok(m, chain, c, turned.data()) || !fingers_clear(m, c, others)) return false;
   chain = std::move(c);
   return true;
 }
@@ -708,7 +709,6 @@ void Planner::phase2_iteration() {
     out = old;
     st = states_;
     const double new_eta = eta_ + sig;
-    std::array<char, kMaxLinks> rests;  // Tail2Head's turned links, for the motion check
     for (int m = 0; m < M; ++m) {
       Chain c;
       bool checked = false;  // c was found clear of the other fingers and itself, against `out`
@@ -727,12 +727,13 @@ void Planner::phase2_iteration() {
           const bool may_open = hug && !last && !palm_touched_ && touching[m] && !closing_[m];
           bool ok = may_open && prefer_open[m] && open_step(m, old[m], new_eta, out, c);
           bool opened = ok;  // open_step checks the fingers itself
+          std::array<char, kMaxLinks> turned;  // Tail2Head's turned links, for the motion check
           for (int pass = 0; pass < 2 && !ok; ++pass) {
             if (pass == 1 && (sig == 0.0 || cand[m] == old[m])) break;  // the same chain again
             c = pass == 0 ? cand[m] : old[m];
-            ok = tail_to_head(*sensing_, snake_request(m, new_eta), root2d(m, new_eta), c, rests.data());
+            ok = tail_to_head(*sensing_, snake_request(m, new_eta), root2d(m, new_eta), c, turned.data());
             if (!ok) ++stats_.clinging_failures;
-            if (ok && !motion_ok(m, old[m], c, rests.data())) {
+            if (ok && !motion_ok(m, old[m], c, turned.data())) {
               ok = false;
               ++stats_.motion_rejections;
             }

@@ -45,6 +45,7 @@ namespace {
 /// Head2Tail (to == from - 1) turns the ray of link `to` so that joint `from` (between it and
 /// the link placed before it) is within its limits, and leaves the freeing rotation free:
 /// Tail2Head, whose chain is the one emitted, enforces them.
+/// `turned` (or nullptr): set to whether clinging turned the link.
 bool place(const Sensing& sensing, const SnakeRequest& req, const Vec2* old, int from, int to, double L,
            bool pivot_outside, Chain& chain, char* turned) {
   Vec2 dir = old[to] - chain[from];
@@ -61,7 +62,7 @@ bool place(const Sensing& sensing, const SnakeRequest& req, const Vec2* old, int
     dir = -e;
   }
   chain[to] = chain[from] + L * dir;
-  *turned = 0;
+  if (turned != nullptr) *turned = 0;
   if (sensing.link_free(req.plane, chain[from], chain[to], req.radius, req.front, pivot_outside)) return true;
   RotateRequest rr;
   rr.plane = req.plane;
@@ -78,34 +79,38 @@ bool place(const Sensing& sensing, const SnakeRequest& req, const Vec2* old, int
   Vec2 freed = r.end - chain[from];
   if (to > from && !joint_within_limits(req, chain, from, freed, false)) return false;
   chain[to] = r.end;
-  *turned = 1;
+  if (turned != nullptr) *turned = 1;
   return true;
+}
+
+/// The chain before a propagation, on the stack: the propagations run for every finger, every
+/// iteration.
+std::array<Vec2, kMaxLinks + 1> stack_copy(const Chain& chain) {
+  std::array<Vec2, kMaxLinks + 1> out;
+  std::copy(chain.begin(), chain.end(), out.begin());
+  return out;
 }
 
 }  // namespace
 
 bool head_to_tail(const Sensing& sensing, const SnakeRequest& req, const Vec2& head, Chain& chain) {
   const int N = static_cast<int>(chain.size()) - 1;
-  std::array<Vec2, kMaxLinks + 1> old;  // on the stack: this runs for every finger, every iteration
-  std::copy(chain.begin(), chain.end(), old.begin());
+  const auto old = stack_copy(chain);
   chain[N] = head;
-  char turned;
   for (int n = N - 1; n >= 0; --n)
     // Every pivot after the first is the end of a link just placed free: outside O.
-    if (!place(sensing, req, old.data(), n + 1, n, req.lengths[n], req.start_outside || n + 1 < N, chain, &turned))
+    if (!place(sensing, req, old.data(), n + 1, n, req.lengths[n], req.start_outside || n + 1 < N, chain, nullptr))
       return false;
   return true;
 }
 
 bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& root, Chain& chain, char* turned) {
   const int N = static_cast<int>(chain.size()) - 1;
-  std::array<Vec2, kMaxLinks + 1> old;
-  std::copy(chain.begin(), chain.end(), old.begin());
+  const auto old = stack_copy(chain);
   chain[0] = root;
-  char scratch;
   for (int n = 0; n < N; ++n)
     if (!place(sensing, req, old.data(), n, n + 1, req.lengths[n], req.start_outside || n > 0, chain,
-               turned != nullptr ? turned + n : &scratch))
+               turned != nullptr ? turned + n : nullptr))
       return false;
   return true;
 }

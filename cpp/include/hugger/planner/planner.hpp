@@ -125,8 +125,8 @@ class Planner {
   double translation_free(int m, const Chain& chain, double sigma) const;
   /// The motion old -> next of finger m (root moved by d_eta, joint angles interpolated
   /// linearly, as a robot executes it) keeps every joint within 4 s and is collision-free.
-  /// `rests` (N entries, or nullptr): Tail2Head's `turned` for next, the links known to rest on O.
-  bool motion_ok(int m, const Chain& old, const Chain& next, const char* rests = nullptr) const;
+  /// `turned` (N entries, or nullptr): tail_to_head's for next, the links known to rest on O.
+  bool motion_ok(int m, const Chain& old, const Chain& next, const char* turned = nullptr) const;
   /// A link sampled on such a motion: clear of O, or into it by at most a quarter of the
   /// collision tolerance.
   bool swept_link_ok(int m, const Vec2& a, const Vec2& b) const;
