@@ -4,7 +4,9 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 #include <string>
+#include <vector>
 
 #include "hugger/check.hpp"
 #include "hugger/geometry/frame.hpp"
@@ -133,4 +135,35 @@ TEST(Checks, TheTargetMustBeInsideTheObject) {
   EXPECT_EQ(message_of([&] { check_target(o, Vec3(0.0, kNaN, 0.0)); }), "target must be a finite 3-vector, got (0, nan, 0)");
   EXPECT_NE(message_of([&] { check_target(o, Vec3(2.0, 0.0, 0.0)); }).find("target T = (2, 0, 0) is not inside the object"),
             std::string::npos);
+}
+
+TEST(Checks, TheTargetCheckAgreesWithTheSignedDistance) {
+  // check_target decides by ray parity off the surface; the rule it owns is the signed distance's
+  // sign. Random points in and around convex and non-convex meshes, their vertices (on the
+  // surface), points just off them, and the symmetric centres (every triangle about as near).
+  const std::vector<test::Mesh> meshes = {test::icosphere(3), test::icosphere(2, Vec3(1.0, 0.6, 0.4)),
+                                          test::box(Vec3(0.5, 0.3, 0.2)), test::cylinder(0.4, 0.5, 48, 3),
+                                          test::torus(0.6, 0.2, 32, 16), test::curvy(3)};
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> U(-1.3, 1.3), tiny(-1e-9, 1e-9);
+  int inside = 0, outside = 0, on = 0;
+  for (const auto& mesh : meshes) {
+    const Object o(mesh.vertices, mesh.faces);
+    std::vector<Vec3> points = {Vec3::Zero(), Vec3(0.6, 0.0, 0.0), Vec3(0.0, 0.6, 0.0)};
+    for (int i = 0; i < 400; ++i) points.emplace_back(U(rng), U(rng), U(rng));
+    for (std::int64_t v = 0; v < mesh.vertices.rows(); v += 7) {
+      const Vec3 x = mesh.vertices.row(v).transpose();
+      points.push_back(x);
+      points.push_back(x + Vec3(tiny(rng), tiny(rng), tiny(rng)));
+    }
+    for (const Vec3& x : points) {
+      const double d = o.nearest(x, x).signed_distance;
+      const bool accepted = message_of([&] { check_target(o, x); }).empty();
+      EXPECT_EQ(accepted, d < 0.0) << "at (" << x.transpose() << "), signed distance " << d;
+      (d < 0.0 ? inside : d == 0.0 ? on : outside) += 1;
+    }
+  }
+  EXPECT_GT(inside, 250);
+  EXPECT_GT(outside, 500);
+  EXPECT_GT(on, 100);
 }

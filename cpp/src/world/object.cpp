@@ -369,6 +369,11 @@ bool Object::capsule_clear(const Vec3& a, const Vec3& b, double radius, bool a_o
 void check_target(const Object& object, const Vec3& target) {
   HUGGER_CHECK_ARGUMENT(target.allFinite(), "target must be a finite 3-vector, got (" << target.x() << ", " << target.y()
                                                                                       << ", " << target.z() << ")");
+  // Off the surface (no triangle touches T) and inside by ray parity: both cheap where T lies deep
+  // inside, unlike a nearest search, which from the centre of a round object (every triangle about
+  // as near as every other) visits nearly all of them. The signed distance, for the message, only
+  // where the rays say otherwise.
+  if (!object.bvh().any_within(target, target, 0.0) && object.inside_off_surface(target)) return;
   const double depth = object.nearest(target, target).signed_distance;
   HUGGER_CHECK_ARGUMENT(depth < 0.0, "target T = (" << target.x() << ", " << target.y() << ", " << target.z()
                                                     << ") is not inside the object (its distance to the surface is "
