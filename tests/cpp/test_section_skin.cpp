@@ -535,7 +535,9 @@ TEST(SectionSkin, RotateUntilFreeFitsANarrowWindow) {
 // 3D, at most r + flatten from O (also where chains of them were simplified), and no closer than
 // r less 10 nm: the parts of pieces that lie inside R are all dropped, also runs of pieces beyond
 // a crossing that cross nothing themselves (curvy's dents; they lay up to 83 um inside R before),
-// and the arcs of vertices of high degree (the cylinder's cap centres).
+// the parts of crossed pieces that a third feature covers (the torus's hole, curvy's dents: one
+// 3D test per run of them decides), and the arcs of vertices of high degree (the cylinder's cap
+// centres).
 TEST(SectionSkin, BoundaryLiesJustOutsideRIn3D) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> U(0.0, 1.0);
@@ -543,7 +545,7 @@ TEST(SectionSkin, BoundaryLiesJustOutsideRIn3D) {
   long samples = 0;
   for (const test::Mesh& m : {test::icosphere(5, Vec3::Constant(0.04)), test::icosphere(3, Vec3(0.05, 0.03, 0.02)),
                               test::curvy(4), test::curvy(5), test::box(Vec3(0.03, 0.02, 0.05)),
-                              test::cylinder(0.035, 0.05, 48)}) {
+                              test::cylinder(0.035, 0.05, 48), test::torus(0.03, 0.012, 48, 24)}) {
     auto object = std::make_shared<Object>(m.vertices, m.faces);
     const Aabb box = object->bounds();
     for (int k = 0; k < 12; ++k) {

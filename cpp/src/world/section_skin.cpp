@@ -249,13 +249,12 @@ PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane
                         "PlaneRegion: the flattening tolerance must be positive, got " << flatten);
   build_pieces();
   mark_crossings();
-  tested_ = drop_inner_segments();
+  drop_inner_segments();
 }
 
 void PlaneRegion::finish() {
   // The chains may move out by what the arcs' flattening left of the tolerance (at least half).
-  simplify(flatten_ - std::min(arc_deviation_, 0.5 * flatten_), &tested_);
-  tested_ = std::vector<char>();
+  simplify(flatten_ - std::min(arc_deviation_, 0.5 * flatten_));
   build_bvh();
   build_cells();
   link_segments();
@@ -416,11 +415,10 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
   return false;
 }
 
-void PlaneRegion::simplify(double tol, std::vector<char>* tested_in) {
+void PlaneRegion::simplify(double tol) {
   const int n = static_cast<int>(segments_.size());
   if (n < 3) return;
-  std::vector<char>& tested = *tested_in;
-  tested.resize(n, 0);
+  std::vector<char> tested(n, 0);  // per segment: a 3D test found it on R's boundary
   // The end points, joined where they lie within kJoin (one vertex).
   auto point = [&](int e) -> const Vec2& { return e % 2 == 0 ? segments_[e / 2].a : segments_[e / 2].b; };
   std::vector<IdPoint> ends(2 * n);  // id: 2 * segment + (0: a, 1: b)
@@ -474,16 +472,19 @@ void PlaneRegion::simplify(double tol, std::vector<char>* tested_in) {
       k = end;
     }
   }
-  // A run of pieces can go on into R beyond a crossing without crossing anything itself (the
-  // pieces of features that another feature covers): drop_inner_segments flags only the piece
-  // crossed. With the parts inside R dropped, such a run is left with a loose end (a vertex of
-  // one segment) where it joined a dropped part, or it meets R's boundary at a junction (a
-  // vertex of three or more). Each segment with such an end, not tested yet, is tested once and
-  // dropped if inside R, which may leave its neighbour loose in turn. A segment is tested at its
-  // middle, as drop_inner_segments tests a part: with the crossings cut, no segment has parts on
-  // both sides of R's boundary (a crossing the search misses, within 1e-9 of a segment's end or
-  // at an angle below 1e-9, could leave a gap of about that size). For r = 0 the pieces are O's
-  // own section, which has no runs inside O, and lie on its surface, where the test cannot tell.
+  // With the crossings cut and the parts on a crossing piece's inner side dropped, the segments
+  // left form runs joined end to end, two at each inner vertex; a run lies wholly on R's boundary
+  // or wholly inside R (no segment has parts on both sides: a crossing the search misses, within
+  // 1e-9 of a segment's end or at an angle below 1e-9, could leave a gap of about that size; and
+  // where two joined segments are on different sides, R's boundary goes on along a third, which
+  // makes their vertex a junction). A run inside R (pieces that another feature covers, with or
+  // without crossing anything) is left with a loose end (a vertex of one segment) where it joined
+  // a dropped part, or meets R's boundary at a junction (a vertex of three or more); on R's
+  // boundary, the runs close into loops. So each segment with such an end, not tested yet, is
+  // tested once and dropped if inside R, which may leave its neighbour loose in turn, and each
+  // loop once below: a few tests per plane, rather than one per part of a crossed piece. A
+  // segment is tested at its middle. For r = 0 the pieces are O's own section, which has no runs
+  // inside O, and lie on its surface, where the test cannot tell.
   std::vector<int> queue;
   for (int e = 0; e < 2 * n && radius_ > 0.0; ++e)
     if (!used[e / 2] && degree[vertex[e]] != 2 && !tested[e / 2]) queue.push_back(e / 2);
@@ -775,22 +776,19 @@ bool PlaneRegion::strictly_inside_3d(const Vec2& x) const {
   return O.inside(X);
 }
 
-std::vector<char> PlaneRegion::drop_inner_segments() {
+void PlaneRegion::drop_inner_segments() {
   // Crossed segments are cut at their crossings. Then every part of a flagged piece lies wholly
-  // on R's boundary or wholly inside R, and those inside are dropped (the rest still covers the
-  // boundary, and no segment left has parts inside R).
+  // on R's boundary or wholly inside R; those that start on the inner side of a crossing piece
+  // are inside, and dropped here; simplify() tests the runs of the rest.
   std::sort(cuts_.begin(), cuts_.end());
   std::vector<Segment> kept;
-  std::vector<char> tested;  // per kept segment: the 3D test found it on R's boundary
   kept.reserve(segments_.size() + cuts_.size());
-  tested.reserve(kept.capacity());
   std::size_t c = 0;
   std::vector<double> at;
   for (std::size_t i = 0; i < segments_.size(); ++i) {
     const Segment& s = segments_[i];
     if (!pieces_[s.piece].crossed) {
       kept.push_back(s);
-      tested.push_back(0);
       continue;
     }
     // Its cuts (none unless crossed), then one part per interval between them.
@@ -803,18 +801,16 @@ std::vector<char> PlaneRegion::drop_inner_segments() {
       const Vec2 to = k + 2 == at.size() ? s.b : Vec2(s.a + at[k + 1] * (s.b - s.a));
       // The crossings at its two ends: a part that starts on the inner side of the crossing
       // piece is inside R (within r of that piece's feature). The outer side proves nothing (a
-      // third feature may still cover the part): such parts ask the 3D test.
+      // third feature may still cover the part): such parts are left to simplify()'s run tests.
       const bool inner_before = k > 0 && cuts_[first_cut + k - 1].after_inner;
       const bool inner_after = k + 2 < at.size() && !cuts_[first_cut + k].after_inner;
-      const bool drop = inner_before || inner_after || strictly_inside_3d(0.5 * (from + to));
-      if (drop) {
+      if (inner_before || inner_after) {
         ++dropped_;
       } else {
         Segment part = s;
         part.a = from;
         part.b = to;
         kept.push_back(part);
-        tested.push_back(1);
       }
       from = to;
     }
@@ -823,7 +819,6 @@ std::vector<char> PlaneRegion::drop_inner_segments() {
   cuts_.shrink_to_fit();
   segments_.swap(kept);
   for (auto& p : pieces_) p.crossed = false;  // resolved
-  return tested;
 }
 
 void PlaneRegion::add_segment(const Vec2& a, const Vec2& b, const Vec2& outward, int piece) {

@@ -11,14 +11,13 @@
 /// are at distance r from a feature of O) and together they cover R's boundary; arcs are
 /// flattened *outward* (tangent polygons, at most flatten / 2 out), so the pieces form a barrier
 /// that no segment starting outside R can cross unseen. Parts of pieces that other pieces cross
-/// into R are dropped, and so are the runs of pieces that go on inside R beyond them (tested in
-/// 3D from their loose ends and junctions) and the closed loops of pieces inside R, so that the
-/// pieces left are R's boundary (to within nanometres inside it); joined end to end into chains,
-/// they are simplified outward
-/// with what remains of the tolerance (every point at most `flatten` outside R), so that their
-/// number follows R's curvature rather than the mesh. A 2D BVH over the segments answers every
-/// query of a link in the plane in about a thousand instructions, nearly independently of the
-/// mesh size. Gaps it reports are measured within the plane (never smaller than the 3D gap).
+/// into R are dropped, and so are the runs of pieces that lie inside R (tested in 3D from their
+/// loose ends and junctions) and the closed loops of pieces inside R, so that the pieces left
+/// are R's boundary (to within nanometres inside it); joined end to end into chains, they are
+/// simplified outward with what remains of the tolerance (every point at most `flatten` outside
+/// R), so that their number follows R's curvature rather than the mesh. A 2D BVH over the
+/// segments answers every query of a link in the plane in about a thousand instructions, nearly
+/// independently of the mesh size. Gaps it reports are measured within the plane (never smaller than the 3D gap).
 #pragma once
 
 #include <algorithm>
@@ -161,13 +160,11 @@ class PlaneRegion {
   bool visit_segments(Skip&& skip, Visit&& visit) const;
   void build_pieces();
   void build_bvh();
-  /// Drops the runs of segments that go on inside R beyond a crossing (found from their loose
-  /// ends and junctions, each tested once in 3D) and the closed loops inside R (one test each;
-  /// neither for r = 0), then replaces the chains of segments (joined end to end, two at each
-  /// inner vertex) by fewer segments that lie outside them, behind which every original vertex
-  /// lies within `tol`. `tested`: per segment, whether a 3D test found it on R's boundary
-  /// (drop_inner_segments' answer, updated here).
-  void simplify(double tol, std::vector<char>* tested);
+  /// Drops the runs of segments that lie inside R (found from their loose ends and junctions,
+  /// each tested once in 3D) and the closed loops inside R (one test each; neither for r = 0),
+  /// then replaces the chains of segments (joined end to end, two at each inner vertex) by fewer
+  /// segments that lie outside them, behind which every original vertex lies within `tol`.
+  void simplify(double tol);
   /// One chain: points P (P[i], P[i + 1] the ends of segments_[seg[i]]); appends the new
   /// segments to `out`.
   void simplify_chain(const std::vector<Vec2>& P, const std::vector<int>& seg, double tol,
@@ -176,11 +173,11 @@ class PlaneRegion {
   /// The 3D test of a point of a piece: strictly inside R (within r less a margin of O's
   /// surface, or inside O).
   bool strictly_inside_3d(const Vec2& x) const;
-  /// Cuts crossed segments at their crossings and drops the parts of flagged pieces that lie
-  /// inside R: a part that starts at a crossing on the inner side of the crossing piece (whose
-  /// feature is then nearer than r just past it), and every other part whose middle the 3D test
-  /// finds inside. Returns, per segment kept, whether the 3D test found it on R's boundary.
-  std::vector<char> drop_inner_segments();
+  /// Cuts crossed segments at their crossings and drops the parts that start at a crossing on
+  /// the inner side of the crossing piece (whose feature is then nearer than r just past it):
+  /// inside R. The other parts lie wholly on R's boundary or wholly inside it: simplify() tests
+  /// their runs.
+  void drop_inner_segments();
   int build_node(int begin, int end, std::vector<Vec2>& centres, int depth);
   /// The grid of cells that no segment touches, each labelled inside or outside R (one inside
   /// test per connected group of such cells: no boundary separates two of its points).
@@ -211,7 +208,6 @@ class PlaneRegion {
     bool operator<(const Cut& o) const { return segment < o.segment || (segment == o.segment && t < o.t); }
   };
   std::vector<Cut> cuts_;
-  std::vector<char> tested_;  ///< while building: drop_inner_segments' answer, for simplify
   std::vector<std::array<Vec2, 2>> piece_ends_;  ///< while building: first and last point of each piece
   int depth_ = 0;
   double arc_deviation_ = 0.0;  ///< while building: how far the flattened arcs lie out, at most
