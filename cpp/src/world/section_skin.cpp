@@ -777,9 +777,9 @@ bool PlaneRegion::strictly_inside_3d(const Vec2& x) const {
 }
 
 void PlaneRegion::drop_inner_segments() {
-  // Crossed segments are cut at their crossings. Then every part of a flagged piece lies wholly
-  // on R's boundary or wholly inside R; those that start on the inner side of a crossing piece
-  // are inside, and dropped here; simplify() tests the runs of the rest.
+  // Crossed segments are cut at their crossings. Then every part lies wholly on R's boundary or
+  // wholly inside R; those that start on the inner side of a crossing piece are inside, and
+  // dropped here; simplify() tests the runs of the rest.
   std::sort(cuts_.begin(), cuts_.end());
   std::vector<Segment> kept;
   kept.reserve(segments_.size() + cuts_.size());
@@ -787,11 +787,11 @@ void PlaneRegion::drop_inner_segments() {
   std::vector<double> at;
   for (std::size_t i = 0; i < segments_.size(); ++i) {
     const Segment& s = segments_[i];
-    if (!pieces_[s.piece].crossed) {
+    if (c == cuts_.size() || cuts_[c].segment != static_cast<int>(i)) {  // not crossed
       kept.push_back(s);
       continue;
     }
-    // Its cuts (none unless crossed), then one part per interval between them.
+    // Its cuts, then one part per interval between them.
     const std::size_t first_cut = c;
     at.assign(1, 0.0);
     for (; c < cuts_.size() && cuts_[c].segment == static_cast<int>(i); ++c) at.push_back(cuts_[c].t);
@@ -818,18 +818,12 @@ void PlaneRegion::drop_inner_segments() {
   cuts_.clear();
   cuts_.shrink_to_fit();
   segments_.swap(kept);
-  for (auto& p : pieces_) p.crossed = false;  // resolved
 }
 
 void PlaneRegion::add_segment(const Vec2& a, const Vec2& b, const Vec2& outward, int piece) {
-  // The ends of each piece (its polyline's first and last points), for the junction check.
   const Vec2 d = b - a;
   const double len = d.norm();
   if (!(len > 0.0)) return;
-  const Vec2 nan = Vec2::Constant(std::numeric_limits<double>::quiet_NaN());
-  if (piece_ends_.size() <= static_cast<std::size_t>(piece)) piece_ends_.resize(piece + 1, {nan, nan});
-  if (std::isnan(piece_ends_[piece][0].x())) piece_ends_[piece][0] = a;
-  piece_ends_[piece][1] = b;
   Segment s;
   s.a = a;
   s.b = b;
@@ -855,7 +849,7 @@ void PlaneRegion::add_arcs(Kind kind, std::int64_t feature, const Vec2& centre, 
     const double dt = (t1 - t0) / k, sec = 1.0 / std::cos(0.5 * dt);
     arc_deviation_ = std::max(arc_deviation_, M * (sec - 1.0));
     const int piece = static_cast<int>(pieces_.size());
-    pieces_.push_back({kind, feature, false});
+    pieces_.push_back({kind, feature});
     auto at = [&](double t, double scale) { return Vec2(centre + scale * (U * std::cos(t) + V * std::sin(t))); };
     Vec2 prev = at(t0, 1.0);
     for (int j = 0; j <= k; ++j) {
@@ -919,7 +913,7 @@ void PlaneRegion::build_pieces() {
         else if (pos[0] == pos[2]) k = 1;
         auto cut = [&](int i, int j) { return to_plane(Q[i] + (s[i] / (s[i] - s[j])) * (Q[j] - Q[i])); };
         const int piece = static_cast<int>(pieces_.size());
-        pieces_.push_back({Kind::kFace, f, false});
+        pieces_.push_back({Kind::kFace, f});
         add_segment(cut(k, (k + 1) % 3), cut(k, (k + 2) % 3), n_in, piece);
       }
     }
@@ -1001,7 +995,7 @@ void PlaneRegion::build_pieces() {
           if (!ok) continue;
           const Vec3 d = r * (std::cos(th) * e1 + std::sin(th) * e2);
           const int piece = static_cast<int>(pieces_.size());
-          pieces_.push_back({Kind::kEdge, feature, false});
+          pieces_.push_back({Kind::kEdge, feature});
           add_segment(to_plane(Pa + d), to_plane(Pb + d), in_plane(d), piece);
         }
       }
@@ -1417,26 +1411,8 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
 }
 
 void PlaneRegion::mark_crossings() {
-  // R's boundary is closed curves: every end of a piece on it is the end of another piece (or of
-  // itself, a closed circle). A piece with a loose end lies (in part) inside R: flag it.
+  // (A piece with a loose end, not crossed, goes on inside R: simplify()'s run tests find it.)
   const std::size_t n = segments_.size();
-  {
-    std::vector<IdPoint> ends;  // id: 2 * piece + (0: first, 1: last)
-    ends.reserve(2 * pieces_.size());
-    for (std::size_t k = 0; k < piece_ends_.size(); ++k) {
-      const auto& pe = piece_ends_[k];
-      if (std::isnan(pe[0].x())) continue;  // a piece without segments
-      ends.push_back({pe[0].x(), pe[0].y(), static_cast<int>(2 * k)});
-      ends.push_back({pe[1].x(), pe[1].y(), static_cast<int>(2 * k + 1)});
-    }
-    // Joined to another end: another piece's, or its own other end (a closed circle).
-    std::vector<char> joined(ends.size(), 0);
-    close_pairs(ends, [&](std::size_t i, std::size_t j) { joined[i] = joined[j] = 1; });
-    for (std::size_t i = 0; i < ends.size(); ++i)
-      if (!joined[i]) pieces_[ends[i].id / 2].crossed = true;
-    piece_ends_.clear();
-    piece_ends_.shrink_to_fit();
-  }
   // Pieces of R's boundary never cross one another; a piece that another crosses (transversally,
   // away from both their end points) has parts inside R, where the side test is unsafe. The
   // pairs to test: segments whose boxes (grown by kTouch) overlap, found on a grid of about one
@@ -1490,8 +1466,6 @@ void PlaneRegion::mark_crossings() {
         const double x = cross2(w, d2) / denom, y = cross2(w, d1) / denom;
         const double ex = 1e-9, ey = 1e-9;
         if (x > ex && x < 1.0 - ex && y > ey && y < 1.0 - ey) {
-          pieces_[s.piece].crossed = true;
-          pieces_[t.piece].crossed = true;
           // The part of s beyond the crossing lies on t's inner side when s runs against t's
           // outward normal there, and likewise for t.
           cuts_.push_back({i, x, d1.dot(t.normal) < 0.0});

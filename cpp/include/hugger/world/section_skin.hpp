@@ -17,7 +17,8 @@
 /// simplified outward with what remains of the tolerance (every point at most `flatten` outside
 /// R), so that their number follows R's curvature rather than the mesh. A 2D BVH over the
 /// segments answers every query of a link in the plane in about a thousand instructions, nearly
-/// independently of the mesh size. Gaps it reports are measured within the plane (never smaller than the 3D gap).
+/// independently of the mesh size. Gaps it reports are measured within the plane (never smaller
+/// than the 3D gap).
 #pragma once
 
 #include <algorithm>
@@ -50,7 +51,6 @@ class PlaneRegion {
   struct Piece {
     Kind kind = Kind::kFace;
     std::int64_t feature = 0;  ///< face, vertex or (for edges) 3 * face + k
-    bool crossed = false;      ///< another piece crosses it, or it has a loose end: parts may lie inside R
   };
   /// Nearest piece of R's boundary to a query segment.
   struct Near {
@@ -208,7 +208,6 @@ class PlaneRegion {
     bool operator<(const Cut& o) const { return segment < o.segment || (segment == o.segment && t < o.t); }
   };
   std::vector<Cut> cuts_;
-  std::vector<std::array<Vec2, 2>> piece_ends_;  ///< while building: first and last point of each piece
   int depth_ = 0;
   double arc_deviation_ = 0.0;  ///< while building: how far the flattened arcs lie out, at most
   double extent_ = 0.0;  ///< largest absolute coordinate of a segment's end (for rounding margins)
