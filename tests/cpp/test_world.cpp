@@ -119,6 +119,16 @@ TEST(Order, AscendingOrderIsSortByValueThenIndex) {
     std::sort(expected.begin(), expected.end(),
               [&](int a, int b) { return values[a] < values[b] || (values[a] == values[b] && a < b); });
     EXPECT_EQ(ascending_order(values), expected) << n << " values";
+    // Values alike in their high bits (the radix passes' digits), differing in the low ones only:
+    // long runs, in falling order of index, that the whole keys must put in order.
+    std::vector<double> alike(values.size());
+    for (int i = 0; i < n; ++i)
+      alike[i] = std::ldexp(1.0 + std::ldexp(static_cast<double>((n - i) % 97 + (pick(rng) < 2 ? 0 : 3 * (i % 5))), -45),
+                            pick(rng) < 8 ? -3 : -4) * (pick(rng) < 9 ? 1.0 : -1.0);
+    for (int i = 0; i < n; ++i) expected[i] = i;
+    std::sort(expected.begin(), expected.end(),
+              [&](int a, int b) { return alike[a] < alike[b] || (alike[a] == alike[b] && a < b); });
+    EXPECT_EQ(ascending_order(alike), expected) << n << " values alike in their high bits";
     // Unsigned integers: many ties, and values that differ in one digit of the sort only.
     std::vector<std::uint32_t> whole(static_cast<std::size_t>(n));
     for (std::uint32_t& w : whole) w = pick(rng) < 5 ? static_cast<std::uint32_t>(pick(rng)) << (11 * pick(rng) % 32) : static_cast<std::uint32_t>(rng());
