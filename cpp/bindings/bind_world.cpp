@@ -2,6 +2,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "common.hpp"
 #include "hugger/check.hpp"
@@ -28,10 +29,10 @@ Points2 rows_of(const std::vector<Vec2>& points) {
 void bind_world(py::module_& m) {
   py::class_<Object, std::shared_ptr<Object>>(m, "Object", "A closed, consistently oriented triangle mesh O.")
       .def(py::init([](const ArrayD& vertices, const ArrayI& faces) {
-             const PointsN3 v = to_rows<PointsN3>(vertices, "vertices");
-             const FacesN3 f = to_rows<FacesN3>(faces, "faces");
+             PointsN3 v = to_rows<PointsN3>(vertices, "vertices");
+             FacesN3 f = to_rows<FacesN3>(faces, "faces");
              py::gil_scoped_release release;
-             return std::make_shared<Object>(v, f);
+             return std::make_shared<Object>(std::move(v), std::move(f));  // kept, not copied
            }),
            py::arg("vertices"), py::arg("faces"))
       .def_property_readonly("volume", &Object::volume, "Enclosed volume (m^3).")

@@ -8,6 +8,7 @@
 #include <future>
 #include <system_error>
 #include <unordered_map>
+#include <utility>
 
 #include "hugger/check.hpp"
 #include "hugger/geometry/frame.hpp"
@@ -189,8 +190,8 @@ std::vector<Vec3> angle_weighted_normals(const PointsN3& V, const FacesN3& F, co
 
 }  // namespace
 
-Object::Object(const PointsN3& vertices, const FacesN3& faces)
-    : vertices_(vertices), faces_(faces), serial_(next_serial.fetch_add(1)) {
+Object::Object(PointsN3 vertices, FacesN3 faces)
+    : vertices_(std::move(vertices)), faces_(std::move(faces)), serial_(next_serial.fetch_add(1)) {
   const std::int64_t nv = vertices_.rows(), nf = faces_.rows();
   HUGGER_CHECK_ARGUMENT(nv != 0 && nf != 0, "object mesh is empty: it needs vertices (V,3) and faces (F,3), got V="
                                                  << nv << ", F=" << nf);

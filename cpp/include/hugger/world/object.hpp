@@ -27,8 +27,9 @@ class Object {
   /// non-finite vertices, indices out of range, degenerate faces (a repeated index, or zero
   /// area: twice the area at most 1e-12 of the longest edge squared), a mesh that is not closed,
   /// not consistently oriented or not manifold (at an edge or a vertex), the same triangle twice
-  /// over coincident vertices, or one whose normals point inward.
-  Object(const PointsN3& vertices, const FacesN3& faces);
+  /// over coincident vertices, or one whose normals point inward. The arrays are kept: moved in
+  /// when given as temporaries (no copy), copied otherwise.
+  Object(PointsN3 vertices, FacesN3 faces);
 
   const PointsN3& vertices() const { return vertices_; }
   /// Unit outward normal of face f (zero for a degenerate face).
