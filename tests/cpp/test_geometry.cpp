@@ -4,6 +4,7 @@
 #include <random>
 
 #include "hugger/geometry/distance.hpp"
+#include "hugger/geometry/harmonic.hpp"
 #include "meshes.hpp"
 
 using namespace hugger;
@@ -87,4 +88,49 @@ TEST(Geometry, SegmentTriangleMatchesSampling) {
     EXPECT_NEAR(d, best, 0.03);
   }
   EXPECT_GT(crossings, 0);  // the sample includes crossing segments
+}
+
+// surely_empty (the region build's quick answer for a vertex's arc) says "empty" only where
+// allowed_intervals finds no angle, and says it for nearly every set that allows none: random
+// sets of arcs, and pairs of arcs that overlap, touch or miss by 1e-14 to 1e-6 rad (where the
+// margin must keep it from answering).
+TEST(Harmonic, SurelyEmptyOnlyWhereNoAngleIsAllowed) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double two_pi = 2.0 * kPi;
+  // The constraint allowing the arc of half-angle w about angle theta, scaled by `scale`.
+  auto arc = [](double theta, double w, double scale) {
+    return Harmonic{scale * std::cos(w), -scale * std::cos(theta), -scale * std::sin(theta)};
+  };
+  int empty = 0, caught = 0, near_pairs = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    std::vector<Harmonic> hs;
+    const bool pair = trial % 2 == 1;
+    if (pair) {
+      // Two arcs whose ends meet, apart by a gap of -1e-6 .. 1e-6 rad (negative: they overlap).
+      const double theta = two_pi * unit(rng), w1 = 0.01 + 1.5 * unit(rng), w2 = 0.01 + 1.5 * unit(rng);
+      const double gap = (unit(rng) < 0.5 ? -1.0 : 1.0) * std::pow(10.0, -14.0 + 8.0 * unit(rng));
+      hs.push_back(arc(theta, w1, 0.1 + unit(rng)));
+      hs.push_back(arc(theta + w1 + gap + w2, w2, 1e-3 + unit(rng)));
+      ++near_pairs;
+    } else {
+      const int n = 1 + static_cast<int>(8 * unit(rng));
+      for (int i = 0; i < n; ++i) {
+        const double c = -1.2 + 2.4 * unit(rng);  // k0 / A: past +-1 the arc is all or nothing
+        const double A = std::pow(10.0, -3.0 + 4.0 * unit(rng)), t = two_pi * unit(rng);
+        hs.push_back({c * A, A * std::cos(t), A * std::sin(t)});
+      }
+    }
+    const int n = static_cast<int>(hs.size());
+    const bool quick = surely_empty(hs.data(), n);
+    const bool none = allowed_intervals(hs.data(), n).empty();
+    if (quick) EXPECT_TRUE(none) << "trial " << trial << ": surely_empty, but allowed_intervals finds angles";
+    if (none && !pair) {
+      ++empty;
+      caught += quick ? 1 : 0;
+    }
+  }
+  EXPECT_GT(near_pairs, 5000);
+  EXPECT_GT(empty, 3000);
+  EXPECT_GE(caught, 0.99 * empty) << caught << " of " << empty << " empty sets answered quickly";
 }

@@ -11,13 +11,13 @@
 
 #include "hugger/check.hpp"
 #include "hugger/geometry/frame.hpp"
+#include "hugger/geometry/harmonic.hpp"
 #include "hugger/geometry/order.hpp"
 
 namespace hugger {
 
 namespace {
 
-constexpr double kTwoPi = 2.0 * kPi;
 /// Distances at or below this count as touching (closes rounding gaps between pieces).
 constexpr double kTouch = 1e-12;
 /// Ties between nearest pieces (a shared end point): their normals are summed.
@@ -76,81 +76,6 @@ void close_pairs(std::vector<IdPoint>& pts, F&& f) {
 /// turned a quarter to the left), and the end it comes from.
 inline const Vec2& head_of(const PlaneRegion::Segment& s) { return (s.b - s.a).dot(left_of(s.normal)) >= 0.0 ? s.b : s.a; }
 inline const Vec2& tail_of(const PlaneRegion::Segment& s) { return &head_of(s) == &s.b ? s.a : s.b; }
-
-/// A constraint on an angle t: allowed where k0 + k1 cos t + k2 sin t <= 0.
-struct Harmonic {
-  double k0, k1, k2;
-  double at(double t) const { return k0 + k1 * std::cos(t) + k2 * std::sin(t); }
-  double scale() const { return std::abs(k0) + std::abs(k1) + std::abs(k2); }
-};
-
-/// The closed intervals of [0, 2 pi) (an interval may run past 2 pi when it wraps) where every
-/// constraint holds. Each constraint allows one arc of the circle (or all of it, or at most a
-/// point): the intersection of those arcs, as sorted disjoint intervals of [0, 2 pi].
-std::vector<std::array<double, 2>> allowed_intervals(const Harmonic* hs, int n) {
-  std::vector<std::array<double, 2>> out;
-  // A constraint that holds nowhere (k0 > its amplitude) empties the set: checked first, cheaply.
-  for (int i = 0; i < n; ++i) {
-    const Harmonic& h = hs[i];
-    if (h.k0 > 0.0 && h.k0 * h.k0 > (h.k1 * h.k1 + h.k2 * h.k2) * (1.0 + 1e-12)) return out;
-  }
-  // Intersecting with one arc adds at most one interval: 2 n + 2 suffice (on the stack for up to
-  // 18 constraints, a vertex of degree 17; beyond, on the heap).
-  constexpr int kSmall = 2 * 18 + 2;
-  const int room = 2 * n + 2;
-  std::array<double, 2> small[2][kSmall];
-  std::vector<std::array<double, 2>> large(room > kSmall ? 2 * static_cast<std::size_t>(room) : 0);
-  std::array<double, 2>* cur = room > kSmall ? large.data() : small[0];
-  std::array<double, 2>* next = room > kSmall ? large.data() + room : small[1];
-  int nc = 0;
-  cur[nc++] = {0.0, kTwoPi};
-  // Into [0, 2 pi): t = phi +- dphi lies in [-2 pi, 2 pi], where one turn taken off its
-  // magnitude is exact (Sterbenz) and gives std::fmod(t, 2 pi) bit for bit, a zero's sign
-  // included.
-  auto wrap = [](double t) {
-    if (t >= kTwoPi) t -= kTwoPi;
-    else if (t <= -kTwoPi) t = -(-t - kTwoPi);
-    return t < 0.0 ? t + kTwoPi : t;
-  };
-  for (int i = 0; i < n && nc > 0; ++i) {
-    const Harmonic& h = hs[i];
-    const double A = std::hypot(h.k1, h.k2);
-    if (!(A > 0.0) || h.k0 <= -A) {
-      if (h.k0 > 0.0) return out;  // no amplitude, and positive: nowhere
-      continue;                    // everywhere
-    }
-    if (h.k0 >= A) return out;  // at most the point where cos = -1
-    // Allowed where cos(t - phi) <= -k0 / A: from phi + dphi round to phi - dphi (+ 2 pi).
-    const double phi = std::atan2(h.k2, h.k1), dphi = std::acos(std::clamp(-h.k0 / A, -1.0, 1.0));
-    const double s = wrap(phi + dphi), e = wrap(phi - dphi);
-    if (s == e) continue;  // all but one point
-    std::array<double, 2> arc[2];
-    int na = 0;
-    if (s < e) {
-      arc[na++] = {s, e};
-    } else {
-      arc[na++] = {0.0, e};
-      arc[na++] = {s, kTwoPi};
-    }
-    int nn = 0;
-    for (int a = 0; a < na; ++a)
-      for (int j = 0; j < nc; ++j) {
-        const double lo = std::max(cur[j][0], arc[a][0]), hi = std::min(cur[j][1], arc[a][1]);
-        if (hi > lo && nn < room) next[nn++] = {lo, hi};
-      }
-    std::copy(next, next + nn, cur);
-    nc = nn;
-  }
-  for (int j = 0; j < nc; ++j) {
-    if (!out.empty() && out.back()[1] == cur[j][0]) out.back()[1] = cur[j][1];
-    else out.push_back(cur[j]);
-  }
-  if (out.size() >= 2 && out.front()[0] == 0.0 && out.back()[1] == kTwoPi) {
-    out.back()[1] = kTwoPi + out.front()[1];
-    out.erase(out.begin());
-  }
-  return out;
-}
 
 /// Distance between 2D segments [p1, q1] and [p2, q2], with the closest points.
 double segment_distance(const Vec2& p1, const Vec2& q1, const Vec2& p2, const Vec2& q2, Vec2* c1, Vec2* c2) {
@@ -1037,6 +962,7 @@ void PlaneRegion::build_pieces() {
         hs[nh++] = {sv * nu.dot(nv), -rho * u.dot(nv), -rho * p.dot(nv)};
         if (!marked && !whole(hs[nh - 1])) continue;
       }
+      if (surely_empty(hs.data(), nh)) continue;  // most marked vertices: their circle misses the cone
       const auto allowed = allowed_intervals(hs.data(), nh);
       if (allowed.empty()) continue;
       add_arcs(Kind::kVertex, iv, to_plane(V - sv * nu), Vec2(rho, 0.0), Vec2(0.0, rho), allowed,
