@@ -49,21 +49,28 @@ std::vector<int> radix_order(const std::vector<Key>& key, int first = 0) {
   // Keys equal in the sorted digits hold their indices in increasing order (the passes are
   // stable), and a key greater in those digits is greater: an insertion sort by the whole key
   // that moves an index only past strictly greater keys keeps (key, index) order and moves
-  // nothing across runs of equal sorted digits. Its moves are few where those digits are most of
-  // a key's bits; past a budget (keys alike in their high bits), a comparison sort does the rest.
-  const long budget = 8L * n + 64;
-  long moves = 0;
+  // nothing across runs of equal sorted digits. Where an index would move far (a long run of keys
+  // alike in their high bits, out of order in the low ones), that whole run is sorted instead.
+  constexpr int kShort = 16;
+  const int shift = kBits * first;
   for (int k = 1; k < n; ++k) {
     const int x = order[k];
     const Key kx = key[x];
-    int m = k;
-    for (; m > 0 && key[order[m - 1]] > kx; --m) order[m] = order[m - 1];
-    order[m] = x;
-    moves += k - m;
-    if (moves > budget) {
-      std::sort(order.begin(), order.end(), [&](int a, int b) { return key[a] < key[b] || (key[a] == key[b] && a < b); });
-      break;
+    if (!(key[order[k - 1]] > kx)) continue;  // in order: nearly every key
+    int m = k - 1;
+    while (m > 0 && k - m < kShort && key[order[m - 1]] > kx) --m;
+    if (m > 0 && key[order[m - 1]] > kx) {
+      const Key high = kx >> shift;
+      int lo = m, hi = k + 1;
+      while (lo > 0 && key[order[lo - 1]] >> shift == high) --lo;
+      while (hi < n && key[order[hi]] >> shift == high) ++hi;
+      std::sort(order.begin() + lo, order.begin() + hi,
+                [&](int a, int b) { return key[a] < key[b] || (key[a] == key[b] && a < b); });
+      k = hi - 1;
+      continue;
     }
+    for (int j = k; j > m; --j) order[j] = order[j - 1];
+    order[m] = x;
   }
   return order;
 }
