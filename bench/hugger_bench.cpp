@@ -143,6 +143,7 @@ struct Result {
   double configurations_per_s = 0;                                // Phase 2 iterations / Phase 2 time
   double p50_us = 0, p90_us = 0, p99_us = 0, max_us = 0;           // per Phase 2 iteration, pooled
   double max_rss_mib = 0;
+  double object_faults = 0, faults = 0;  // minor page faults (fresh pages) of the Object's build, of a whole plan (medians)
   bool deterministic = true;
   std::uint64_t digest = 0;  // of the first repeat's plan: compare it across builds
   bool ok = false;
@@ -179,6 +180,13 @@ std::uint64_t digest(const Planner& p) {
   return h;
 }
 
+/// Minor page faults of this process so far (every thread): the fresh pages it has touched.
+long minor_faults() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_minflt;
+}
+
 double max_rss_mib() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
@@ -204,12 +212,14 @@ Result run(const Scenario& sc, const std::string& skin, int repeats) {
     const Vec3 target = Vec3::Zero();
     const Pose start = paper_start(target);
     r.triangles = mesh.faces.rows();
-    std::vector<double> object_s, planner_s, phase2_s, total_s, sections_s, per_iteration;
+    std::vector<double> object_s, planner_s, phase2_s, total_s, sections_s, per_iteration, object_faults, faults;
     std::uint64_t first_digest = 0;
     for (int k = 0; k < repeats; ++k) {
+      const long f0 = minor_faults();
       const auto t0 = Clock::now();
       auto object = std::make_shared<const Object>(mesh.vertices, mesh.faces);
       const double t_object = seconds_since(t0);
+      object_faults.push_back(static_cast<double>(minor_faults() - f0));
       const auto t1 = Clock::now();
       const std::shared_ptr<const Sensing> sensing = make_skin(skin, object);
       Planner planner(hand, sensing, target, start);
@@ -234,6 +244,7 @@ Result run(const Scenario& sc, const std::string& skin, int repeats) {
         per_iteration.push_back(seconds_since(ti) * 1e6);
       }
       const double t_phase2 = seconds_since(t2);
+      faults.push_back(static_cast<double>(minor_faults() - f0));
       object_s.push_back(t_object);
       planner_s.push_back(t_planner);
       phase2_s.push_back(t_phase2);
@@ -255,6 +266,8 @@ Result run(const Scenario& sc, const std::string& skin, int repeats) {
     r.phase2_s = median(phase2_s);
     r.total_s = median(total_s);
     r.sections_s = median(sections_s);
+    r.object_faults = median(object_faults);
+    r.faults = median(faults);
     r.configurations_per_s = r.phase2_s > 0 ? static_cast<double>(r.phase2_iterations) / r.phase2_s : 0.0;
     std::sort(per_iteration.begin(), per_iteration.end());
     r.p50_us = percentile(per_iteration, 0.50);
@@ -422,9 +435,9 @@ int main(int argc, char** argv) {
   std::fprintf(table, "hugger_bench: %s build, %d repeat(s), medians; %u hardware threads; load average %s\n",
                kReleaseBuild ? "Release" : "DEBUG", repeats, std::thread::hardware_concurrency(),
                load_average().c_str());
-  std::fprintf(table, "%-11s %-7s %8s %5s %6s %6s %8s %8s %8s %8s %8s %9s %7s %7s %7s %7s %7s %-14s\n", "scenario", "skin",
+  std::fprintf(table, "%-11s %-7s %8s %5s %6s %6s %8s %8s %8s %8s %8s %9s %7s %7s %7s %7s %7s %7s %-14s\n", "scenario", "skin",
                "tris", "MxN", "confs", "iters", "obj ms", "plan1 ms", "sect ms", "phase2ms", "total ms", "conf/s",
-               "p50 us", "p90 us", "p99 us", "max us", "RSS MiB", "status");
+               "p50 us", "p90 us", "p99 us", "max us", "RSS MiB", "faults", "status");
   std::vector<Result> results;
   for (const Scenario* sc : todo) {
     std::vector<Result> mine;
@@ -439,10 +452,10 @@ int main(int argc, char** argv) {
       char mxn[16];
       std::snprintf(mxn, sizeof mxn, "%ldx%ld", r.fingers, r.links);
       std::fprintf(table,
-                   "%-11s %-7s %8ld %5s %6ld %6ld %8.2f %8.2f %8.2f %8.2f %8.2f %9.0f %7.1f %7.1f %7.1f %7.1f %7.1f %-14s%s\n",
+                   "%-11s %-7s %8ld %5s %6ld %6ld %8.2f %8.2f %8.2f %8.2f %8.2f %9.0f %7.1f %7.1f %7.1f %7.1f %7.1f %7.0f %-14s%s\n",
                    r.name, r.skin, r.triangles, mxn, r.configurations, r.phase2_iterations, r.object_s * 1e3,
                    r.planner_s * 1e3, r.sections_s * 1e3, r.phase2_s * 1e3, r.total_s * 1e3, r.configurations_per_s,
-                   r.p50_us, r.p90_us, r.p99_us, r.max_us, r.max_rss_mib, r.status,
+                   r.p50_us, r.p90_us, r.p99_us, r.max_us, r.max_rss_mib, r.faults, r.status,
                    r.deterministic ? "" : " NOT DETERMINISTIC");
       std::fflush(table);
     }
@@ -474,6 +487,7 @@ int main(int argc, char** argv) {
          << ", \"total_s\": " << r.total_s << ", \"phase2_configurations_per_s\": " << r.configurations_per_s
          << ", \"iteration_us\": {\"p50\": " << r.p50_us << ", \"p90\": " << r.p90_us << ", \"p99\": " << r.p99_us
          << ", \"max\": " << r.max_us << "}, \"max_rss_mib\": " << r.max_rss_mib
+         << ", \"minor_faults\": {\"object\": " << r.object_faults << ", \"plan\": " << r.faults << "}"
          << ", \"deterministic\": " << (r.deterministic ? "true" : "false") << ", \"digest\": \""
          << std::hex << r.digest << std::dec << "\"}";
     }
