@@ -1,6 +1,7 @@
 #include "hugger/planner/planner.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -173,6 +174,7 @@ void Planner::plan_phase1(const Pose& start) {
   stalled_.assign(hand_.fingers(), 0);
   frozen_lb_.assign(2 * static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1), -kInf);
   closing_.assign(hand_.fingers(), 0);
+  angle_memo_.assign(hand_.fingers(), AngleMemo());
   closed_.assign(hand_.fingers(), 0);
   opened_.assign(hand_.fingers(), 0);
   reclosing_.assign(hand_.fingers(), 0);
@@ -180,6 +182,25 @@ void Planner::plan_phase1(const Pose& start) {
 
 Vec2 Planner::root2d(int m, double eta) const {
   return Vec2(hand_.root2d(m).x(), eta);  // the root on the palm's front face, moved eta along p
+}
+
+const double* Planner::chain_angles(int m, const Chain& chain) const {
+  AngleMemo& memo = angle_memo_[static_cast<std::size_t>(m)];
+  const std::size_t bytes = chain.size() * sizeof(Vec2);
+  for (int k : {memo.last, 1 - memo.last}) {
+    const Chain& c = memo.chain[k];
+    // Bits, not values: chains that differ only in a zero's sign have different angles.
+    if (c.size() == chain.size() && std::memcmp(c.data(), chain.data(), bytes) == 0) {
+      memo.last = k;
+      return memo.angles[k].data();
+    }
+  }
+  const int k = 1 - memo.last;
+  memo.last = k;
+  memo.chain[k] = chain;
+  memo.angles[k].resize(chain.empty() ? 0 : chain.size() - 1);
+  HandModel::planar_angles(chain, memo.angles[k].data());
+  return memo.angles[k].data();
 }
 
 Configuration Planner::make_configuration(int phase) const {
@@ -196,7 +217,7 @@ Configuration Planner::make_configuration(int phase) const {
     if (states_[m] == TipState::kDone && !history_.empty() && history_.back().tip_state[m] == TipState::kDone)
       c.angles.row(m) = history_.back().angles.row(m);
     else
-      HandModel::planar_angles(chains_[m], c.angles.row(m).data());
+      std::copy_n(chain_angles(m, chains_[m]), N, c.angles.row(m).data());
   }
   c.tip_state = states_;
   c.phase = phase;
@@ -341,8 +362,8 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
   // callback may plan on this thread meanwhile: no scratch shared across calls).
   std::array<double, kMaxLinks> a0, a1, a;
   std::array<char, kMaxLinks> sample{};
-  HandModel::planar_angles(old, a0.data());
-  HandModel::planar_angles(next, a1.data());
+  std::copy_n(chain_angles(m, old), N, a0.data());
+  std::copy_n(chain_angles(m, next), N, a1.data());
   // How far any joint can move along the straight line in joint space (as the checker bounds it).
   const double d_root = (next[0] - old[0]).norm();
   double cum = 0.0, reach = 0.0, bound = d_root;
@@ -386,8 +407,8 @@ bool Planner::close_step(int m, Chain& chain) const {
       break;
     }
   if (first >= N) return false;  // the distal link touches: closing is over
-  std::vector<double> a(N);
-  HandModel::planar_angles(chain, a.data());
+  const double* angles = chain_angles(m, chain);
+  std::vector<double> a(angles, angles + N);
   // Flexing joints first..N-1 by d moves the tip by at most d * sum_k L_k (k - first + 1).
   double lever = 0.0;
   for (int k = first; k < N; ++k) lever += hand_.link_length(m, k) * (k - first + 1);
@@ -416,8 +437,8 @@ bool Planner::close_step(int m, Chain& chain) const {
 bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vector<Chain>& others, Chain& out) {
   const int N = hand_.links();
   const double s = params_.step;
-  std::vector<double> a(N);
-  HandModel::planar_angles(old, a.data());
+  const double* angles = chain_angles(m, old);
+  std::vector<double> a(angles, angles + N);
   // The root joint may open to the palm's front plane and its lower limit.
   const double lowest = std::max(-kPi / 2.0, hand_.lower()(m, 0));
   const double dist = farthest_joint(old);
@@ -444,8 +465,8 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
 bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others) const {
   const int N = hand_.links();
   const double s = params_.step;
-  std::vector<double> a(N);
-  HandModel::planar_angles(chain, a.data());
+  const double* angles = chain_angles(m, chain);
+  std::vector<double> a(angles, angles + N);
   const double dist = farthest_joint(chain);
   if (!(dist > 0.0)) return false;
   const double top = std::min(kMaxCloseFlexion, hand_.upper()(m, 0));

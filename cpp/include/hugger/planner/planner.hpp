@@ -146,6 +146,10 @@ class Planner {
   /// rules or the `others` fingers refuse the step.
   bool reclose_step(int m, Chain& chain, const std::vector<Chain>& others) const;
   bool fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const;
+  /// HandModel::planar_angles of finger m's `chain`, bit for bit, remembered for the last two
+  /// chains of each finger (the one it holds and the one tried last): the motion check and the
+  /// configuration ask about the same chains in turn. Valid until the next call for finger m.
+  const double* chain_angles(int m, const Chain& chain) const;
   double link_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
   /// Remembers CONTACT finger m's chain of this iteration, the palm still, and returns for how
   /// many iterations running the finger has come back to within epsilon (every joint) of one of
@@ -194,6 +198,13 @@ class Planner {
   std::vector<char> closed_;   ///< hug rule: per finger, has closed (or is closing) once
   std::vector<char> opened_;   ///< hug rule: per finger, opened to yield and not closed again yet
   std::vector<char> reclosing_;  ///< hug rule: per finger, closing again at rest before palm contact
+  /// chain_angles' memory: per finger, two chains (bits compared) and their joint angles.
+  struct AngleMemo {
+    Chain chain[2];
+    std::vector<double> angles[2];
+    int last = 0;  ///< the slot used last; a new chain takes the other
+  };
+  mutable std::vector<AngleMemo> angle_memo_;
 };
 
 }  // namespace hugger
