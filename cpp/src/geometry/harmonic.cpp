@@ -19,6 +19,28 @@ inline double pseudo_angle(double x, double y) {
   return t >= 0.0 ? t : 4.0 + t;
 }
 
+/// Intersects the sorted disjoint intervals cur[0, nc) of [0, full] with the arc from s round to
+/// e (through full, that is 0, when s > e) into next, at most `room` of them; `touching`: keep
+/// the intervals of a single point. Returns their count.
+int intersect_arc(const std::array<double, 2>* cur, int nc, double s, double e, double full, bool touching,
+                  std::array<double, 2>* next, int room) {
+  std::array<double, 2> arc[2];
+  int na = 0;
+  if (s < e) {
+    arc[na++] = {s, e};
+  } else {
+    arc[na++] = {0.0, e};
+    arc[na++] = {s, full};
+  }
+  int nn = 0;
+  for (int a = 0; a < na; ++a)
+    for (int j = 0; j < nc; ++j) {
+      const double lo = std::max(cur[j][0], arc[a][0]), hi = std::min(cur[j][1], arc[a][1]);
+      if ((touching ? hi >= lo : hi > lo) && nn < room) next[nn++] = {lo, hi};
+    }
+  return nn;
+}
+
 }  // namespace
 
 /// True only when no angle satisfies every constraint (then allowed_intervals(hs, n) is empty):
@@ -53,20 +75,7 @@ bool surely_empty(const Harmonic* hs, int n) {
     double e = pseudo_angle(c * mx - sn * my, c * my + sn * mx) + kMargin;
     if (s < 0.0) s += 4.0;
     if (e >= 4.0) e -= 4.0;
-    std::array<double, 2> arc[2];
-    int na = 0;
-    if (s < e) {
-      arc[na++] = {s, e};
-    } else {
-      arc[na++] = {0.0, e};
-      arc[na++] = {s, 4.0};
-    }
-    int nn = 0;
-    for (int a = 0; a < na; ++a)
-      for (int j = 0; j < nc; ++j) {
-        const double lo = std::max(cur[j][0], arc[a][0]), hi = std::min(cur[j][1], arc[a][1]);
-        if (hi >= lo) next[nn++] = {lo, hi};
-      }
+    const int nn = intersect_arc(cur, nc, s, e, 4.0, true, next, kSmall);
     if (nn == 0) return true;
     std::swap(cur, next);
     nc = nn;
@@ -114,20 +123,7 @@ std::vector<std::array<double, 2>> allowed_intervals(const Harmonic* hs, int n) 
     const double phi = std::atan2(h.k2, h.k1), dphi = std::acos(std::clamp(-h.k0 / A, -1.0, 1.0));
     const double s = wrap(phi + dphi), e = wrap(phi - dphi);
     if (s == e) continue;  // all but one point
-    std::array<double, 2> arc[2];
-    int na = 0;
-    if (s < e) {
-      arc[na++] = {s, e};
-    } else {
-      arc[na++] = {0.0, e};
-      arc[na++] = {s, kTwoPi};
-    }
-    int nn = 0;
-    for (int a = 0; a < na; ++a)
-      for (int j = 0; j < nc; ++j) {
-        const double lo = std::max(cur[j][0], arc[a][0]), hi = std::min(cur[j][1], arc[a][1]);
-        if (hi > lo && nn < room) next[nn++] = {lo, hi};
-      }
+    const int nn = intersect_arc(cur, nc, s, e, kTwoPi, false, next, room);
     std::copy(next, next + nn, cur);
     nc = nn;
   }
