@@ -91,46 +91,82 @@ TEST(Geometry, SegmentTriangleMatchesSampling) {
 }
 
 // surely_empty (the region build's quick answer for a vertex's arc) says "empty" only where
-// allowed_intervals finds no angle, and says it for nearly every set that allows none: random
-// sets of arcs, and pairs of arcs that overlap, touch or miss by 1e-14 to 1e-6 rad (where the
-// margin must keep it from answering).
+// allowed_intervals finds no angle, and says it for nearly every random set that allows none.
+// The sets: random arcs; pairs of arcs whose ends overlap, touch or miss by 1e-14 to 1e-6 rad
+// (below ~1e-9 the margin must keep it from answering); narrow arcs (half-angles 1e-8 to 5e-3)
+// beside a neighbour within 1e-8 rad; arcs of nearly the whole circle with one in their gap;
+// constraints without amplitude; arcs ending on multiples of pi/4; up to 40 constraints. Each at
+// three scales (x1, x2^-530, x2^500): allowed_intervals does not depend on it, and a quick
+// "empty" must not either.
 TEST(Harmonic, SurelyEmptyOnlyWhereNoAngleIsAllowed) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double two_pi = 2.0 * kPi;
+  auto log_uniform = [&](double lo, double hi) { return lo * std::pow(hi / lo, unit(rng)); };
+  auto sign = [&] { return unit(rng) < 0.5 ? -1.0 : 1.0; };
   // The constraint allowing the arc of half-angle w about angle theta, scaled by `scale`.
   auto arc = [](double theta, double w, double scale) {
     return Harmonic{scale * std::cos(w), -scale * std::cos(theta), -scale * std::sin(theta)};
   };
-  int empty = 0, caught = 0, near_pairs = 0;
-  for (int trial = 0; trial < 20000; ++trial) {
+  int empty = 0, caught = 0, kinds[6] = {};
+  for (int trial = 0; trial < 30000; ++trial) {
     std::vector<Harmonic> hs;
-    const bool pair = trial % 2 == 1;
-    if (pair) {
-      // Two arcs whose ends meet, apart by a gap of -1e-6 .. 1e-6 rad (negative: they overlap).
-      const double theta = two_pi * unit(rng), w1 = 0.01 + 1.5 * unit(rng), w2 = 0.01 + 1.5 * unit(rng);
-      const double gap = (unit(rng) < 0.5 ? -1.0 : 1.0) * std::pow(10.0, -14.0 + 8.0 * unit(rng));
-      hs.push_back(arc(theta, w1, 0.1 + unit(rng)));
-      hs.push_back(arc(theta + w1 + gap + w2, w2, 1e-3 + unit(rng)));
-      ++near_pairs;
-    } else {
+    const int kind = trial % 6;
+    ++kinds[kind];
+    if (kind == 0) {  // random
       const int n = 1 + static_cast<int>(8 * unit(rng));
       for (int i = 0; i < n; ++i) {
         const double c = -1.2 + 2.4 * unit(rng);  // k0 / A: past +-1 the arc is all or nothing
         const double A = std::pow(10.0, -3.0 + 4.0 * unit(rng)), t = two_pi * unit(rng);
         hs.push_back({c * A, A * std::cos(t), A * std::sin(t)});
       }
+    } else if (kind == 1) {  // two arcs whose ends meet, apart by -1e-6 .. 1e-6 rad (< 0: overlap)
+      const double theta = two_pi * unit(rng), w1 = 0.01 + 1.5 * unit(rng), w2 = 0.01 + 1.5 * unit(rng);
+      const double gap = sign() * log_uniform(1e-14, 1e-6);
+      hs.push_back(arc(theta, w1, 0.1 + unit(rng)));
+      hs.push_back(arc(theta + w1 + gap + w2, w2, 1e-3 + unit(rng)));
+    } else if (kind == 2) {  // a narrow arc beside a neighbour
+      const double theta = two_pi * unit(rng), w1 = log_uniform(1e-8, 5e-3), w2 = log_uniform(1e-8, 1.5);
+      const double gap = sign() * log_uniform(1e-13, 1e-8);
+      hs.push_back(arc(theta, w1, 0.1 + unit(rng)));
+      hs.push_back(arc(theta + w1 + gap + w2, w2, 0.1 + unit(rng)));
+    } else if (kind == 3) {  // nearly the whole circle, and an arc in (or across) its gap
+      const double theta = two_pi * unit(rng), w1 = std::acos(-1.0 + log_uniform(2e-6, 1e-4));
+      const double gap = kPi - w1, w2 = gap * (0.2 + 0.6 * unit(rng));
+      const double off = (gap - w2) * (1.0 + sign() * log_uniform(1e-9, 1e-2));  // from the gap's middle
+      hs.push_back(arc(theta, w1, 0.1 + unit(rng)));
+      hs.push_back(arc(theta + kPi + sign() * off, w2, 0.1 + unit(rng)));
+    } else if (kind == 4) {  // arcs ending on multiples of pi/4, and constraints without amplitude
+      const int n = 1 + static_cast<int>(4 * unit(rng));
+      for (int i = 0; i < n; ++i) {
+        const int a = static_cast<int>(8 * unit(rng)), b = 1 + static_cast<int>(4 * unit(rng));
+        hs.push_back(arc((a + 0.5 * b) * kPi / 4.0, 0.5 * b * kPi / 4.0, 0.1 + unit(rng)));
+      }
+      hs.insert(hs.begin() + static_cast<long>(unit(rng) * hs.size()), Harmonic{unit(rng) < 0.8 ? -1.0 : 1.0, 0.0, 0.0});
+    } else {  // many constraints: arcs about one direction, some missing it
+      const int n = 19 + static_cast<int>(22 * unit(rng));
+      const double theta = two_pi * unit(rng);
+      for (int i = 0; i < n; ++i) {
+        const double w = 0.05 + 1.4 * unit(rng), off = (unit(rng) < 0.97 ? 0.9 : 1.05) * w * sign() * unit(rng);
+        hs.push_back(arc(theta + off, w, 0.1 + unit(rng)));
+      }
     }
     const int n = static_cast<int>(hs.size());
-    const bool quick = surely_empty(hs.data(), n);
-    const bool none = allowed_intervals(hs.data(), n).empty();
-    if (quick) EXPECT_TRUE(none) << "trial " << trial << ": surely_empty, but allowed_intervals finds angles";
-    if (none && !pair) {
-      ++empty;
-      caught += quick ? 1 : 0;
+    for (const double scale : {1.0, 0x1p-530, 0x1p500}) {
+      std::vector<Harmonic> scaled = hs;
+      for (Harmonic& h : scaled) h = {h.k0 * scale, h.k1 * scale, h.k2 * scale};
+      const bool quick = surely_empty(scaled.data(), n);
+      const bool none = allowed_intervals(scaled.data(), n).empty();
+      if (quick) {
+        EXPECT_TRUE(none) << "kind " << kind << ", trial " << trial << ", scale " << scale
+                          << ": surely_empty, but allowed_intervals finds angles";
+      }
+      if (scale == 1.0 && kind == 0 && none) {
+        ++empty;
+        caught += quick ? 1 : 0;
+      }
     }
   }
-  EXPECT_GT(near_pairs, 5000);
-  EXPECT_GT(empty, 3000);
-  EXPECT_GE(caught, 0.99 * empty) << caught << " of " << empty << " empty sets answered quickly";
+  EXPECT_GT(empty, 1500);
+  EXPECT_GE(caught, 0.99 * empty) << caught << " of " << empty << " empty random sets answered quickly";
 }

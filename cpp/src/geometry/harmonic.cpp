@@ -11,7 +11,12 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * kPi;
 
-/// A pseudo-angle of the direction (x, y) != 0 in [0, 4): increasing with its angle from +x
+/// Intervals kept on the stack: intersecting with one arc adds at most one interval, so 2 n + 2
+/// hold two buffers' worth for up to 18 constraints (a vertex of degree 17).
+constexpr int kSmall = 2 * 18 + 2;
+
+/// A pseudo-angle of the direction (x, y) != 0 in [0, 4] (4 only for directions just below +x,
+/// rounded; 0 and 4 are the same direction): increasing with its angle from +x
 /// (counterclockwise), by a slope between 1/2 and 1, without trigonometry.
 inline double pseudo_angle(double x, double y) {
   const double t = y / (std::abs(x) + std::abs(y));
@@ -46,13 +51,14 @@ int intersect_arc(const std::array<double, 2>* cur, int nc, double s, double e, 
 /// True only when no angle satisfies every constraint (then allowed_intervals(hs, n) is empty):
 /// the intersection of each constraint's arc, grown by a margin far above the rounding of either
 /// computation, is empty. Without trigonometry: each arc's ends by its half-angle's cosine and
-/// sine, ordered by pseudo-angle. False when unsure (an arc narrower or wider than the margin
-/// allows for, many constraints): allowed_intervals decides those.
+/// sine, ordered by pseudo-angle. A constraint it cannot judge safely is left out (that only adds
+/// angles): an arc narrower than the margin allows for, an amplitude whose square would lose
+/// precision or overflow. False when unsure, and for many constraints: allowed_intervals decides.
 bool surely_empty(const Harmonic* hs, int n) {
-  constexpr int kSmall = 2 * 18 + 2;
   constexpr double kMargin = 1e-9;  // pseudo-angle, at least 1e-9 rad: rounding is ~1e-13 here
-  constexpr double kNarrow = 1e-6;  // |cos| of the half-angle within this of 1: unsure
-  if (2 * n + 2 > kSmall) return false;
+  constexpr double kNarrow = 1e-6;  // cos of the half-angle within this of +1 (an arc under
+                                    // 2.8e-3 rad) or of -1 (nearly the whole circle)
+  if (n + 1 > kSmall) return false;  // one interval more per arc at most
   std::array<double, 2> buf[2][kSmall];
   std::array<double, 2>*cur = buf[0], *next = buf[1];
   int nc = 0;
@@ -63,12 +69,14 @@ bool surely_empty(const Harmonic* hs, int n) {
       if (h.k0 > 0.0) return true;  // nowhere, as allowed_intervals finds too
       continue;
     }
+    // Below 2^-450 the squares' sum nears the subnormals, where the root loses digits (too small
+    // an A would narrow the arc); above 2^510 it overflows. allowed_intervals uses hypot.
     const double A = std::sqrt(h.k1 * h.k1 + h.k2 * h.k2);
-    if (!(A > 0.0) || !std::isfinite(A)) return false;
+    if (!(A >= 0x1p-450) || !(A <= 0x1p510)) continue;
     const double c = h.k0 / A;  // allowed within the half-angle acos(c) of the direction -(k1, k2)
     if (c <= -1.0 + kNarrow) continue;  // (nearly) everywhere: leaving it out only adds angles
     if (c >= 1.0 + kNarrow) return true;  // k0 > A: nowhere
-    if (c >= 1.0 - kNarrow) return false;
+    if (c >= 1.0 - kNarrow) continue;  // too narrow to judge with the margin: left out
     const double mx = -h.k1 / A, my = -h.k2 / A, sn = std::sqrt((1.0 - c) * (1.0 + c));
     // The arc from the middle turned back by the half-angle to it turned on by it.
     double s = pseudo_angle(c * mx + sn * my, c * my - sn * mx) - kMargin;
@@ -93,9 +101,7 @@ std::vector<std::array<double, 2>> allowed_intervals(const Harmonic* hs, int n) 
     const Harmonic& h = hs[i];
     if (h.k0 > 0.0 && h.k0 * h.k0 > (h.k1 * h.k1 + h.k2 * h.k2) * (1.0 + 1e-12)) return out;
   }
-  // Intersecting with one arc adds at most one interval: 2 n + 2 suffice (on the stack for up to
-  // 18 constraints, a vertex of degree 17; beyond, on the heap).
-  constexpr int kSmall = 2 * 18 + 2;
+  // 2 n + 2 intervals suffice: on the stack up to kSmall, beyond on the heap.
   const int room = 2 * n + 2;
   std::array<double, 2> small[2][kSmall];
   std::vector<std::array<double, 2>> large(room > kSmall ? 2 * static_cast<std::size_t>(room) : 0);
