@@ -1,10 +1,10 @@
 #include "hugger/planner/planner.hpp"
 
 #include <algorithm>
-#include <cstring>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 #include <stdexcept>
 
@@ -190,17 +190,24 @@ const double* Planner::chain_angles(int m, const Chain& chain) const {
   for (int k : {memo.last, 1 - memo.last}) {
     const Chain& c = memo.chain[k];
     // Bits, not values: chains that differ only in a zero's sign have different angles.
-    if (c.size() == chain.size() && std::memcmp(c.data(), chain.data(), bytes) == 0) {
+    if (c.size() == chain.size() && (bytes == 0 || std::memcmp(c.data(), chain.data(), bytes) == 0)) {
       memo.last = k;
       return memo.angles[k].data();
     }
   }
+  // The angles first, the chain last: a slot whose angles failed to fit matches no chain.
   const int k = 1 - memo.last;
-  memo.last = k;
-  memo.chain[k] = chain;
+  memo.chain[k].clear();
   memo.angles[k].resize(chain.empty() ? 0 : chain.size() - 1);
   HandModel::planar_angles(chain, memo.angles[k].data());
+  memo.chain[k] = chain;
+  memo.last = k;
   return memo.angles[k].data();
+}
+
+std::vector<double> Planner::joint_angles(int m, const Chain& chain) const {
+  const double* angles = chain_angles(m, chain);
+  return std::vector<double>(angles, angles + hand_.links());
 }
 
 Configuration Planner::make_configuration(int phase) const {
@@ -359,7 +366,8 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
   const double s = params_.step, r = hand_.link_radius();
   if (largest_move(old, next) > kMaxJointSteps * s) return false;
   // On the stack: this runs for every finger that moves, in every iteration (and a skin's
-  // callback may plan on this thread meanwhile: no scratch shared across calls).
+  // callback may plan on this thread meanwhile). chain_angles' memory is shared across calls,
+  // but its answers are copied out at once and a hit is the same chain bit for bit.
   std::array<double, kMaxLinks> a0, a1, a;
   std::array<char, kMaxLinks> sample{};
   std::copy_n(chain_angles(m, old), N, a0.data());
@@ -407,8 +415,7 @@ bool Planner::close_step(int m, Chain& chain) const {
       break;
     }
   if (first >= N) return false;  // the distal link touches: closing is over
-  const double* angles = chain_angles(m, chain);
-  std::vector<double> a(angles, angles + N);
+  const std::vector<double> a = joint_angles(m, chain);
   // Flexing joints first..N-1 by d moves the tip by at most d * sum_k L_k (k - first + 1).
   double lever = 0.0;
   for (int k = first; k < N; ++k) lever += hand_.link_length(m, k) * (k - first + 1);
@@ -435,10 +442,8 @@ bool Planner::close_step(int m, Chain& chain) const {
 }
 
 bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vector<Chain>& others, Chain& out) {
-  const int N = hand_.links();
   const double s = params_.step;
-  const double* angles = chain_angles(m, old);
-  std::vector<double> a(angles, angles + N);
+  const std::vector<double> a = joint_angles(m, old);
   // The root joint may open to the palm's front plane and its lower limit.
   const double lowest = std::max(-kPi / 2.0, hand_.lower()(m, 0));
   const double dist = farthest_joint(old);
@@ -463,10 +468,8 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
 }
 
 bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others) const {
-  const int N = hand_.links();
   const double s = params_.step;
-  const double* angles = chain_angles(m, chain);
-  std::vector<double> a(angles, angles + N);
+  const std::vector<double> a = joint_angles(m, chain);
   const double dist = farthest_joint(chain);
   if (!(dist > 0.0)) return false;
   const double top = std::min(kMaxCloseFlexion, hand_.upper()(m, 0));

@@ -150,6 +150,7 @@ class Planner {
   /// chains of each finger (the one it holds and the one tried last): the motion check and the
   /// configuration ask about the same chains in turn. Valid until the next call for finger m.
   const double* chain_angles(int m, const Chain& chain) const;
+  std::vector<double> joint_angles(int m, const Chain& chain) const;  ///< chain_angles, copied
   double link_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
   /// Remembers CONTACT finger m's chain of this iteration, the palm still, and returns for how
   /// many iterations running the finger has come back to within epsilon (every joint) of one of
