@@ -19,14 +19,16 @@ std::uint64_t order_key(double x) {
 
 /// 0 .. n - 1 in (key, index) order: a least-significant-digit radix sort of the keys' 11-bit
 /// digits from digit `first` up, stable (so ties keep the indices' order); digits that all keys
-/// share are skipped. Branch-free, where a comparison sort of such keys is a coin toss per
-/// comparison. With `first` > 0 the digits below are left out of the passes, and the keys equal
-/// in the sorted digits (rare where those are most of a key's bits) are then put in order by
-/// their whole keys: the same order, in fewer passes.
+/// share are skipped. The passes are branch-free, where a comparison sort of such keys is a coin
+/// toss per comparison. With `first` > 0 the digits below are left out of the passes, and the
+/// keys equal in the sorted digits (rare where those are most of a key's bits) are then put in
+/// order by their whole keys: the same order, in fewer passes.
 template <class Key>
 std::vector<int> radix_order(const std::vector<Key>& key, int first = 0) {
   constexpr int kBits = 11, kDigits = (8 * static_cast<int>(sizeof(Key)) + kBits - 1) / kBits,
                 kBuckets = 1 << kBits;
+  static_assert(kBits * (kDigits - 1) < 8 * sizeof(Key), "the top digit's shift is below the key's width");
+  first = std::clamp(first, 0, kDigits - 1);
   const int n = static_cast<int>(key.size());
   std::vector<int> order(static_cast<std::size_t>(n)), scratch(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) order[i] = i;
@@ -82,7 +84,7 @@ std::vector<int> ascending_order(const std::vector<double>& values) {
   for (std::size_t i = 0; i < values.size(); ++i) key[i] = order_key(values[i]);
   // The high 31 bits (sign, exponent, 19 bits of mantissa) in three passes instead of six over
   // all 64: finite doubles that agree in those bits differ by less than 2^-19 of their magnitude,
-  // so the runs left for the whole keys are short (ties and near-ties).
+  // so the runs left for the whole keys are usually short (a long one is sorted by itself).
   return radix_order(key, 3);
 }
 

@@ -8,8 +8,8 @@
 namespace hugger {
 
 /// The indices 0 .. n - 1 of `values` in ascending order of (value, index), with -0 equal to +0
-/// (a stable radix sort: linear in n, and without the mispredicted branches of a comparison
-/// sort of such values). The values must not be NaN.
+/// (a radix sort of the keys' high bits, then an insertion sort, or std::sort for a long run, of
+/// the keys equal in those bits). The values must not be NaN.
 std::vector<int> ascending_order(const std::vector<double>& values);
 /// The same for unsigned integers.
 std::vector<int> ascending_order(const std::vector<std::uint32_t>& values);
