@@ -143,7 +143,7 @@ struct Result {
   double configurations_per_s = 0;                                // Phase 2 iterations / Phase 2 time
   double p50_us = 0, p90_us = 0, p99_us = 0, max_us = 0;           // per Phase 2 iteration, pooled
   double max_rss_mib = 0;
-  double object_faults = 0, faults = 0;  // minor page faults (fresh pages) of the Object's build, of a whole plan (medians)
+  double object_faults = 0, faults = 0;  // minor page faults (mostly fresh pages) of the Object's build, of a whole plan (medians)
   bool deterministic = true;
   std::uint64_t digest = 0;  // of the first repeat's plan: compare it across builds
   bool ok = false;
@@ -180,18 +180,17 @@ std::uint64_t digest(const Planner& p) {
   return h;
 }
 
-/// Minor page faults of this process so far (every thread): the fresh pages it has touched.
-long minor_faults() {
+/// This process's resource use so far (every thread).
+rusage self_usage() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
-  return u.ru_minflt;
+  return u;
 }
 
-double max_rss_mib() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
-}
+/// Minor page faults so far: mostly the fresh pages touched (copy-on-write ones count too).
+long minor_faults() { return self_usage().ru_minflt; }
+
+double max_rss_mib() { return static_cast<double>(self_usage().ru_maxrss) / 1024.0; }  // KiB on Linux
 
 std::shared_ptr<const Sensing> make_skin(const std::string& skin, const std::shared_ptr<const Object>& object) {
   if (skin == "section") return std::make_shared<SectionSkin>(object);
@@ -214,7 +213,11 @@ Result run(const Scenario& sc, const std::string& skin, int repeats) {
     r.triangles = mesh.faces.rows();
     std::vector<double> object_s, planner_s, phase2_s, total_s, sections_s, per_iteration, object_faults, faults;
     std::uint64_t first_digest = 0;
+    std::size_t iterations = 4096;  // room for the per-iteration times, made before any clock
+    object_faults.reserve(static_cast<std::size_t>(repeats));
+    faults.reserve(static_cast<std::size_t>(repeats));
     for (int k = 0; k < repeats; ++k) {
+      per_iteration.reserve(per_iteration.size() + iterations);
       const long f0 = minor_faults();
       const auto t0 = Clock::now();
       auto object = std::make_shared<const Object>(mesh.vertices, mesh.faces);
@@ -237,7 +240,6 @@ Result run(const Scenario& sc, const std::string& skin, int repeats) {
         sections_s.push_back(seconds_since(ts));
       }
       const auto t2 = Clock::now();
-      per_iteration.reserve(per_iteration.size() + 4096);
       for (;;) {
         const auto ti = Clock::now();
         if (!planner.advance()) break;
@@ -257,6 +259,7 @@ Result run(const Scenario& sc, const std::string& skin, int repeats) {
         r.configurations = static_cast<long>(planner.history().size());
         r.phase1_configurations = planner.stats().phase1_configurations;
         r.phase2_iterations = planner.stats().phase2_iterations;
+        iterations = static_cast<std::size_t>(r.phase2_iterations) + 1;
       } else if (d != first_digest) {
         r.deterministic = false;
       }
@@ -487,7 +490,8 @@ int main(int argc, char** argv) {
          << ", \"total_s\": " << r.total_s << ", \"phase2_configurations_per_s\": " << r.configurations_per_s
          << ", \"iteration_us\": {\"p50\": " << r.p50_us << ", \"p90\": " << r.p90_us << ", \"p99\": " << r.p99_us
          << ", \"max\": " << r.max_us << "}, \"max_rss_mib\": " << r.max_rss_mib
-         << ", \"minor_faults\": {\"object\": " << r.object_faults << ", \"plan\": " << r.faults << "}"
+         << ", \"minor_faults\": {\"object\": " << std::llround(r.object_faults)
+         << ", \"plan\": " << std::llround(r.faults) << "}"
          << ", \"deterministic\": " << (r.deterministic ? "true" : "false") << ", \"digest\": \""
          << std::hex << r.digest << std::dec << "\"}";
     }
