@@ -92,12 +92,14 @@ TEST(Geometry, SegmentTriangleMatchesSampling) {
 
 // surely_empty (the region build's quick answer for a vertex's arc) says "empty" only where
 // allowed_intervals finds no angle, and says it for nearly every random set that allows none.
-// The sets: random arcs; pairs of arcs whose ends overlap, touch or miss by 1e-14 to 1e-6 rad
-// (below ~1e-9 the margin must keep it from answering); narrow arcs (half-angles 1e-8 to 5e-3)
-// beside a neighbour within 1e-8 rad; arcs of nearly the whole circle with one in their gap;
-// constraints without amplitude; arcs ending on multiples of pi/4; up to 40 constraints. Each at
-// three scales (x1, x2^-530, x2^500): allowed_intervals does not depend on it, and a quick
-// "empty" must not either.
+// The sets, by kind: random arcs; pairs of arcs whose ends overlap, touch or miss by 1e-14 to
+// 1e-6 rad (below ~1e-9 the margin must keep it from answering); narrow arcs (half-angles 1e-8
+// to 5e-3) beside a neighbour within 1e-8 rad; arcs of nearly the whole circle (1 + cos of the
+// half-angle down to 1e-16) with one in or across their gap; constraints without amplitude
+// beside arcs ending on multiples of pi/4; 19 to 40 arcs about one direction; 36 nearly whole
+// arcs with disjoint gaps (37 intervals) and a probe in or near a gap. Each set also with every
+// constraint scaled by its own factor, tiny (2^-545 to 2^-430) or huge (2^490 to 2^521), where
+// surely_empty leaves some of them out (a positive factor changes no constraint's arc).
 TEST(Harmonic, SurelyEmptyOnlyWhereNoAngleIsAllowed) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -108,11 +110,12 @@ TEST(Harmonic, SurelyEmptyOnlyWhereNoAngleIsAllowed) {
   auto arc = [](double theta, double w, double scale) {
     return Harmonic{scale * std::cos(w), -scale * std::cos(theta), -scale * std::sin(theta)};
   };
-  int empty = 0, caught = 0, kinds[6] = {};
-  for (int trial = 0; trial < 30000; ++trial) {
+  constexpr int kKinds = 7;
+  int empty = 0, caught = 0;
+  int none_of_kind[kKinds] = {}, some_of_kind[kKinds] = {}, quick_of_kind[kKinds] = {};
+  for (int trial = 0; trial < 35000; ++trial) {
     std::vector<Harmonic> hs;
-    const int kind = trial % 6;
-    ++kinds[kind];
+    const int kind = trial % kKinds;
     if (kind == 0) {  // random
       const int n = 1 + static_cast<int>(8 * unit(rng));
       for (int i = 0; i < n; ++i) {
@@ -131,7 +134,7 @@ TEST(Harmonic, SurelyEmptyOnlyWhereNoAngleIsAllowed) {
       hs.push_back(arc(theta, w1, 0.1 + unit(rng)));
       hs.push_back(arc(theta + w1 + gap + w2, w2, 0.1 + unit(rng)));
     } else if (kind == 3) {  // nearly the whole circle, and an arc in (or across) its gap
-      const double theta = two_pi * unit(rng), w1 = std::acos(-1.0 + log_uniform(2e-6, 1e-4));
+      const double theta = two_pi * unit(rng), w1 = std::acos(-1.0 + log_uniform(1e-16, 1e-4));
       const double gap = kPi - w1, w2 = gap * (0.2 + 0.6 * unit(rng));
       const double off = (gap - w2) * (1.0 + sign() * log_uniform(1e-9, 1e-2));  // from the gap's middle
       hs.push_back(arc(theta, w1, 0.1 + unit(rng)));
@@ -143,29 +146,60 @@ TEST(Harmonic, SurelyEmptyOnlyWhereNoAngleIsAllowed) {
         hs.push_back(arc((a + 0.5 * b) * kPi / 4.0, 0.5 * b * kPi / 4.0, 0.1 + unit(rng)));
       }
       hs.insert(hs.begin() + static_cast<long>(unit(rng) * hs.size()), Harmonic{unit(rng) < 0.8 ? -1.0 : 1.0, 0.0, 0.0});
-    } else {  // many constraints: arcs about one direction, some missing it
+    } else if (kind == 5) {  // many constraints: arcs about one direction, some missing it
       const int n = 19 + static_cast<int>(22 * unit(rng));
       const double theta = two_pi * unit(rng);
       for (int i = 0; i < n; ++i) {
         const double w = 0.05 + 1.4 * unit(rng), off = (unit(rng) < 0.97 ? 0.9 : 1.05) * w * sign() * unit(rng);
         hs.push_back(arc(theta + off, w, 0.1 + unit(rng)));
       }
+      // Half of them with an arc on the far side too (most of those allow no angle).
+      if (unit(rng) < 0.5) hs.back() = arc(theta + kPi + 0.3 * (2.0 * unit(rng) - 1.0), 0.05 + 1.35 * unit(rng), 1.0);
+    } else {  // 36 gaps cut from the circle, then a probe about one of them
+      constexpr int kGaps = 36;
+      const double cell = two_pi / kGaps, turn = two_pi * unit(rng);
+      double centre[kGaps], width[kGaps];
+      for (int i = 0; i < kGaps; ++i) {
+        width[i] = cell * (0.05 + 0.45 * unit(rng));
+        centre[i] = turn + cell * i + 0.2 * cell * (2.0 * unit(rng) - 1.0);
+        hs.push_back(arc(centre[i] + kPi, kPi - 0.5 * width[i], 0.1 + unit(rng)));
+      }
+      const int j = static_cast<int>(kGaps * unit(rng));
+      const double w = 0.5 * width[j] * log_uniform(0.05, 3.0), off = sign() * width[j] * unit(rng);
+      hs.push_back(arc(centre[j] + off, w, 0.1 + unit(rng)));
     }
     const int n = static_cast<int>(hs.size());
-    for (const double scale : {1.0, 0x1p-530, 0x1p500}) {
+    for (int variant = 0; variant < 3; ++variant) {
       std::vector<Harmonic> scaled = hs;
-      for (Harmonic& h : scaled) h = {h.k0 * scale, h.k1 * scale, h.k2 * scale};
+      for (Harmonic& h : scaled) {
+        // Each constraint its own factor (not a power of two): about 2^-545 .. 2^-430 (the
+        // squares turn subnormal below about 2^-511) or 2^490 .. 2^521 (they overflow above
+        // 2^512), either side of where surely_empty leaves a constraint out.
+        const double f = variant == 0 ? 1.0
+                                      : std::ldexp(1.0 + unit(rng), variant == 1 ? -545 + static_cast<int>(115 * unit(rng))
+                                                                                 : 490 + static_cast<int>(31 * unit(rng)));
+        h = {h.k0 * f, h.k1 * f, h.k2 * f};
+      }
       const bool quick = surely_empty(scaled.data(), n);
       const bool none = allowed_intervals(scaled.data(), n).empty();
       if (quick) {
-        EXPECT_TRUE(none) << "kind " << kind << ", trial " << trial << ", scale " << scale
+        EXPECT_TRUE(none) << "kind " << kind << ", trial " << trial << ", variant " << variant
                           << ": surely_empty, but allowed_intervals finds angles";
       }
-      if (scale == 1.0 && kind == 0 && none) {
+      if (variant != 0) continue;
+      ++(none ? none_of_kind : some_of_kind)[kind];
+      quick_of_kind[kind] += quick ? 1 : 0;
+      if (kind == 0 && none) {
         ++empty;
         caught += quick ? 1 : 0;
       }
     }
+  }
+  // Every kind has sets with and without angles, and sets surely_empty answers.
+  for (int kind = 0; kind < kKinds; ++kind) {
+    EXPECT_GT(none_of_kind[kind], 100) << "kind " << kind;
+    EXPECT_GT(some_of_kind[kind], 100) << "kind " << kind;
+    EXPECT_GT(quick_of_kind[kind], kind == 2 ? 0 : 50) << "kind " << kind;  // narrow arcs: mostly left out
   }
   EXPECT_GT(empty, 1500);
   EXPECT_GE(caught, 0.99 * empty) << caught << " of " << empty << " empty random sets answered quickly";

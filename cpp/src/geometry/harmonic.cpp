@@ -11,8 +11,10 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * kPi;
 
-/// Intervals kept on the stack: intersecting with one arc adds at most one interval, so 2 n + 2
-/// hold two buffers' worth for up to 18 constraints (a vertex of degree 17).
+/// Intervals kept on the stack, per buffer. Intersecting with one arc adds at most one interval
+/// (a wrapping arc's gap lies inside at most one of them), so n constraints leave at most n + 1:
+/// surely_empty's buffers hold that for up to 37 constraints; allowed_intervals keeps 2 n + 2 on
+/// the stack for up to 18 (a vertex of degree 17).
 constexpr int kSmall = 2 * 18 + 2;
 
 /// A pseudo-angle of the direction (x, y) != 0 in [0, 4] (4 only for directions just below +x,
@@ -69,8 +71,9 @@ bool surely_empty(const Harmonic* hs, int n) {
       if (h.k0 > 0.0) return true;  // nowhere, as allowed_intervals finds too
       continue;
     }
-    // Below 2^-450 the squares' sum nears the subnormals, where the root loses digits (too small
-    // an A would narrow the arc); above 2^510 it overflows. allowed_intervals uses hypot.
+    // Below about 2^-511 the squares' sum is subnormal and the root loses digits (too small an A
+    // would narrow the arc), so 2^-450 keeps a wide margin; above 2^512 the sum overflows.
+    // allowed_intervals uses hypot.
     const double A = std::sqrt(h.k1 * h.k1 + h.k2 * h.k2);
     if (!(A >= 0x1p-450) || !(A <= 0x1p510)) continue;
     const double c = h.k0 / A;  // allowed within the half-angle acos(c) of the direction -(k1, k2)

@@ -195,7 +195,8 @@ const double* Planner::chain_angles(int m, const Chain& chain) const {
       return memo.angles[k].data();
     }
   }
-  // The angles first, the chain last: a slot whose angles failed to fit matches no chain.
+  // The angles first, the chain last: a slot whose angles failed to fit holds an empty chain,
+  // which matches no chain asked (a finger's chains are never empty).
   const int k = 1 - memo.last;
   memo.chain[k].clear();
   memo.angles[k].resize(chain.empty() ? 0 : chain.size() - 1);

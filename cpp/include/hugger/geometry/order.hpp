@@ -11,7 +11,7 @@ namespace hugger {
 /// (a radix sort of the keys' high bits, then an insertion sort, or std::sort for a long run, of
 /// the keys equal in those bits). The values must not be NaN.
 std::vector<int> ascending_order(const std::vector<double>& values);
-/// The same for unsigned integers.
+/// The same for unsigned integers: a stable radix sort of all their bits.
 std::vector<int> ascending_order(const std::vector<std::uint32_t>& values);
 
 }  // namespace hugger
