@@ -105,7 +105,7 @@ def main() -> int:
     ap.add_argument("--approaches", type=int, default=26)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--workers", type=int, default=None, help="processes of the robust verdict")
-    ap.add_argument("--rules", default=None, help="the Phase 2 rule set, when the planner has one")
+    ap.add_argument("--rules", default=None, help="the Phase 2 rule set: hug (the default) or paper")
     ap.add_argument("--verify", type=int, default=0, help="hugger.search(verify=V): physics check of the V best-ranked")
     ap.add_argument("--robust-verify", action="store_true",
                     help="hugger.search(verify=V, robust=True): the V best-ranked checked with the robust verdict")
