@@ -49,6 +49,22 @@ def test_torus_centre_is_outside():
         objects.torus(0.01, 0.02)
 
 
+@pytest.mark.parametrize("make, kwargs, message", [
+    (objects.sphere, {"radius": -0.04}, "radius must be finite and positive"),
+    (objects.sphere, {"radius": 0.0}, "radius must be finite and positive"),
+    (objects.blob, {"radius": float("inf")}, "radius must be finite and positive"),
+    (objects.ellipsoid, {"radii": (0.05, -0.04, 0.03)}, "radii must be finite and positive"),
+    (objects.ellipsoid, {"radii": (0.05, 0.04)}, "radii must be 3 numbers"),
+    (objects.box, {"extents": (0.06, 0.0, 0.04)}, "extents must be finite and positive"),
+    (objects.cylinder, {"radius": -0.035}, "radius must be finite and positive"),
+    (objects.cylinder, {"height": float("nan")}, "height must be finite and positive"),
+])
+def test_builtin_sizes_must_be_positive(make, kwargs, message):
+    # A negative size would mirror the mesh (and be refused for its inward faces, the wrong reason).
+    with pytest.raises(ValueError, match=message):
+        make(**kwargs)
+
+
 def test_unknown_builtin_names_the_choices():
     with pytest.raises(ValueError, match="choose from sphere, apple"):
         objects.get("banana")

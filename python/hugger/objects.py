@@ -54,22 +54,34 @@ def _center(center: Any) -> np.ndarray:
     return c
 
 
+def _sizes(name: str, value: Any, count: int) -> np.ndarray:
+    """``value`` as ``count`` finite positive sizes, or a ValueError naming ``name``."""
+    try:
+        x = np.asarray(value, dtype=np.float64).reshape(count)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be {'a number' if count == 1 else f'{count} numbers'}, got {value!r}") from None
+    if not np.all(np.isfinite(x) & (x > 0)):
+        raise ValueError(f"{name} must be finite and positive, got {value!r}")
+    return x
+
+
 def sphere(radius: float = 0.04, center: Any = (0, 0, 0), subdivisions: int = 4) -> Object:
     """Sphere of ``radius`` (default 4 cm), 20 * 4**subdivisions triangles."""
     v, f = icosphere(subdivisions)
-    return Object(v * float(radius) + _center(center), f)
+    return Object(v * float(_sizes("radius", radius, 1)[0]) + _center(center), f)
 
 
 def ellipsoid(radii: Any = (0.05, 0.04, 0.03), center: Any = (0, 0, 0), subdivisions: int = 4) -> Object:
     """Axis-aligned ellipsoid with semi-axes ``radii`` (default 5 x 4 x 3 cm)."""
     v, f = icosphere(subdivisions)
-    return Object(v * np.asarray(radii, dtype=np.float64).reshape(3) + _center(center), f)
+    return Object(v * _sizes("radii", radii, 3) + _center(center), f)
 
 
 def blob(radius: float = 0.04, amplitude: float = 0.25, seed: int = 0, center: Any = (0, 0, 0),
          subdivisions: int = 4) -> Object:
     """A smooth, non-convex, star-shaped body: a sphere whose radius varies by a few low-order
     waves of relative ``amplitude`` (random phases from ``seed``)."""
+    radius = float(_sizes("radius", radius, 1)[0])
     v, f = icosphere(subdivisions)
     rng = np.random.default_rng(seed)
     scale = np.ones(len(v))
@@ -85,7 +97,7 @@ def box(extents: Any = (0.06, 0.05, 0.04), center: Any = (0, 0, 0), divisions: i
     """Axis-aligned box of full ``extents`` (default 6 x 5 x 4 cm), each face a grid of
     ``divisions`` x ``divisions`` squares."""
     n = max(1, int(divisions))
-    e = np.asarray(extents, dtype=np.float64).reshape(3) / 2.0
+    e = _sizes("extents", extents, 3) / 2.0
     verts: dict[tuple[int, ...], int] = {}
     points: list[np.ndarray] = []
     faces: list[tuple[int, int, int]] = []
@@ -115,6 +127,7 @@ def box(extents: Any = (0.06, 0.05, 0.04), center: Any = (0, 0, 0), divisions: i
 def cylinder(radius: float = 0.035, height: float = 0.1, center: Any = (0, 0, 0), sections: int = 48,
              rings: int = 8) -> Object:
     """Cylinder along z of ``radius`` and ``height`` (default 3.5 x 10 cm), closed by flat caps."""
+    radius, height = float(_sizes("radius", radius, 1)[0]), float(_sizes("height", height, 1)[0])
     s, r = max(3, int(sections)), max(1, int(rings))
     ang = 2 * np.pi * np.arange(s) / s
     pts = [np.array([0.0, 0.0, -height / 2]), np.array([0.0, 0.0, height / 2])]
@@ -252,6 +265,8 @@ def load_mesh(path: str | os.PathLike[str], scale: float = 1.0) -> tuple[Object,
         raise ImportError("reading mesh files needs trimesh: pip install 'hugger[mesh]'") from None
     path = os.fspath(path)
     scale = positive("scale", scale)
+    if os.path.isdir(path):
+        raise IsADirectoryError(f"{path} is a directory, not a mesh file")
     if not os.path.isfile(path):
         raise FileNotFoundError(f"no such mesh file: {path}")
     try:
