@@ -104,6 +104,24 @@ def test_scale_is_refused_for_a_builtin(tmp_path, capsys):
         hugger.scenarios.default_case("sphere", scale=0.001)
 
 
+@pytest.mark.parametrize("argv, message", [
+    (["--verify", "2"], "--approaches K > 1"),
+    (["--verify", "-1"], "--approaches K > 1"),
+    (["--robust-verify"], "--approaches K > 1"),
+    (["--workers", "2"], "--approaches K > 1"),
+    (["--turn", "inf"], "must be finite"),
+])
+def test_plan_refuses_options_it_would_ignore_or_cannot_use(argv, tmp_path, capsys, message):
+    code, _, err = run(["plan", "sphere", "--out", tmp_path / "a.npz", *argv], capsys)
+    assert code == 2 and err.startswith("hugger: error: ") and message in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "a.npz").exists()
+
+
+def test_plan_of_a_directory_says_so(tmp_path, capsys):
+    code, _, err = run(["plan", str(tmp_path), "--out", tmp_path / "a.npz"], capsys)
+    assert code == 2 and "is a directory, not a mesh file" in err
+
+
 def test_stl_load_reports_no_merged_vertices(tmp_path):
     mesh = write_ball(tmp_path / "ball.stl")  # STL: three vertices of its own per face
     obj, repairs = objects.load_mesh(mesh)

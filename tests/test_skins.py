@@ -3,6 +3,7 @@ fine mesh of the same shape; the sensor model stays a lower bound of the true ga
 from __future__ import annotations
 
 import gc
+import importlib.util
 import math
 import os
 
@@ -149,6 +150,10 @@ def test_object_free_plan_saves_and_hugger_info_reads_it(hand, tmp_path):
     from hugger.cli import main
 
     assert main(["info", str(path), "--json"]) == 0
+    if importlib.util.find_spec("mujoco") is not None:  # the hold test says why it cannot run
+        assert main(["validate", str(path)]) == 2
+        with pytest.raises(ValueError, match="object-free"):
+            hugger.physics.validate(back)
     with pytest.raises(ValueError, match="record_object"):
         hugger.Planner(hand, hugger.objects.sphere(0.04), [0, 0, 0], start(), record_object=hugger.objects.sphere(0.04))
 

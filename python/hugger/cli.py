@@ -292,6 +292,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
     hand = _hand(args)
     case = _case(args, hand)
     searched = None
+    if args.approaches == 1 and (args.verify or args.robust_verify or args.workers is not None):
+        raise UsageError("--verify, --robust-verify and --workers choose among the grasps of --approaches K > 1")
     if args.approaches != 1:
         traj, elapsed, searched = _search(case, hand, args)
     else:
@@ -427,7 +429,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     prov = traj.provenance
     if obj is not None:
         lo, hi = obj.bounds
-        what = f"{prov.get('object', '(not recorded)')}: {len(obj.faces)} triangles, " \
+        what = f"{prov.get('object', '(unnamed)')}: {len(obj.faces)} triangles, " \
                f"{' x '.join(f'{1000 * e:.0f}' for e in hi - lo)} mm"
     else:
         what = "none recorded (planned with a skin that has no mesh)"

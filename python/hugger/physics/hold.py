@@ -70,6 +70,7 @@ def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: flo
     """
     mujoco = _mujoco()
     traj = _trajectory(traj)
+    traj.object()  # the test needs the object: an object-free plan is refused here, saying so
     k = _index(traj, k)
     squeeze = _positive("squeeze", squeeze, allow_zero=True)
     force_factor = _positive("force_factor", force_factor, allow_zero=True)
@@ -195,6 +196,7 @@ def validate_robust(traj: Any, k: int = -1, *, workers: int | None = None, bisec
     Deterministic, like :func:`validate`.
     """
     traj = _trajectory(traj)
+    traj.object()  # as validate: an object-free plan is refused, saying so
     k = _index(traj, k)
     workers = _workers("workers", workers)
     weight = NOMINAL_MASS * GRAVITY
