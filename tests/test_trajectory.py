@@ -237,3 +237,15 @@ def test_a_valid_file_from_another_writer_loads(saved, tmp_path):
     edited = {**arrays, "tip_state": arrays["tip_state"].astype(np.int64), "phase": arrays["phase"].astype(np.uint8)}
     back = hugger.Trajectory.load(_write(tmp_path, edited, compressed=False))
     assert _same(back, traj) and back.tip_state.dtype == np.int8
+
+
+def test_pickles_after_object_was_built(tmp_path):
+    # A trajectory whose object() was asked (analysis, link gaps) still goes to worker processes.
+    import pickle
+
+    case = hugger.scenarios.default_case("sphere")
+    traj = hugger.plan(case.hand, case.obj, case.target, case.palm_pose)
+    gaps = traj.link_gaps()  # builds and caches the Object
+    back = pickle.loads(pickle.dumps(traj))
+    assert same(back, traj, arrays=FILE_ARRAYS) and back._object is None and traj._object is not None
+    np.testing.assert_array_equal(back.link_gaps(), gaps)

@@ -69,6 +69,13 @@ class Trajectory:
     def __len__(self) -> int:
         return int(self.palm_pose.shape[0])
 
+    def __getstate__(self) -> dict[str, Any]:
+        # Pickled (to a worker process, say) without object()'s cached C++ Object, which cannot be
+        # pickled: the receiver builds its own from the arrays when it needs one.
+        state = dict(self.__dict__)
+        state["_object"] = None
+        return state
+
     @property
     def hand(self) -> dict[str, Any]:
         return cast(dict[str, Any], json.loads(self.hand_json))
