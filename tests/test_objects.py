@@ -50,14 +50,14 @@ def test_torus_centre_is_outside():
 
 
 @pytest.mark.parametrize("make, kwargs, message", [
-    (objects.sphere, {"radius": -0.04}, "radius must be finite and positive"),
-    (objects.sphere, {"radius": 0.0}, "radius must be finite and positive"),
-    (objects.blob, {"radius": float("inf")}, "radius must be finite and positive"),
-    (objects.ellipsoid, {"radii": (0.05, -0.04, 0.03)}, "radii must be finite and positive"),
+    (objects.sphere, {"radius": -0.04}, "radius must be a positive finite number"),
+    (objects.sphere, {"radius": 0.0}, "radius must be a positive finite number"),
+    (objects.blob, {"radius": float("inf")}, "radius must be a positive finite number"),
+    (objects.ellipsoid, {"radii": (0.05, -0.04, 0.03)}, "radii must be a positive finite number"),
     (objects.ellipsoid, {"radii": (0.05, 0.04)}, "radii must be 3 numbers"),
-    (objects.box, {"extents": (0.06, 0.0, 0.04)}, "extents must be finite and positive"),
-    (objects.cylinder, {"radius": -0.035}, "radius must be finite and positive"),
-    (objects.cylinder, {"height": float("nan")}, "height must be finite and positive"),
+    (objects.box, {"extents": (0.06, 0.0, 0.04)}, "extents must be a positive finite number"),
+    (objects.cylinder, {"radius": -0.035}, "radius must be a positive finite number"),
+    (objects.cylinder, {"height": float("nan")}, "height must be a positive finite number"),
 ])
 def test_builtin_sizes_must_be_positive(make, kwargs, message):
     # A negative size would mirror the mesh (and be refused for its inward faces, the wrong reason).

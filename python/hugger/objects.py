@@ -54,34 +54,32 @@ def _center(center: Any) -> np.ndarray:
     return c
 
 
-def _sizes(name: str, value: Any, count: int) -> np.ndarray:
-    """``value`` as ``count`` finite positive sizes, or a ValueError naming ``name``."""
+def _sizes(name: str, value: Any) -> np.ndarray:
+    """``value`` as 3 sizes, each finite and positive (``positive``), or a ValueError naming ``name``."""
     try:
-        x = np.asarray(value, dtype=np.float64).reshape(count)
+        x = np.asarray(value, dtype=np.float64).reshape(3)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be {'a number' if count == 1 else f'{count} numbers'}, got {value!r}") from None
-    if not np.all(np.isfinite(x) & (x > 0)):
-        raise ValueError(f"{name} must be finite and positive, got {value!r}")
-    return x
+        raise ValueError(f"{name} must be 3 numbers, got {value!r}") from None
+    return np.array([positive(name, v) for v in x])
 
 
 def sphere(radius: float = 0.04, center: Any = (0, 0, 0), subdivisions: int = 4) -> Object:
     """Sphere of ``radius`` (default 4 cm), 20 * 4**subdivisions triangles."""
     v, f = icosphere(subdivisions)
-    return Object(v * float(_sizes("radius", radius, 1)[0]) + _center(center), f)
+    return Object(v * positive("radius", radius) + _center(center), f)
 
 
 def ellipsoid(radii: Any = (0.05, 0.04, 0.03), center: Any = (0, 0, 0), subdivisions: int = 4) -> Object:
     """Axis-aligned ellipsoid with semi-axes ``radii`` (default 5 x 4 x 3 cm)."""
     v, f = icosphere(subdivisions)
-    return Object(v * _sizes("radii", radii, 3) + _center(center), f)
+    return Object(v * _sizes("radii", radii) + _center(center), f)
 
 
 def blob(radius: float = 0.04, amplitude: float = 0.25, seed: int = 0, center: Any = (0, 0, 0),
          subdivisions: int = 4) -> Object:
     """A smooth, non-convex, star-shaped body: a sphere whose radius varies by a few low-order
     waves of relative ``amplitude`` (random phases from ``seed``)."""
-    radius = float(_sizes("radius", radius, 1)[0])
+    radius = positive("radius", radius)
     v, f = icosphere(subdivisions)
     rng = np.random.default_rng(seed)
     scale = np.ones(len(v))
@@ -97,7 +95,7 @@ def box(extents: Any = (0.06, 0.05, 0.04), center: Any = (0, 0, 0), divisions: i
     """Axis-aligned box of full ``extents`` (default 6 x 5 x 4 cm), each face a grid of
     ``divisions`` x ``divisions`` squares."""
     n = max(1, int(divisions))
-    e = _sizes("extents", extents, 3) / 2.0
+    e = _sizes("extents", extents) / 2.0
     verts: dict[tuple[int, ...], int] = {}
     points: list[np.ndarray] = []
     faces: list[tuple[int, int, int]] = []
@@ -127,7 +125,7 @@ def box(extents: Any = (0.06, 0.05, 0.04), center: Any = (0, 0, 0), divisions: i
 def cylinder(radius: float = 0.035, height: float = 0.1, center: Any = (0, 0, 0), sections: int = 48,
              rings: int = 8) -> Object:
     """Cylinder along z of ``radius`` and ``height`` (default 3.5 x 10 cm), closed by flat caps."""
-    radius, height = float(_sizes("radius", radius, 1)[0]), float(_sizes("height", height, 1)[0])
+    radius, height = positive("radius", radius), positive("height", height)
     s, r = max(3, int(sections)), max(1, int(rings))
     ang = 2 * np.pi * np.arange(s) / s
     pts = [np.array([0.0, 0.0, -height / 2]), np.array([0.0, 0.0, height / 2])]

@@ -31,14 +31,6 @@ def _rotation_deg(q0: np.ndarray, q1: np.ndarray) -> float:
     return math.degrees(2.0 * math.acos(min(1.0, float(dot))))
 
 
-def _require_object(traj: Any) -> None:
-    """The hold test needs the object: an object-free plan is refused, saying why (without building
-    the Object, which would be cached on ``traj`` and could not be sent to worker processes)."""
-    if not traj.has_object:
-        raise ValueError("this plan is object-free (made with a skin that has no mesh): the hold test needs "
-                         "the object; give the planner record_object=")
-
-
 def touching_fingers(traj: Any, k: int = -1, distance: float = CONTACT_DISTANCE) -> np.ndarray:
     """Bool (M,): fingers with a link within ``distance`` (m) of the object at configuration k (a finger
     "touches" by the same gap as every contact of the summaries and the analysis)."""
@@ -78,7 +70,7 @@ def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: flo
     """
     mujoco = _mujoco()
     traj = _trajectory(traj)
-    _require_object(traj)
+    traj.object()  # the test needs the object: an object-free plan is refused here, saying why
     k = _index(traj, k)
     squeeze = _positive("squeeze", squeeze, allow_zero=True)
     force_factor = _positive("force_factor", force_factor, allow_zero=True)
@@ -204,7 +196,7 @@ def validate_robust(traj: Any, k: int = -1, *, workers: int | None = None, bisec
     Deterministic, like :func:`validate`.
     """
     traj = _trajectory(traj)
-    _require_object(traj)
+    traj.object()  # the test needs the object: an object-free plan is refused here, saying why
     k = _index(traj, k)
     workers = _workers("workers", workers)
     weight = NOMINAL_MASS * GRAVITY
