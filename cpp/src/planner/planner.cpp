@@ -461,7 +461,8 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
     Chain c = hand_.forward_planar(m, root, b.data());
     std::array<char, kMaxLinks> turned;
     if (!tail_to_head(*sensing_, snake_request(m, new_eta), root, c, turned.data())) continue;
-    if (!motion_ok(m, old, c, turned.data()) || !fingers_clear(m, c, others)) continue;
+    // The cheap test first: a chain that hits a finger needs no motion check.
+    if (!fingers_clear(m, c, others) || !motion_ok(m, old, c, turned.data())) continue;
     out = std::move(c);
     return true;
   }
@@ -484,7 +485,7 @@ bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others
   if (largest_move(chain, c) < params_.epsilon) return false;
   // A step the motion rules or the other fingers would refuse ends the closing here, so that the
   // ordinary rules move the finger in this same iteration.
-  if (!motion_ok(m, chain, c, turned.data()) || !fingers_clear(m, c, others)) return false;
+  if (!fingers_clear(m, c, others) || !motion_ok(m, chain, c, turned.data())) return false;
   chain = std::move(c);
   return true;
 }
@@ -758,18 +759,20 @@ void Planner::phase2_iteration() {
             c = pass == 0 ? cand[m] : old[m];
             ok = tail_to_head(*sensing_, snake_request(m, new_eta), root2d(m, new_eta), c, turned.data());
             if (!ok) ++stats_.clinging_failures;
-            if (ok && !motion_ok(m, old[m], c, turned.data())) {
-              ok = false;
-              ++stats_.motion_rejections;
-            }
             // Hug rule: a chain that would hit another finger or itself while the palm moves is
             // refused like one whose motion collides (the old chain re-attached is tried next).
+            // Tested first, as the cheaper: a chain refused so needs no motion check.
             if (ok && hug && !last) {
               checked = fingers_clear(m, c, out);
               if (!checked) {
                 ok = false;
                 ++stats_.finger_collisions;
               }
+            }
+            if (ok && !motion_ok(m, old[m], c, turned.data())) {
+              ok = false;
+              checked = false;
+              ++stats_.motion_rejections;
             }
           }
           if (!ok && may_open && !prefer_open[m]) ok = opened = open_step(m, old[m], new_eta, out, c);
