@@ -664,25 +664,55 @@ void PlaneRegion::build_cells() {
     for (int j = j0; j <= j1; ++j)
       for (int i = i0; i <= i1; ++i) cells_[static_cast<std::size_t>(j) * nx + i] = -1;
   }
-  // Each group of free cells joined by shared sides holds no boundary: one test labels it.
-  std::vector<int> stack;
-  for (int start = 0; start < nx * ny; ++start) {
-    if (cells_[start] != 2) continue;
-    const Vec2 centre = cells_lo_ + cell_ * Vec2(start % nx + 0.5, start / nx + 0.5);
-    const signed char label = inside_from(nearest(centre, centre, kInf), centre) ? 1 : 0;
-    cells_[start] = label;
-    stack.assign(1, start);
-    while (!stack.empty()) {
-      const int c = stack.back();
-      stack.pop_back();
-      const int i = c % nx, j = c / nx;
-      const int next[4] = {i > 0 ? c - 1 : -1, i + 1 < nx ? c + 1 : -1, j > 0 ? c - nx : -1, j + 1 < ny ? c + nx : -1};
-      for (const int d : next)
-        if (d >= 0 && cells_[d] == 2) {
-          cells_[d] = label;
-          stack.push_back(d);
-        }
+  // Each group of free cells joined by shared sides holds no boundary: one test labels it, at its
+  // first cell in row-major order. The groups are found row by row: the runs of free cells in a
+  // row, each joined to the runs beside it in the row below (union-find; a group's root is its
+  // first run).
+  struct Run {
+    int first, last;  ///< cell indices (row-major), one row
+  };
+  std::vector<Run> runs;
+  std::vector<int> parent;
+  auto root = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  int below = 0;  // the first run of the row below still worth comparing
+  for (int j = 0; j < ny; ++j) {
+    const int row = static_cast<int>(runs.size());
+    const signed char* c = &cells_[static_cast<std::size_t>(j) * nx];
+    for (int i = 0; i < nx;) {
+      if (c[i] != 2) {
+        ++i;
+        continue;
+      }
+      int e = i;
+      while (e + 1 < nx && c[e + 1] == 2) ++e;
+      const int id = static_cast<int>(runs.size());
+      runs.push_back({j * nx + i, j * nx + e});
+      parent.push_back(id);
+      // The runs of the row below that share a column with [i, e] (those ending before i share
+      // none with this run or the ones after it in the row).
+      while (below < row && runs[below].last - (j - 1) * nx < i) ++below;
+      for (int b = below; b < row && runs[b].first - (j - 1) * nx <= e; ++b) {
+        const int x = root(b), y = root(id);
+        if (x != y) parent[std::max(x, y)] = std::min(x, y);
+      }
+      i = e + 1;
     }
+    below = row;
+  }
+  std::vector<signed char> label(runs.size());
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const int g = root(static_cast<int>(k));
+    if (g == static_cast<int>(k)) {
+      const int start = runs[k].first;
+      const Vec2 centre = cells_lo_ + cell_ * Vec2(start % nx + 0.5, start / nx + 0.5);
+      label[k] = inside_from(nearest(centre, centre, kInf), centre) ? 1 : 0;
+    } else {
+      label[k] = label[static_cast<std::size_t>(g)];
+    }
+    std::fill(cells_.begin() + runs[k].first, cells_.begin() + runs[k].last + 1, label[k]);
   }
 }
 
