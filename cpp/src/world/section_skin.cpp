@@ -1415,7 +1415,9 @@ void PlaneRegion::mark_crossings() {
         if (t.piece == s.piece) continue;
         const Vec2 olo = box[i][0].cwiseMax(box[j][0]), ohi = box[i][1].cwiseMin(box[j][1]);
         if (olo.x() > ohi.x() || olo.y() > ohi.y()) continue;              // the boxes do not overlap
-        if (cell_of(olo.y(), 1) * g + cell_of(olo.x(), 0) != c) continue;  // tested in another cell
+        // Tested in the cell of the overlap's low corner, max of the boxes' low corners: cell_of
+        // is monotone, so that cell is the larger of their cells, each axis.
+        if (std::max(cells[i][2], cells[j][2]) * g + std::max(cells[i][0], cells[j][0]) != c) continue;
         const Vec2 d1 = s.b - s.a, d2 = t.b - t.a, w = t.a - s.a;
         const double denom = cross2(d1, d2);
         if (std::abs(denom) <= 1e-9 * d1.norm() * d2.norm()) continue;  // parallel: a junction
