@@ -300,9 +300,10 @@ TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
 // the section skin's contact_gap is at most delta exactly when the mesh world's 3D gap is (up to
 // the flattening, contact early), though the in-plane gap alone misses some of those
 // contacts; capped, it keeps its decision, and where it says no contact, it shrinks no faster
-// than the link moves in the plane (the FROZEN fingers' bounds rely on it).
+// than the link moves in the plane (the FROZEN fingers' bounds rely on it); and its lasting
+// bounds (contact_gap_bound) are exact up to need and never above the gap.
 TEST(SectionSkin, ContactGapDecidesContactInSpace) {
-  long contacts = 0, missed_in_plane = 0, checked = 0;
+  long contacts = 0, missed_in_plane = 0, checked = 0, bounded = 0, unbounded = 0, oblique = 0;
   for (const test::Mesh& m : {test::curvy(4), test::icosphere(3, Vec3(0.05, 0.03, 0.02)), test::box(Vec3(0.03, 0.02, 0.05))}) {
     Scene s(m, 5);
     for (int k = 0; k < 12; ++k) {
@@ -338,6 +339,25 @@ TEST(SectionSkin, ContactGapDecidesContactInSpace) {
           if (g <= std::max(cap, delta)) EXPECT_EQ(capped, g) << "cap " << cap;
           else EXPECT_GT(capped, cap) << "cap " << cap;
         }
+        // Bounds that last (Sensing::contact_gap_bound): exact up to need, beyond it above need and
+        // at most the gap, and at least far where the gap is; in both skins, also where the
+        // in-plane gap alone would pass far.
+        for (const double far : {1.5 * delta, 0.5 * (g + delta), 0.999 * g, 1.001 * g, 2.0 * g}) {
+          const double need = delta;
+          for (const Sensing* skin : {static_cast<const Sensing*>(&s.skin), static_cast<const Sensing*>(&s.mesh)}) {
+            const double exact = skin->contact_gap(pl, a, b, r, delta);
+            const double bound = skin->contact_gap_bound(pl, a, b, r, delta, need, far);
+            if (exact <= need) {  // the gap itself (a link deep in O may be told -inf by a capped query)
+              EXPECT_LE(bound, need) << "plane " << k << " query " << q;
+              if (exact >= 0.0) EXPECT_EQ(bound, exact) << "plane " << k << " query " << q;
+              continue;
+            }
+            EXPECT_GT(bound, need) << "plane " << k << " query " << q;
+            EXPECT_LE(bound, exact + 1e-12) << "plane " << k << " query " << q << " far " << far;
+            if (far > need && exact >= far + 1e-9) ++(bound >= far ? bounded : unbounded);
+          }
+          if (far > delta && s.skin.link(pl, a, b, r).gap >= far && g < far) ++oblique;
+        }
         // Moved within the plane by v: where g - |v| still says no contact, the gap shrank by at
         // most |v|.
         const Vec2 v = 0.01 * s.size * Vec2(s.u() - 0.5, s.u() - 0.5);
@@ -345,10 +365,13 @@ TEST(SectionSkin, ContactGapDecidesContactInSpace) {
       }
     }
   }
-  std::printf("  %ld queries, %ld contacts, %ld of them with an in-plane gap beyond delta\n", checked, contacts,
-              missed_in_plane);
+  std::printf("  %ld queries, %ld contacts, %ld of them with an in-plane gap beyond delta; bounds at far %ld "
+              "(below far %ld); %ld cases the in-plane gap alone would bound wrongly\n",
+              checked, contacts, missed_in_plane, bounded, unbounded, oblique);
   EXPECT_GE(contacts, 100);
   EXPECT_GE(missed_in_plane, 20);  // the case the gap in space is measured for
+  EXPECT_GE(bounded, 500);         // the bounds reach far where the gap does
+  EXPECT_GE(oblique, 20);          // and the gap in space is tested where it decides
 }
 
 // prepare() builds the regions of several planes side by side, each in two stages, on 1, 2 and 3

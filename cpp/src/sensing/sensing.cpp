@@ -163,6 +163,14 @@ double Sensing::contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2&
   return std::min(g, gap_in_space(plane, a, b, radius, cap));
 }
 
+double Sensing::contact_gap_bound(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                                  double delta, double need, double far) const {
+  // Beyond the cap the answer is only known to be at least the cap (above need: a skin may answer
+  // a gap beyond the cap with the cap itself).
+  const double cap = std::max(std::nextafter(need, kInf), far);
+  return std::min(contact_gap(plane, a, b, radius, delta, cap), cap);
+}
+
 RotateResult Sensing::rotate_until_touch(const RotateRequest& req) const {
   RotateResult out;
   const Vec2 arm = req.end - req.pivot;

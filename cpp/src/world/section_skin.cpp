@@ -1668,6 +1668,22 @@ double SectionSkin::gap_in_space(const FingerPlane& plane, const Vec2& a, const 
   return mesh_.capsule(wa, wb, radius, cap).gap;
 }
 
+double SectionSkin::contact_gap_bound(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                                      double delta, double need, double far) const {
+  if (!region(plane, radius)) return Sensing::contact_gap_bound(plane, a, b, radius, delta, need, far);
+  // Exact up to need, capped just above it (beyond the cap only known to be at least the cap).
+  // Beyond need, the exact gap in space beside a large flat face is a search of many triangles;
+  // two threshold tests that stop at the first piece that close say whether it is at least far:
+  // R's boundary (the in-plane gap), then the triangles (no triangle within radius + far of the
+  // axis, which lies outside R, so outside O).
+  const double cap = std::nextafter(need, kInf);
+  const double g = contact_gap(plane, a, b, radius, delta, cap);
+  if (g <= need) return g;
+  const bool beyond = far > need && !link_gap_below(plane, a, b, radius, far) &&
+                      !object_->bvh().any_within(plane.to_world(a), plane.to_world(b), std::nextafter(radius + far, kInf));
+  return beyond ? far : std::min(g, cap);
+}
+
 bool SectionSkin::link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                                  double below) const {
   // A piece of R's boundary closer than `below` to the axis: link() would find the nearest piece

@@ -249,6 +249,10 @@ class SectionSkin final : public Sensing {
   /// As link(...).gap < below, stopping at the first boundary piece closer than `below`.
   bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                       double below) const override;
+  /// Exact up to `need`; beyond it `far` where threshold tests (R's boundary, then the object's
+  /// BVH in space) find nothing within `far`, else a value just above `need`.
+  double contact_gap_bound(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double delta,
+                           double need, double far) const override;
   /// Exactly, by PlaneRegion::depth_within: no point of the axis deeper in R than `allow`.
   bool link_depth_within(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                          double allow) const override;
