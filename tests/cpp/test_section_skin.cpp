@@ -303,7 +303,8 @@ TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
 // than the link moves in the plane (the FROZEN fingers' bounds rely on it); and its lasting
 // bounds (contact_gap_bound) are exact up to need and never above the gap.
 TEST(SectionSkin, ContactGapDecidesContactInSpace) {
-  long contacts = 0, missed_in_plane = 0, checked = 0, bounded = 0, unbounded = 0, oblique = 0;
+  long contacts = 0, missed_in_plane = 0, checked = 0, oblique = 0;
+  long bounded[2] = {0, 0}, unbounded[2] = {0, 0};  // section skin, mesh world
   for (const test::Mesh& m : {test::curvy(4), test::icosphere(3, Vec3(0.05, 0.03, 0.02)), test::box(Vec3(0.03, 0.02, 0.05))}) {
     Scene s(m, 5);
     for (int k = 0; k < 12; ++k) {
@@ -344,7 +345,8 @@ TEST(SectionSkin, ContactGapDecidesContactInSpace) {
         // in-plane gap alone would pass far.
         for (const double far : {1.5 * delta, 0.5 * (g + delta), 0.999 * g, 1.001 * g, 2.0 * g}) {
           const double need = delta;
-          for (const Sensing* skin : {static_cast<const Sensing*>(&s.skin), static_cast<const Sensing*>(&s.mesh)}) {
+          for (int which = 0; which < 2; ++which) {
+            const Sensing* skin = which == 0 ? static_cast<const Sensing*>(&s.skin) : &s.mesh;
             const double exact = skin->contact_gap(pl, a, b, r, delta);
             const double bound = skin->contact_gap_bound(pl, a, b, r, delta, need, far);
             if (exact <= need) {  // the gap itself (a link deep in O may be told -inf by a capped query)
@@ -354,7 +356,7 @@ TEST(SectionSkin, ContactGapDecidesContactInSpace) {
             }
             EXPECT_GT(bound, need) << "plane " << k << " query " << q;
             EXPECT_LE(bound, exact + 1e-12) << "plane " << k << " query " << q << " far " << far;
-            if (far > need && exact >= far + 1e-9) ++(bound >= far ? bounded : unbounded);
+            if (far > need && exact >= far + 1e-9) ++(bound >= far ? bounded[which] : unbounded[which]);
           }
           if (far > delta && s.skin.link(pl, a, b, r).gap >= far && g < far) ++oblique;
         }
@@ -365,13 +367,16 @@ TEST(SectionSkin, ContactGapDecidesContactInSpace) {
       }
     }
   }
-  std::printf("  %ld queries, %ld contacts, %ld of them with an in-plane gap beyond delta; bounds at far %ld "
-              "(below far %ld); %ld cases the in-plane gap alone would bound wrongly\n",
-              checked, contacts, missed_in_plane, bounded, unbounded, oblique);
+  std::printf("  %ld queries, %ld contacts, %ld of them with an in-plane gap beyond delta; bounds at far: section "
+              "skin %ld (below far %ld), mesh world %ld (%ld); %ld cases the in-plane gap alone would bound wrongly\n",
+              checked, contacts, missed_in_plane, bounded[0], unbounded[0], bounded[1], unbounded[1], oblique);
   EXPECT_GE(contacts, 100);
   EXPECT_GE(missed_in_plane, 20);  // the case the gap in space is measured for
-  EXPECT_GE(bounded, 500);         // the bounds reach far where the gap does
-  EXPECT_GE(oblique, 20);          // and the gap in space is tested where it decides
+  for (int which = 0; which < 2; ++which) {
+    EXPECT_GE(bounded[which], 500) << "skin " << which;  // the bounds reach far where the gap does
+    EXPECT_EQ(unbounded[which], 0) << "skin " << which;
+  }
+  EXPECT_GE(oblique, 20);  // and the gap in space is tested where it decides
 }
 
 // prepare() builds the regions of several planes side by side, each in two stages, on 1, 2 and 3

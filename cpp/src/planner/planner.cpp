@@ -275,10 +275,8 @@ double Planner::frozen_gap(int m, int n, double need, bool contact) {
   const Chain& c = chains_[m];
   const Vec2 &a = n < hand_.links() ? c[n] : c[0], &b = n < hand_.links() ? c[n + 1] : c[0];
   if (contact) {
-    // Exact up to `need`, which decides contact; beyond it a bound that lasts several palm steps
-    // (at 8 s: 4 s, or 4 s and s, or 16 s asked the section skin's threshold tests more often than
-    // they spared on the built-ins).
-    lb = sensing_->contact_gap_bound(planes_[m], a, b, hand_.link_radius(), params_.contact_tolerance, need, 8.0 * s);
+    // Exact up to `need`, which decides contact; beyond it a bound that lasts several palm steps.
+    lb = sensing_->contact_gap_bound(planes_[m], a, b, hand_.link_radius(), params_.contact_tolerance, need, 4.0 * s);
     return lb;
   }
   // Ask with a wider cap than needed, so that the bound lasts several palm steps.

@@ -114,8 +114,9 @@ class Sensing {
   /// A lower bound of contact_gap() that lasts: the gap itself where it is at most `need`
   /// (>= delta), else a value above `need` and at most the gap, and at least `far` (> need) where
   /// the gap is. The planner keeps it for a FROZEN finger's link while the link moves less than
-  /// its excess over `need`. The default asks contact_gap capped at `far`; a skin whose exact gap
-  /// beyond `need` is dear may answer with threshold tests (the section skin does).
+  /// its excess over `need`. The default asks contact_gap capped at max(nextafter(need), far) (the
+  /// planner's bounds before this query existed); a skin whose exact gap beyond `need` is dear
+  /// may answer with threshold tests (the section skin does).
   virtual double contact_gap_bound(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                                    double delta, double need, double far) const;
   /// True when the capsule does not penetrate O (gap >= 0). `a_outside`: the caller knows that
