@@ -47,8 +47,16 @@ def icosphere(subdivisions: int = 3) -> tuple[np.ndarray, np.ndarray]:
     return np.array(verts), np.array(faces, dtype=np.int64)
 
 
+def _three(name: str, value: Any) -> np.ndarray:
+    """``value`` as 3 floats, or a ValueError naming ``name``."""
+    try:
+        return np.asarray(value, dtype=np.float64).reshape(3)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be 3 numbers, got {value!r}") from None
+
+
 def _center(center: Any) -> np.ndarray:
-    c = np.asarray(center, dtype=np.float64).reshape(3)
+    c = _three("center", center)
     if not np.all(np.isfinite(c)):
         raise ValueError("center must be finite")
     return c
@@ -56,11 +64,7 @@ def _center(center: Any) -> np.ndarray:
 
 def _sizes(name: str, value: Any) -> np.ndarray:
     """``value`` as 3 sizes, each finite and positive (``positive``), or a ValueError naming ``name``."""
-    try:
-        x = np.asarray(value, dtype=np.float64).reshape(3)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be 3 numbers, got {value!r}") from None
-    return np.array([positive(name, v) for v in x])
+    return np.array([positive(name, v) for v in _three(name, value)])
 
 
 def sphere(radius: float = 0.04, center: Any = (0, 0, 0), subdivisions: int = 4) -> Object:

@@ -72,6 +72,19 @@ void close_pairs(std::vector<IdPoint>& pts, F&& f) {
     }
 }
 
+/// Union-find over `parent` (each index its own root at first): the root of x's set, halving the
+/// path on the way. join() hangs the larger root under the smaller, so a set's root is its least
+/// index.
+inline int set_root(std::vector<int>& parent, int x) {
+  while (parent[x] != x) x = parent[x] = parent[parent[x]];
+  return x;
+}
+inline void join_sets(std::vector<int>& parent, int x, int y) {
+  x = set_root(parent, x);
+  y = set_root(parent, y);
+  if (x != y) parent[std::max(x, y)] = std::min(x, y);
+}
+
 /// The end a boundary segment leads to when walked with R on the left (along its outward normal
 /// turned a quarter to the left), and the end it comes from.
 inline const Vec2& head_of(const PlaneRegion::Segment& s) { return (s.b - s.a).dot(left_of(s.normal)) >= 0.0 ? s.b : s.a; }
@@ -350,16 +363,9 @@ void PlaneRegion::simplify(double tol) {
   for (int e = 0; e < 2 * n; ++e) ends[e] = {point(e).x(), point(e).y(), e};
   std::vector<int> parent(2 * n);
   for (int i = 0; i < 2 * n; ++i) parent[i] = i;
-  auto root = [&](int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  close_pairs(ends, [&](std::size_t i, std::size_t j) {
-    const int x = root(ends[i].id), y = root(ends[j].id);
-    if (x != y) parent[std::max(x, y)] = std::min(x, y);
-  });
+  close_pairs(ends, [&](std::size_t i, std::size_t j) { join_sets(parent, ends[i].id, ends[j].id); });
   std::vector<int> vertex(2 * n);  // each end's vertex (its root end)
-  for (int e = 0; e < 2 * n; ++e) vertex[e] = root(e);
+  for (int e = 0; e < 2 * n; ++e) vertex[e] = set_root(parent, e);
   // A segment whose two ends are one vertex (an arc shorter than kJoin, where two pieces meet)
   // is left out: the chain through its vertex joins its neighbours at one point.
   std::vector<char> used(n, 0);
@@ -673,10 +679,6 @@ void PlaneRegion::build_cells() {
   };
   std::vector<Run> runs;
   std::vector<int> parent;
-  auto root = [&](int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
   int below = 0;  // the first run of the row below still worth comparing
   for (int j = 0; j < ny; ++j) {
     const int row = static_cast<int>(runs.size());
@@ -694,17 +696,14 @@ void PlaneRegion::build_cells() {
       // The runs of the row below that share a column with [i, e] (those ending before i share
       // none with this run or the ones after it in the row).
       while (below < row && runs[below].last - (j - 1) * nx < i) ++below;
-      for (int b = below; b < row && runs[b].first - (j - 1) * nx <= e; ++b) {
-        const int x = root(b), y = root(id);
-        if (x != y) parent[std::max(x, y)] = std::min(x, y);
-      }
+      for (int b = below; b < row && runs[b].first - (j - 1) * nx <= e; ++b) join_sets(parent, b, id);
       i = e + 1;
     }
     below = row;
   }
   std::vector<signed char> label(runs.size());
   for (std::size_t k = 0; k < runs.size(); ++k) {
-    const int g = root(static_cast<int>(k));
+    const int g = set_root(parent, static_cast<int>(k));
     if (g == static_cast<int>(k)) {
       const int start = runs[k].first;
       const Vec2 centre = cells_lo_ + cell_ * Vec2(start % nx + 0.5, start / nx + 0.5);
@@ -1660,12 +1659,16 @@ Touch SectionSkin::link(const FingerPlane& plane, const Vec2& a, const Vec2& b, 
 double SectionSkin::gap_in_space(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                                  double cap) const {
   if (!region(plane, radius)) return kInf;  // link() measured in space already
-  // The axis is outside R, so outside O: its gap in space exceeds the cap exactly when no
-  // triangle comes within radius + cap of it, a test that stops at the first one.
   const double c = std::max(cap, 0.0);
-  const Vec3 wa = plane.to_world(a), wb = plane.to_world(b);
-  if (!object_->bvh().any_within(wa, wb, std::nextafter(radius + c, kInf))) return std::nextafter(c, kInf);
-  return mesh_.capsule(wa, wb, radius, cap).gap;
+  if (!gap_in_space_below(plane, a, b, radius, c)) return std::nextafter(c, kInf);
+  return mesh_.capsule(plane.to_world(a), plane.to_world(b), radius, cap).gap;
+}
+
+bool SectionSkin::gap_in_space_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                                     double level) const {
+  // The axis is outside R, so outside O: its gap in space exceeds level exactly when no triangle
+  // comes within radius + level of it, a test that stops at the first one.
+  return object_->bvh().any_within(plane.to_world(a), plane.to_world(b), std::nextafter(radius + level, kInf));
 }
 
 double SectionSkin::contact_gap_bound(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
@@ -1674,13 +1677,12 @@ double SectionSkin::contact_gap_bound(const FingerPlane& plane, const Vec2& a, c
   // Exact up to need, capped just above it (beyond the cap only known to be at least the cap).
   // Beyond need, the exact gap in space beside a large flat face is a search of many triangles;
   // two threshold tests that stop at the first piece that close say whether it is at least far:
-  // R's boundary (the in-plane gap), then the triangles (no triangle within radius + far of the
-  // axis, which lies outside R, so outside O).
+  // R's boundary (the in-plane gap), then the triangles (the axis then lies outside R).
   const double cap = std::nextafter(need, kInf);
   const double g = contact_gap(plane, a, b, radius, delta, cap);
   if (g <= need) return g;
-  const bool beyond = far > need && !link_gap_below(plane, a, b, radius, far) &&
-                      !object_->bvh().any_within(plane.to_world(a), plane.to_world(b), std::nextafter(radius + far, kInf));
+  const bool beyond =
+      far > need && !link_gap_below(plane, a, b, radius, far) && !gap_in_space_below(plane, a, b, radius, far);
   return beyond ? far : std::min(g, cap);
 }
 

@@ -32,11 +32,13 @@ def _floats(a: Any, fmt: str = "{:.17g}") -> str:
     return " ".join(fmt.format(float(x)) for x in np.asarray(a, dtype=np.float64).ravel())
 
 
-def _trajectory(traj: Any) -> Trajectory:
+def _trajectory(traj: Any, needs_object: bool = False) -> Trajectory:
     if isinstance(traj, (str, os.PathLike)):
-        return Trajectory.load(traj)
-    if not isinstance(traj, Trajectory):
+        traj = Trajectory.load(traj)
+    elif not isinstance(traj, Trajectory):
         raise ValueError(f"traj must be a hugger.Trajectory or a path to a trajectory file, got {type(traj).__name__}")
+    if needs_object:
+        traj.object()  # an object-free plan is refused here, saying why
     return traj
 
 

@@ -69,8 +69,7 @@ def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: flo
     True`` and is not held. MuJoCo is deterministic here: the same input gives the identical output.
     """
     mujoco = _mujoco()
-    traj = _trajectory(traj)
-    traj.object()  # the test needs the object: an object-free plan is refused here, saying why
+    traj = _trajectory(traj, needs_object=True)
     k = _index(traj, k)
     squeeze = _positive("squeeze", squeeze, allow_zero=True)
     force_factor = _positive("force_factor", force_factor, allow_zero=True)
@@ -195,8 +194,7 @@ def validate_robust(traj: Any, k: int = -1, *, workers: int | None = None, bisec
     push of ``9.81 N / 2**bisect_steps`` is lost); ``max_force_factor`` is it over the weight.
     Deterministic, like :func:`validate`.
     """
-    traj = _trajectory(traj)
-    traj.object()  # the test needs the object: an object-free plan is refused here, saying why
+    traj = _trajectory(traj, needs_object=True)
     k = _index(traj, k)
     workers = _workers("workers", workers)
     weight = NOMINAL_MASS * GRAVITY

@@ -294,6 +294,9 @@ class SectionSkin final : public Sensing {
                       double cap) const override;
 
  private:
+  /// Its threshold test alone, for an axis outside R: some triangle within radius + level (>= 0).
+  bool gap_in_space_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                          double level) const;
   struct Entry;
   /// The region of the plane and radius if built, else nullptr (no lock).
   const PlaneRegion* find(const FingerPlane& plane, double radius) const;
