@@ -34,12 +34,14 @@ def _floats(a: Any, fmt: str = "{:.17g}") -> str:
 
 def _trajectory(traj: Any, needs_object: bool = False) -> Trajectory:
     if isinstance(traj, (str, os.PathLike)):
-        traj = Trajectory.load(traj)
-    elif not isinstance(traj, Trajectory):
+        out = Trajectory.load(traj)
+    elif isinstance(traj, Trajectory):
+        out = traj
+    else:
         raise ValueError(f"traj must be a hugger.Trajectory or a path to a trajectory file, got {type(traj).__name__}")
     if needs_object:
-        traj.object()  # an object-free plan is refused here, saying why
-    return traj
+        out.object()  # an object-free plan is refused here, saying why
+    return out
 
 
 def _index(traj: Trajectory, k: Any) -> int:
