@@ -7,8 +7,11 @@ planners are timed, wall clock (``time.perf_counter``):
 
   mesh, section  Hugger with ``skin="mesh"`` and ``skin="section"`` (rules ``hug``, the default).
                  setup = building the ``hugger.Object`` from the case's vertex and face arrays
-                 (the engine's checks, normals, BVH) + constructing the Planner (its checks and
-                 Phase 1); plan = ``Planner.plan()`` (Phase 2 and the trajectory handed to Python).
+                 (the engine's checks, normals, BVH) + constructing the Planner (its checks,
+                 Phase 1 and, with the section skin, the regions of the finger planes, which the
+                 constructor builds once Phase 1 has ended; the speed targets, docs/performance.md,
+                 count the object build and the sections as setup); plan = ``Planner.plan()`` (Phase 2 and the trajectory
+                 handed to Python).
   baseline       :func:`hugger.baselines.plan_baseline`, measured as bench/compare_baseline.py does
                  it: setup = its ``stats["setup_time_s"]`` (building and compiling the MuJoCo model,
                  convex pieces from the cache; the Object is given ready-made), plan = its
@@ -207,7 +210,8 @@ def markdown(result: dict[str, Any]) -> str:
         f"Wall clock (time.perf_counter), medians over {result['repeat']} repeats after one untimed warm-up "
         "round; each repeat a round robin over object x planner. Start: `hugger.scenarios.default_case`, "
         "default hand (5 x 5 links of 2 cm). mesh / section: Hugger (rules hug) with that skin; setup = "
-        "`hugger.Object(V, F)` + `Planner(...)` (checks, BVH, Phase 1), plan = `.plan()`. baseline: "
+        "`hugger.Object(V, F)` + `Planner(...)` (checks, BVH, Phase 1, the section skin's regions), plan = "
+        "`.plan()` (Phase 2). baseline: "
         "`hugger.baselines.plan_baseline`; setup = building and compiling the MuJoCo model (Object given, "
         "convex pieces from the cache), plan = its loop of collision queries (as bench/compare_baseline.py "
         "measures them). Speed is reported, not asserted.",

@@ -178,6 +178,9 @@ void Planner::plan_phase1(const Pose& start) {
   closed_.assign(hand_.fingers(), 0);
   opened_.assign(hand_.fingers(), 0);
   reclosing_.assign(hand_.fingers(), 0);
+  // The finger planes are fixed from here on: a hint that lets a skin build its per-plane
+  // structures now, as setup, so that Phase 2's iterations (streamed one by one) carry none of it.
+  sensing_->prepare(planes_, hand_.link_radius());
 }
 
 Vec2 Planner::root2d(int m, double eta) const {
@@ -575,10 +578,6 @@ void Planner::phase2_iteration() {
   const double r = hand_.link_radius();
   const bool hug = params_.rules == Rules::kHug;
   const long it = stats_.phase2_iterations;
-  if (!phase2_started_) {
-    sensing_->prepare(planes_, r);  // a hint: a skin may build its per-plane structures now
-    phase2_started_ = true;
-  }
   // A FROZEN finger becomes CONTACT (palm contact, or the hand blocked); under the hug rules it
   // never touched O, so it closes all its joints until it touches.
   auto release = [&](std::vector<TipState>& st, int m) {

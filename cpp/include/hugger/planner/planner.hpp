@@ -178,7 +178,6 @@ class Planner {
   PlannerStats stats_;
 
   // Phase 2 state: each finger lives in a fixed plane; the palm has moved eta_ along p.
-  bool phase2_started_ = false;
   Pose palm2_ = Pose::Identity();  ///< palm pose when Phase 2 started
   std::vector<FingerPlane> planes_;
   std::vector<Chain> chains_;

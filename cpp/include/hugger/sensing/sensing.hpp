@@ -141,9 +141,10 @@ class Sensing {
   virtual bool link_depth_within(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                                  double allow) const;
 
-  /// A hint, once at the start of Phase 2: link queries in these finger planes, for links of
-  /// `radius`, follow. A skin that builds a structure per plane (the section skin) may build them
-  /// now, side by side; the default does nothing. Answers never depend on it.
+  /// A hint, once when Phase 1 has ended (in the Planner's constructor, before Phase 2): link
+  /// queries in these finger planes, for links of `radius`, follow. A skin that builds a
+  /// structure per plane (the section skin) may build them now, side by side; the default does
+  /// nothing. Answers never depend on it.
   virtual void prepare(const std::vector<FingerPlane>& planes, double radius) const {
     (void)planes;
     (void)radius;
