@@ -10,7 +10,11 @@ Figures (medians over R repeats, wall-clock seconds; inputs built before any clo
   core_plan       the same with the trajectory left in C++ (_core plan only): the cost of planning
   step_loop       the same plan driven from Python one configuration at a time (Planner.step()),
                   i.e. what streaming to a robot costs; step_overhead_us is the per-configuration
-                  difference to core_plan
+                  difference to core_plan; constructor_s the Planner's constructor (checks, Phase 1,
+                  the section skin's regions), step_p50_us and step_max_ms one step() call's time
+                  (the median over Phase 2's configurations, the largest over the plan's (the
+                  configurations of Phase 1, planned by the constructor, are handed out at once);
+                  medians over the repeats)
   plan_many       C independent cases (the paper's scenario from C start directions) with
                   hugger.plan_many on 1 thread and on K threads; speedup = t(1) / t(K)
 
@@ -72,11 +76,24 @@ def main(argv: list[str] | None = None) -> int:
 
     t_core, planner = timed(core_plan, args.repeat)
 
+    constructor, step_p50, step_max = [], [], []
+
     def step_loop():
+        t0 = time.perf_counter()
         p = hugger.Planner(hand, obj, target, pose)
-        n = 0
-        while p.step() is not None:
+        constructor.append(time.perf_counter() - t0)
+        n, times, phase2 = 0, [], []
+        while True:
+            t = time.perf_counter()
+            c = p.step()
+            times.append(time.perf_counter() - t)
+            if c is None:
+                break
+            if c.phase == 2:
+                phase2.append(times[-1])
             n += 1
+        step_p50.append(statistics.median(phase2))
+        step_max.append(max(times))
         return n
 
     t_step, n_steps = timed(step_loop, args.repeat)
@@ -98,6 +115,9 @@ def main(argv: list[str] | None = None) -> int:
         "step_loop_s": t_step,
         "step_configurations": n_steps,
         "step_overhead_us": (t_step - t_core) / max(n_steps, 1) * 1e6,
+        "constructor_s": statistics.median(constructor),
+        "step_p50_phase2_us": statistics.median(step_p50) * 1e6,
+        "step_max_ms": statistics.median(step_max) * 1e3,
         "configurations_per_s_plan": len(traj) / t_plan,
         "plan_many_cases": args.cases,
         "plan_many_configurations": confs,

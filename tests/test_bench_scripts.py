@@ -64,6 +64,17 @@ def test_plan_digest_is_repeatable_and_tells_plans_apart(capsys):
     assert bad.value.code == 2
 
 
+def test_bench_python_reports_the_streaming_figures(capsys):
+    mod = bench_module("bench_python")
+    assert mod.main(["--repeat", "1", "--cases", "1", "--threads", "1", "--json"]) == 0
+    f = json.loads(capsys.readouterr().out)
+    assert f["status"] == "done"
+    assert f["step_configurations"] == f["configurations"]  # step() hands out the plan() trajectory's configurations
+    assert f["constructor_s"] > 0 and f["step_p50_phase2_us"] > 0
+    assert f["step_max_ms"] * 1e3 >= f["step_p50_phase2_us"]  # the largest step is no shorter than the median
+    assert f["plan_many_identical_results"] is True
+
+
 OPTIONAL = {"mujoco", "ray", "viser", "matplotlib", "coacd", "trimesh", "yourdfpy", "imageio", "imageio_ffmpeg", "fcl"}
 
 

@@ -243,6 +243,27 @@ TEST(SectionSkin, PlansAreCollisionFreeIn3DAndDeterministic) {
   }
 }
 
+// The Planner's constructor hands the skin the Phase 2 planes once Phase 1 has fixed them
+// (Sensing::prepare): the section skin builds their regions then, so that no Phase 2 iteration
+// carries that work, and Phase 2 asks in no other plane.
+TEST(SectionSkin, TheConstructorBuildsThePhase2Regions) {
+  const test::Mesh m = test::curvy(4);
+  auto object = std::make_shared<const Object>(m.vertices, m.faces);
+  const HandModel hand = HandModel::uniform(5, 5, 0.02, 0.004, 0.03, 0.01);
+  Pose start = Pose::Identity();
+  start.linear() = Eigen::AngleAxisd(0.7, Vec3::UnitY()).toRotationMatrix() *
+                   Eigen::AngleAxisd(kPi, Vec3::UnitX()).toRotationMatrix();
+  start.translation() = Vec3(0, 0, 0.2);
+  auto skin = std::make_shared<SectionSkin>(object);
+  ASSERT_EQ(skin->regions(), 0);
+  Planner planner(hand, skin, Vec3::Zero(), start);
+  EXPECT_EQ(skin->regions(), hand.fingers());  // five fingers, five planes: none shared
+  ASSERT_TRUE(planner.advance());               // the first Phase 2 iteration
+  EXPECT_EQ(skin->regions(), hand.fingers());
+  EXPECT_EQ(planner.plan(), Status::kDone);
+  EXPECT_EQ(skin->regions(), hand.fingers());
+}
+
 TEST(SectionSkin, RegionSizeBarelyGrowsWithTheMesh) {
   // A plane through a sphere of radius 4 cm, link radius 4 mm: the boundary pieces are one ring
   // of features, so their number grows with the square root of the triangle count, and the
