@@ -6,9 +6,10 @@ length) of the 5x5 hand), Hugger with each rule set (`hug`, the default, and `pa
 baseline start from :func:`hugger.scenarios.default_case`'s pose;
 the table gives, per planner:
 
-* time to grasp: wall-clock of the planning itself (Hugger: ``Planner.plan()``; baseline: its
-  loop of MuJoCo collision queries) and of its setup (Hugger: building the planner, i.e. the
-  object's BVH; baseline: building and compiling the MuJoCo model, convex pieces from cache);
+* time to grasp: wall-clock of the planning itself (Hugger: ``Planner.plan()``, Phase 2; baseline:
+  its loop of MuJoCo collision queries) and of its setup (Hugger: constructing the Planner, i.e.
+  its checks, Phase 1 and the section skin's regions of the finger planes (the Object is built
+  before the clock); baseline: building and compiling the MuJoCo model, convex pieces from cache);
 * links in contact and palm contact (gap <= 1 mm), the Ferrari-Canny epsilon and the grasp wrench
   space volume over all contacts (:func:`hugger.analysis.analyze`, mu 0.5, torques about T);
 * the six-direction hold test of :func:`hugger.physics.validate` (0.1 kg, mu 0.6, 10x weight).

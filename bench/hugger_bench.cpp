@@ -9,7 +9,6 @@
 // starts. Figures are medians over the R repeats; per-iteration percentiles pool the Phase 2
 // iterations of all repeats. Release builds only: a build without NDEBUG refuses to run
 // unless --allow-debug is given, and then marks every figure as such.
-#include <malloc.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -28,6 +27,10 @@
 #include <thread>
 #include <unordered_map>
 #include <vector>
+
+#if defined(__GLIBC__)
+#include <malloc.h>  // malloc_trim
+#endif
 
 #include "hugger/planner/planner.hpp"
 #include "hugger/world/object.hpp"
@@ -237,7 +240,9 @@ Result run(const Scenario& sc, const std::string& skin, int repeats) {
         const Planner probe(hand, std::make_shared<NothingSensed>(), target, start);
         for (int m = 0; m < hand.fingers(); ++m) planes.push_back(hand.plane(probe.history().back().palm, m));
       }
+#if defined(__GLIBC__)
       malloc_trim(0);
+#endif
     }
     for (int k = 0; k < repeats; ++k) {
       per_iteration.reserve(per_iteration.size() + iterations);

@@ -91,7 +91,8 @@ def _planner_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--skin", choices=SKINS,
                    help="sensing skin: section (2D per finger plane, the default) or mesh (exact 3D queries, the reference)")
     g.add_argument("--timeout", type=float, metavar="SECONDS",
-                   help="stop planning after this long, with status 'timeout' and a valid partial plan")
+                   help="stop planning Phase 2 after this long, with status 'timeout' and a valid partial "
+                        "plan (Phase 1 and the finger planes' regions come before it)")
 
 
 def _case_options(p: argparse.ArgumentParser) -> None:

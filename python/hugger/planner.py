@@ -150,7 +150,8 @@ class Planner:
         ``timeout`` (seconds, positive finite, or None for no limit) bounds the wall-clock time of
         this call: past it the plan stops with status ``timeout`` and the trajectory holds every
         configuration planned so far (a valid, collision-free partial plan). A timed-out plan has
-        ended; Phase 1, done when the planner was made, is not counted.
+        ended; Phase 1 and the section skin's regions of the finger planes, both made when the
+        planner was made, are not counted.
         """
         limit = _timeout(timeout)  # refused before anything changes
         try:
@@ -181,6 +182,7 @@ class Planner:
 
 def plan(hand: Hand, obj: Object, target: Any, palm_pose: Any, timeout: float | None = None,
          **params: Any) -> Trajectory:
-    """Plan in one call: ``Planner(hand, obj, target, palm_pose, **params).plan(timeout)``."""
+    """Plan in one call: ``Planner(hand, obj, target, palm_pose, **params).plan(timeout)``
+    (``timeout`` bounds ``plan()``: the constructor's Phase 1 and regions come before it)."""
     limit = _timeout(timeout)  # checked before any planning
     return Planner(hand, obj, target, palm_pose, **params).plan(limit)

@@ -79,8 +79,11 @@ struct PlannerStats {
 
 class Planner {
  public:
-  /// Checks the inputs and plans Phase 1. Throws std::invalid_argument when the palm pose is
-  /// not rigid, a parameter is out of range, or the hand touches O at C_init or during Phase 1.
+  /// Checks the inputs and plans Phase 1, then hands the skin the finger planes of Phase 2
+  /// (Sensing::prepare: the section skin builds their regions, a few milliseconds on its
+  /// threads; what it throws, such as std::bad_alloc, propagates from here). Throws
+  /// std::invalid_argument when the palm pose is not rigid, a parameter is out of range, or the
+  /// hand touches O at C_init or during Phase 1.
   Planner(HandModel hand, std::shared_ptr<const Sensing> sensing, const Vec3& target, const Pose& palm_pose,
           PlannerParams params = {});
 
@@ -94,7 +97,8 @@ class Planner {
   /// Runs to the end; returns the final status. With a finite `timeout` (seconds, > 0) the plan
   /// stops with Status::kTimeout once that much wall-clock time has passed since the call: the
   /// deadline is checked before every Phase 2 iteration, so the history stays a valid (partial)
-  /// trajectory and the overrun is at most one iteration. A timed-out plan has ended for good.
+  /// trajectory and the overrun is at most one iteration (Phase 1 and the skin's preparation,
+  /// done by the constructor, are not counted). A timed-out plan has ended for good.
   /// Throws std::invalid_argument when `timeout` is NaN or not positive.
   Status plan(double timeout = kInf);
 

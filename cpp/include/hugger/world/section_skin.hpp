@@ -222,7 +222,8 @@ class PlaneRegion {
 };
 
 /// The section skin (docs/performance.md): answers link queries given in finger-plane
-/// coordinates from the plane's PlaneRegion (built on first use, once per plane and radius);
+/// coordinates from the plane's PlaneRegion (built by prepare(), which the Planner's constructor
+/// calls with the Phase 2 planes, or on first use; once per plane and radius);
 /// capsule and palm queries in the world, and the higher-level queries' world-frame parts, go
 /// to the mesh world. Thread-safe: regions are built under a lock and then only read.
 class SectionSkin final : public Sensing {
@@ -273,7 +274,9 @@ class SectionSkin final : public Sensing {
   void prepare(const std::vector<FingerPlane>& planes, double radius) const override;
 
   /// The region of a plane and radius, built on first use; nullptr past kMaxRegions regions
-  /// (queries in further planes then go to the mesh world).
+  /// (queries in further planes then go to the mesh world). A skin shared by several planners
+  /// spends its regions as they are made (each Planner's constructor prepares its planes, run or
+  /// not): past about twelve hands of five fingers, give each planner a skin of its own.
   const PlaneRegion* region(const FingerPlane& plane, double radius) const;
   /// How many regions are built so far.
   int regions() const { return count_.load(std::memory_order_acquire); }
