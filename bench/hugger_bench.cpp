@@ -236,10 +236,7 @@ Result run(const Scenario& sc, const std::string& skin, int repeats) {
     // that the timed builds touch as many fresh pages as without it.
     std::vector<FingerPlane> planes;
     if (skin == "section") {
-      {
-        const Planner probe(hand, std::make_shared<NothingSensed>(), target, start);
-        for (int m = 0; m < hand.fingers(); ++m) planes.push_back(hand.plane(probe.history().back().palm, m));
-      }
+      planes = Planner(hand, std::make_shared<NothingSensed>(), target, start).planes();
 #if defined(__GLIBC__)
       malloc_trim(0);
 #endif

@@ -274,16 +274,16 @@ double Planner::frozen_gap(int m, int n, double need, bool contact) {
   const std::size_t parts = static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1);
   double& lb = frozen_lb_[(contact ? parts : 0) + static_cast<std::size_t>(m) * (hand_.links() + 1) + n];
   if (lb > need) return lb;
-  const double s = params_.step;
+  const double far = 4.0 * params_.step;  // beyond need, a bound that lasts several palm steps
   const Chain& c = chains_[m];
   const Vec2 &a = n < hand_.links() ? c[n] : c[0], &b = n < hand_.links() ? c[n + 1] : c[0];
   if (contact) {
-    // Exact up to `need`, which decides contact; beyond it a bound that lasts several palm steps.
-    lb = sensing_->contact_gap_bound(planes_[m], a, b, hand_.link_radius(), params_.contact_tolerance, need, 4.0 * s);
+    // Exact up to `need`, which decides contact.
+    lb = sensing_->contact_gap_bound(planes_[m], a, b, hand_.link_radius(), params_.contact_tolerance, need, far);
     return lb;
   }
-  // Ask with a wider cap than needed, so that the bound lasts several palm steps.
-  const double cap = std::max(need, 4.0 * s);
+  // Ask with a wider cap than needed.
+  const double cap = std::max(need, far);
   const double g = link_gap(m, a, b, cap);
   lb = std::min(g, cap);  // beyond the cap the answer is only known to be at least the cap
   return lb;

@@ -105,6 +105,8 @@ class Planner {
   Status status() const { return status_; }
   bool finished() const { return status_ != Status::kRunning && next_ >= history_.size(); }
   const std::vector<Configuration>& history() const { return history_; }
+  /// The finger planes of Phase 2, one per finger, fixed where Phase 1 leaves the palm.
+  const std::vector<FingerPlane>& planes() const { return planes_; }
   const HandModel& hand() const { return hand_; }
   const PlannerParams& params() const { return params_; }
   const PlannerStats& stats() const { return stats_; }
