@@ -453,6 +453,46 @@ TEST(SectionSkin, PrepareBuildsTheSameRegionsSideBySide) {
   }
 }
 
+// Every query looks up its plane's region (a table of hashes of u and the radius, then a scan):
+// planes that hash alike (the same u, other origins) and another radius each get their own
+// region, in any order of queries; a zero's sign (equal planes, other hashes) finds the same.
+TEST(SectionSkin, FindsEachPlanesRegionWhateverItsHash) {
+  const auto m = test::curvy(3);
+  const auto object = std::make_shared<Object>(m.vertices, m.faces);
+  const double r = 0.004;
+  std::vector<FingerPlane> planes;
+  for (int k = 0; k < 4; ++k) {
+    FingerPlane f;  // u = x, p = z: the normal is -y
+    f.origin = object->bounds().centre() + Vec3(0.0, 0.004 * k, 0.0);
+    planes.push_back(f);
+  }
+  SectionSkin skin(object, kFlatten);
+  std::vector<const PlaneRegion*> first;
+  for (const FingerPlane& f : planes) first.push_back(skin.region(f, r));
+  const PlaneRegion* other_radius = skin.region(planes[0], 2.0 * r);
+  ASSERT_EQ(skin.regions(), 5);
+  for (std::size_t k = 0; k < planes.size(); ++k) {
+    ASSERT_NE(first[k], nullptr);
+    EXPECT_NE(first[k], other_radius);
+    for (std::size_t j = 0; j < k; ++j) EXPECT_NE(first[k], first[j]) << k << " " << j;
+    // The region is that plane's: a skin of its own builds the same boundary.
+    const SectionSkin alone(object, kFlatten);
+    const PlaneRegion* own = alone.region(planes[k], r);
+    ASSERT_EQ(first[k]->segments().size(), own->segments().size()) << k;
+    EXPECT_EQ(first[k]->segments().front().a, own->segments().front().a) << k;
+  }
+  std::mt19937 rng(5);
+  for (int q = 0; q < 200; ++q) {
+    const std::size_t k = rng() % planes.size();
+    EXPECT_EQ(skin.region(planes[k], r), first[k]) << q;
+    if (q % 7 == 0) EXPECT_EQ(skin.region(planes[0], 2.0 * r), other_radius) << q;
+  }
+  FingerPlane signed_zero = planes[1];
+  signed_zero.u.y() = -0.0;
+  EXPECT_EQ(skin.region(signed_zero, r), first[1]);
+  EXPECT_EQ(skin.regions(), 5);  // found, not built again
+}
+
 // rotate_until_free in closed form: against a brute-force sweep of fine angles both ways (the
 // section skin's own clearance test), on random colliding links in random planes, with and
 // without a front plane: the result is free, never nearer than the smallest free angle, at most

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <condition_variable>
+#include <cstring>
 #include <exception>
 #include <stdexcept>
 #include <string>
@@ -1491,6 +1492,20 @@ bool same_plane(const FingerPlane& x, double rx, const FingerPlane& y, double ry
   return same(x.u, y.u) && rx == ry && same(x.origin, y.origin) && same(x.p, y.p);
 }
 
+/// The hash of a plane and radius for find()'s table: a mix of the bits of u's first two coordinates (a hand's
+/// finger planes differ in u) and of the radius. Equal planes (same_plane) hash alike but for
+/// the sign of a zero, which only sends that query to the scan.
+std::size_t plane_hash(const FingerPlane& plane, double radius) {
+  auto bits = [](double x) {
+    std::uint64_t b;
+    std::memcpy(&b, &x, sizeof b);
+    return b;
+  };
+  const std::uint64_t h = bits(plane.u.x()) * 0x9E3779B97F4A7C15ull ^ bits(plane.u.y()) * 0xC2B2AE3D27D4EB4Full ^
+                          bits(radius) * 0x165667B19E3779F9ull;
+  return static_cast<std::size_t>(h ^ (h >> 32));
+}
+
 bool finite_plane(const FingerPlane& plane, double radius) {
   return radius >= 0.0 && std::isfinite(radius) && plane.origin.allFinite() && plane.u.allFinite() &&
          plane.p.allFinite();
@@ -1499,20 +1514,17 @@ bool finite_plane(const FingerPlane& plane, double radius) {
 }  // namespace
 
 const PlaneRegion* SectionSkin::find(const FingerPlane& plane, double radius) const {
-  const int n = count_.load(std::memory_order_acquire);
-  // Queries come in runs in one plane: try this thread's last hit first (a hint, checked like
-  // every other slot; entries are unique, so any match is the one).
-  thread_local int last = 0;
-  if (last < n) {
-    const Entry* e = slots_[last].load(std::memory_order_acquire);
+  // Every query asks for its plane's region, and the fingers' queries interleave: the table of
+  // hashes answers most with one comparison (a miss or a collision falls back to the scan).
+  const int hinted = by_hash_[plane_hash(plane, radius) % kHashSlots].load(std::memory_order_acquire);
+  if (hinted > 0) {
+    const Entry* e = slots_[hinted - 1].load(std::memory_order_acquire);
     if (same_plane(e->plane, e->radius, plane, radius)) return &e->region;
   }
+  const int n = count_.load(std::memory_order_acquire);
   for (int i = 0; i < n; ++i) {
     const Entry* e = slots_[i].load(std::memory_order_acquire);
-    if (same_plane(e->plane, e->radius, plane, radius)) {
-      last = i;
-      return &e->region;
-    }
+    if (same_plane(e->plane, e->radius, plane, radius)) return &e->region;
   }
   return nullptr;
 }
@@ -1528,6 +1540,8 @@ const PlaneRegion* SectionSkin::insert(std::unique_ptr<Entry> entry) const {
   const Entry* raw = entry.get();
   owned_.push_back(std::move(entry));
   slots_[m].store(raw, std::memory_order_release);
+  std::atomic<int>& hinted = by_hash_[plane_hash(raw->plane, raw->radius) % kHashSlots];
+  if (hinted.load(std::memory_order_relaxed) == 0) hinted.store(m + 1, std::memory_order_release);
   count_.store(m + 1, std::memory_order_release);
   return &raw->region;
 }

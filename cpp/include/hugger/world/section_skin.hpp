@@ -313,6 +313,10 @@ class SectionSkin final : public Sensing {
   mutable std::mutex build_mutex_;  ///< region(): one thread builds a new plane's region at a time
   mutable std::vector<std::unique_ptr<Entry>> owned_;
   mutable std::array<std::atomic<const Entry*>, kMaxRegions> slots_{};
+  /// find()'s table: slot index + 1 of the entry whose plane and radius hash there (0: none; a
+  /// later entry of the same hash is found by the scan instead).
+  static constexpr int kHashSlots = 128;
+  mutable std::array<std::atomic<int>, kHashSlots> by_hash_{};
   mutable std::atomic<int> count_{0};
   int build_threads_ = 0;
 };
