@@ -587,14 +587,16 @@ void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<i
           // (Where a straight stretch joins them, w is an end itself, to rounding.)
           if (!w.allFinite() || (w - P[a + 1]).dot(da) < -1e-12 * da.norm() || (P[b] - w).dot(db) < -1e-12 * db.norm())
             break;
-          double near = kInf;  // w's distance to the chain from a to b
-          for (int i = a; i <= b; ++i) {
+          // w within tol of the chain from a to b (sqrt is monotonic: the test of the nearest
+          // segment is the test of any one, so the search stops at the first within tol).
+          bool near = false;
+          for (int i = a; i <= b && !near; ++i) {
             const Vec2 d = P[i + 1] - P[i];
             const double l2 = d.squaredNorm();
             const double t = l2 > 0.0 ? std::clamp((w - P[i]).dot(d) / l2, 0.0, 1.0) : 0.0;
-            near = std::min(near, (w - P[i] - t * d).squaredNorm());
+            near = std::sqrt((w - P[i] - t * d).squaredNorm()) <= tol;
           }
-          if (std::sqrt(near) > tol) break;
+          if (!near) break;
           best = b;
           corner = w;
         }
