@@ -147,7 +147,7 @@ void bind_world(py::module_& m) {
             d["normals"] = normals;
             return d;
           },
-          py::arg("origin"), py::arg("u"), py::arg("v"), py::arg("radius"), py::arg("flatten") = 1e-6,
+          py::arg("origin"), py::arg("u"), py::arg("v"), py::arg("radius"), py::arg("flatten") = PlaneRegion::kDefaultFlatten,
           "The section skin's region of the plane origin + a u + b v for links of `radius`: the points "
           "within `radius` of O. Returns its boundary as flattened segments (k, 2, 2) in (a, b), at most "
           "`flatten` m outside the exact curve, and their outward unit normals (k, 2).")

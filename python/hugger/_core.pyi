@@ -121,7 +121,7 @@ class Object:
         """
         Section of O by the plane origin + a u + b v: a list of closed loops (k, 2) in (a, b); outer loops counter-clockwise.
         """
-    def section_region(self, origin: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], radius: typing.SupportsFloat | typing.SupportsIndex, flatten: typing.SupportsFloat | typing.SupportsIndex = 1e-06) -> dict[str, typing.Any]:
+    def section_region(self, origin: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], radius: typing.SupportsFloat | typing.SupportsIndex, flatten: typing.SupportsFloat | typing.SupportsIndex = 1e-05) -> dict[str, typing.Any]:
         """
         The section skin's region of the plane origin + a u + b v for links of `radius`: the points within `radius` of O. Returns its boundary as flattened segments (k, 2, 2) in (a, b), at most `flatten` m outside the exact curve, and their outward unit normals (k, 2).
         """

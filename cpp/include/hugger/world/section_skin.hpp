@@ -39,6 +39,9 @@ namespace hugger {
 /// The region R of one plane for one link radius (see the file comment). Immutable once built.
 class PlaneRegion {
  public:
+  /// The default flattening tolerance (metres): a tenth of the default contact tolerance, so that
+  /// a link the skin keeps off O (by at most this much) is still far inside the sensing distance.
+  static constexpr double kDefaultFlatten = 1e-5;
   /// One segment of R's boundary: a segment in plane coordinates with its outward unit normal
   /// (pointing away from R) and the feature of O it comes from.
   struct Segment {
@@ -193,7 +196,7 @@ class PlaneRegion {
 
   std::shared_ptr<const Object> object_;
   FingerPlane plane_;
-  double radius_ = 0.0, flatten_ = 1e-6;
+  double radius_ = 0.0, flatten_ = kDefaultFlatten;
   std::vector<Segment> segments_;
   std::vector<int> next_;  ///< link_segments()
   std::vector<Piece> pieces_;
@@ -229,7 +232,7 @@ class PlaneRegion {
 class SectionSkin final : public Sensing {
  public:
   /// `flatten`: how far outside R the boundary may lie (metres, > 0; PlaneRegion).
-  explicit SectionSkin(std::shared_ptr<const Object> object, double flatten = 1e-6);
+  explicit SectionSkin(std::shared_ptr<const Object> object, double flatten = PlaneRegion::kDefaultFlatten);
   ~SectionSkin() override;
 
   Touch capsule(const Vec3& a, const Vec3& b, double radius, double cap = kInf) const override {
