@@ -111,7 +111,9 @@ def test_former_stalls_end_promptly(name, normal, rules, checker, tmp_path):
 #: Cases of the planner fuzz test (seed, shape, size) where a finger goes round a cycle: the first
 #: with the 1 µm flattening of the section skin before e4ee900, the other three with its 10 µm
 #: (with the cycle rule taken out, each ran to max_iterations with the hug rules and the section
-#: skin, the second with the mesh skin too; with it they end in about 100-150 iterations).
+#: skin, seed 86 with the mesh skin too; with it every plan here ends within 320 iterations). The
+#: cylinders are made with NumPy's sin and cos, which may round differently on another processor
+#: (docs/objects.md): there they may end without the cycle; the box is made without them.
 CYCLES = [(100, "cylinder", 0.01), (47, "cylinder", 0.03), (86, "cylinder", 0.03), (386, "box", 0.01)]
 
 
@@ -119,12 +121,12 @@ CYCLES = [(100, "cylinder", 0.01), (47, "cylinder", 0.03), (86, "cylinder", 0.03
 @pytest.mark.parametrize("rules", RULES)
 @pytest.mark.parametrize("seed,kind,size", CYCLES, ids=[f"{k}{s * 100:g}cm-{n}" for n, k, s in CYCLES])
 def test_wide_oscillation_ends(seed, kind, size, rules, skin, checker, tmp_path):
-    """Cases of the planner fuzz test (random hands on small objects, the palm landed): with the
-    section skin and the hug rules one finger went round a cycle (the first case: 14 iterations,
-    its tip 0.3 mm wide, wider than the overextension window's 2 s, drifting by 0.4 nm a round)
-    until max_iterations. A finger that keeps coming back to within epsilon of a chain it had,
-    the palm still, is at rest. (That combination needs the rule; the others end without it, and
-    are kept as plans of these hard cases.)"""
+    """Cases of the planner fuzz test (random hands on small objects, the palm landed) where, with
+    the hug rules, one finger went round a cycle until max_iterations (seed 100 at the 1 µm
+    flattening: 14 iterations a round, its tip 0.3 mm wide, wider than the overextension window's
+    2 s, drifting by 0.4 nm a round). A finger that keeps coming back to within epsilon of a chain
+    it had, the palm still, is at rest. The combinations that end without the rule (see CYCLES)
+    are kept as plans of these hard cases."""
     rng = np.random.default_rng(seed)
     obj, _ = helpers.random_object(rng, kind, size)
     target = 0.4375 * obj.vertices[rng.integers(len(obj.vertices))]
@@ -134,7 +136,7 @@ def test_wide_oscillation_ends(seed, kind, size, rules, skin, checker, tmp_path)
     traj = planner.plan()
     checked(traj, checker, tmp_path, swept_every=5)
     assert traj.status == "done"
-    assert planner.stats["phase2_iterations"] < 1000
+    assert planner.stats["phase2_iterations"] < 500
 
 
 @pytest.mark.parametrize("rules", RULES)

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <string>
@@ -453,44 +454,62 @@ TEST(SectionSkin, PrepareBuildsTheSameRegionsSideBySide) {
   }
 }
 
-// Every query looks up its plane's region (a table of hashes of u and the radius, then a scan):
-// planes that hash alike (the same u, other origins) and another radius each get their own
-// region, in any order of queries; a zero's sign (equal planes, other hashes) finds the same.
-TEST(SectionSkin, FindsEachPlanesRegionWhateverItsHash) {
+// Every query looks up its plane's region (a table of slots hashed from u, the origin and the
+// radius, then a scan of every region): planes that share u (parallel fingers) and planes of
+// another radius each get their own region, in any order of queries. The skin is filled to its
+// kMaxRegions regions first, so that a lookup that failed would find no room to build the region
+// again and return nullptr: 64 regions in 128 slots share some (the scan's path), and a zero's
+// sign (an equal plane, hashed elsewhere) is found by the scan too.
+TEST(SectionSkin, FindsEachPlanesRegionWhateverItsSlot) {
   const auto m = test::curvy(3);
   const auto object = std::make_shared<Object>(m.vertices, m.faces);
   const double r = 0.004;
   std::vector<FingerPlane> planes;
-  for (int k = 0; k < 4; ++k) {
+  std::vector<double> radii;
+  for (int k = 0; k < SectionSkin::kMaxRegions; ++k) {
     FingerPlane f;  // u = x, p = z: the normal is -y
-    f.origin = object->bounds().centre() + Vec3(0.0, 0.004 * k, 0.0);
+    f.origin = object->bounds().centre() + Vec3(0.0, 0.0005 * (k / 2), 0.0);
     planes.push_back(f);
+    radii.push_back(k % 2 == 0 ? r : 2.0 * r);  // each origin with two radii
   }
   SectionSkin skin(object, kFlatten);
+  skin.set_build_threads(1);
   std::vector<const PlaneRegion*> first;
-  for (const FingerPlane& f : planes) first.push_back(skin.region(f, r));
-  const PlaneRegion* other_radius = skin.region(planes[0], 2.0 * r);
-  ASSERT_EQ(skin.regions(), 5);
+  for (std::size_t k = 0; k < planes.size(); ++k) first.push_back(skin.region(planes[k], radii[k]));
+  ASSERT_EQ(skin.regions(), SectionSkin::kMaxRegions);
+  FingerPlane beyond = planes[0];
+  beyond.origin.y() -= 0.0005;
+  EXPECT_EQ(skin.region(beyond, r), nullptr);  // full: a plane not built yet gets no region
   for (std::size_t k = 0; k < planes.size(); ++k) {
-    ASSERT_NE(first[k], nullptr);
-    EXPECT_NE(first[k], other_radius);
-    for (std::size_t j = 0; j < k; ++j) EXPECT_NE(first[k], first[j]) << k << " " << j;
+    ASSERT_NE(first[k], nullptr) << k;
+    for (std::size_t j = 0; j < k; ++j) ASSERT_NE(first[k], first[j]) << k << " " << j;
+  }
+  for (const std::size_t k : {std::size_t{0}, std::size_t{1}, std::size_t{40}}) {
     // The region is that plane's: a skin of its own builds the same boundary.
     const SectionSkin alone(object, kFlatten);
-    const PlaneRegion* own = alone.region(planes[k], r);
+    const PlaneRegion* own = alone.region(planes[k], radii[k]);
     ASSERT_EQ(first[k]->segments().size(), own->segments().size()) << k;
     EXPECT_EQ(first[k]->segments().front().a, own->segments().front().a) << k;
   }
   std::mt19937 rng(5);
-  for (int q = 0; q < 200; ++q) {
+  for (int q = 0; q < 1000; ++q) {
     const std::size_t k = rng() % planes.size();
-    EXPECT_EQ(skin.region(planes[k], r), first[k]) << q;
-    if (q % 7 == 0) EXPECT_EQ(skin.region(planes[0], 2.0 * r), other_radius) << q;
+    ASSERT_EQ(skin.region(planes[k], radii[k]), first[k]) << q;
   }
-  FingerPlane signed_zero = planes[1];
+  FingerPlane signed_zero = planes[3];
   signed_zero.u.y() = -0.0;
-  EXPECT_EQ(skin.region(signed_zero, r), first[1]);
-  EXPECT_EQ(skin.regions(), 5);  // found, not built again
+  EXPECT_EQ(skin.region(signed_zero, radii[3]), first[3]);
+  EXPECT_EQ(skin.regions(), SectionSkin::kMaxRegions);
+}
+
+// The planner's skin flattens to a tenth of its contact tolerance, at most the default: a link
+// the skin keeps off O stays well within the sensing distance however small it is set.
+TEST(SectionSkin, FlattensToATenthOfTheContactTolerance) {
+  EXPECT_EQ(PlaneRegion::flatten_for(PlannerParams::kDefaultContactTolerance), PlaneRegion::kDefaultFlatten);
+  EXPECT_EQ(PlaneRegion::flatten_for(1.0), PlaneRegion::kDefaultFlatten);
+  EXPECT_DOUBLE_EQ(PlaneRegion::flatten_for(2e-6), 2e-7);
+  for (const double bad : {0.0, -1e-4, kInf, std::numeric_limits<double>::quiet_NaN()})
+    EXPECT_EQ(PlaneRegion::flatten_for(bad), PlaneRegion::kDefaultFlatten) << bad;
 }
 
 // rotate_until_free in closed form: against a brute-force sweep of fine angles both ways (the

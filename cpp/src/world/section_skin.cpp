@@ -587,8 +587,8 @@ void PlaneRegion::simplify_chain(const std::vector<Vec2>& P, const std::vector<i
           // (Where a straight stretch joins them, w is an end itself, to rounding.)
           if (!w.allFinite() || (w - P[a + 1]).dot(da) < -1e-12 * da.norm() || (P[b] - w).dot(db) < -1e-12 * db.norm())
             break;
-          // w within tol of the chain from a to b (sqrt is monotonic: the test of the nearest
-          // segment is the test of any one, so the search stops at the first within tol).
+          // w within tol of the chain from a to b: the nearest segment is within tol exactly
+          // when some segment is (sqrt is monotonic), so the search stops at the first.
           bool near = false;
           for (int i = a; i <= b && !near; ++i) {
             const Vec2 d = P[i + 1] - P[i];
@@ -1489,23 +1489,28 @@ namespace {
 
 bool same_plane(const FingerPlane& x, double rx, const FingerPlane& y, double ry) {
   // Scalar comparisons that stop at the first difference, u first: a hand's finger planes
-  // differ in u and often share the origin and p (the palm's centre and axis).
+  // mostly differ in u (parallel and opposed fingers share it, and differ in the origin) and
+  // often share the origin and p (the palm's centre and axis).
   auto same = [](const Vec3& a, const Vec3& b) { return a.x() == b.x() && a.y() == b.y() && a.z() == b.z(); };
   return same(x.u, y.u) && rx == ry && same(x.origin, y.origin) && same(x.p, y.p);
 }
 
-/// The hash of a plane and radius for find()'s table: a mix of the bits of u's first two coordinates (a hand's
-/// finger planes differ in u) and of the radius. Equal planes (same_plane) hash alike but for
-/// the sign of a zero, which only sends that query to the scan.
-std::size_t plane_hash(const FingerPlane& plane, double radius) {
+/// The slot of a plane and radius in find()'s table: the bits of u, the origin and the radius,
+/// each times its own odd constant, summed; the slot is the sum's top bits, which every input
+/// bit moves (multiplicative hashing). p is left out: a hand's finger planes share it. Equal
+/// planes (same_plane) hash alike but for the sign of a zero, which only sends that query to the
+/// scan.
+std::size_t plane_slot(const FingerPlane& plane, double radius, int slot_bits) {
   auto bits = [](double x) {
     std::uint64_t b;
     std::memcpy(&b, &x, sizeof b);
     return b;
   };
-  const std::uint64_t h = bits(plane.u.x()) * 0x9E3779B97F4A7C15ull ^ bits(plane.u.y()) * 0xC2B2AE3D27D4EB4Full ^
-                          bits(radius) * 0x165667B19E3779F9ull;
-  return static_cast<std::size_t>(h ^ (h >> 32));
+  const std::uint64_t h = bits(plane.u.x()) * 0x9E3779B97F4A7C15ull + bits(plane.u.y()) * 0xC2B2AE3D27D4EB4Full +
+                          bits(plane.u.z()) * 0x165667B19E3779F9ull + bits(plane.origin.x()) * 0xD6E8FEB86659FD93ull +
+                          bits(plane.origin.y()) * 0xFF51AFD7ED558CCDull +
+                          bits(plane.origin.z()) * 0xC4CEB9FE1A85EC53ull + bits(radius) * 0x27D4EB2F165667C5ull;
+  return static_cast<std::size_t>(h >> (64 - slot_bits));
 }
 
 bool finite_plane(const FingerPlane& plane, double radius) {
@@ -1518,7 +1523,7 @@ bool finite_plane(const FingerPlane& plane, double radius) {
 const PlaneRegion* SectionSkin::find(const FingerPlane& plane, double radius) const {
   // Every query asks for its plane's region, and the fingers' queries interleave: the table of
   // hashes answers most with one comparison (a miss or a collision falls back to the scan).
-  const int hinted = by_hash_[plane_hash(plane, radius) % kHashSlots].load(std::memory_order_acquire);
+  const int hinted = by_hash_[plane_slot(plane, radius, kHashBits)].load(std::memory_order_acquire);
   if (hinted > 0) {
     const Entry* e = slots_[hinted - 1].load(std::memory_order_acquire);
     if (same_plane(e->plane, e->radius, plane, radius)) return &e->region;
@@ -1542,7 +1547,7 @@ const PlaneRegion* SectionSkin::insert(std::unique_ptr<Entry> entry) const {
   const Entry* raw = entry.get();
   owned_.push_back(std::move(entry));
   slots_[m].store(raw, std::memory_order_release);
-  std::atomic<int>& hinted = by_hash_[plane_hash(raw->plane, raw->radius) % kHashSlots];
+  std::atomic<int>& hinted = by_hash_[plane_slot(raw->plane, raw->radius, kHashBits)];
   if (hinted.load(std::memory_order_relaxed) == 0) hinted.store(m + 1, std::memory_order_release);
   count_.store(m + 1, std::memory_order_release);
   return &raw->region;

@@ -39,7 +39,8 @@ constexpr long kMaxIterations = 1000000000;
 struct PlannerParams {
   double step = std::numeric_limits<double>::quiet_NaN();   ///< fingertip step s (m); default: shortest link / 20
   double epsilon = std::numeric_limits<double>::quiet_NaN();  ///< overextension threshold (m); default: step / 10
-  double contact_tolerance = std::numeric_limits<double>::quiet_NaN();  ///< sensing distance delta (m); default 1e-4
+  double contact_tolerance = std::numeric_limits<double>::quiet_NaN();  ///< sensing distance delta (m); default kDefaultContactTolerance
+  static constexpr double kDefaultContactTolerance = 1e-4;  ///< the default sensing distance delta (m)
   long max_iterations = 20000;     ///< bound on Phase 2 iterations, 1 .. kMaxIterations
   Rules rules = Rules::kHug;       ///< the rule set of Phase 2
 };

@@ -39,9 +39,16 @@ namespace hugger {
 /// The region R of one plane for one link radius (see the file comment). Immutable once built.
 class PlaneRegion {
  public:
-  /// The default flattening tolerance (metres): a tenth of the default contact tolerance, so that
-  /// a link the skin keeps off O (by at most this much) is still far inside the sensing distance.
+  /// The default flattening tolerance (metres): a tenth of the planner's default contact
+  /// tolerance, so that a link the skin keeps off O (by at most this much) is still well inside
+  /// the sensing distance. flatten_for() scales it down for smaller contact tolerances.
   static constexpr double kDefaultFlatten = 1e-5;
+  /// The flattening tolerance for a planner whose contact tolerance is `delta` (m): a tenth of
+  /// it, at most kDefaultFlatten (kDefaultFlatten for a delta that is not a positive number: the
+  /// planner refuses it).
+  static double flatten_for(double delta) {
+    return delta > 0.0 && std::isfinite(delta) ? std::min(kDefaultFlatten, 0.1 * delta) : kDefaultFlatten;
+  }
   /// One segment of R's boundary: a segment in plane coordinates with its outward unit normal
   /// (pointing away from R) and the feature of O it comes from.
   struct Segment {
@@ -318,7 +325,7 @@ class SectionSkin final : public Sensing {
   mutable std::array<std::atomic<const Entry*>, kMaxRegions> slots_{};
   /// find()'s table: slot index + 1 of the entry whose plane and radius hash there (0: none; a
   /// later entry of the same hash is found by the scan instead).
-  static constexpr int kHashSlots = 128;
+  static constexpr int kHashBits = 7, kHashSlots = 1 << kHashBits;
   mutable std::array<std::atomic<int>, kHashSlots> by_hash_{};
   mutable std::atomic<int> count_{0};
   int build_threads_ = 0;
