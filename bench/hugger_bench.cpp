@@ -37,6 +37,7 @@
 #include "hugger/world/section_skin.hpp"
 #include "hugger/world/simulated_world.hpp"
 #include "meshes.hpp"  // tests/cpp: the icosphere and curvy, built as hugger.objects builds them
+#include "scenes.hpp"  // tests/cpp: test::EmptySkin
 
 using namespace hugger;
 using Clock = std::chrono::steady_clock;
@@ -201,13 +202,6 @@ std::shared_ptr<const Sensing> make_skin(const std::string& skin, const std::sha
   return std::make_shared<SimulatedWorld>(object);
 }
 
-/// A skin that senses nothing: every gap is infinite.
-class NothingSensed : public Sensing {
- public:
-  Touch capsule(const Vec3&, const Vec3&, double, double) const override { return Touch{}; }
-  double palm(const Pose&, double, double, double) const override { return kInf; }
-};
-
 Result run(const Scenario& sc, const std::string& skin, int repeats) {
   Result r;
   std::snprintf(r.name, sizeof r.name, "%s", sc.name.c_str());
@@ -236,7 +230,7 @@ Result run(const Scenario& sc, const std::string& skin, int repeats) {
     // that the timed builds touch as many fresh pages as without it.
     std::vector<FingerPlane> planes;
     if (skin == "section") {
-      planes = Planner(hand, std::make_shared<NothingSensed>(), target, start).planes();
+      planes = Planner(hand, std::make_shared<test::EmptySkin>(), target, start).planes();
 #if defined(__GLIBC__)
       malloc_trim(0);
 #endif

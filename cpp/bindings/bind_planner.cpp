@@ -225,9 +225,7 @@ void bind_planner(py::module_& m) {
              std::shared_ptr<const Sensing> world;
              if (skin == "section") {
                // The skin keeps links off O by at most its flattening: a tenth of delta at most.
-               const double delta = std::isnan(params.contact_tolerance) ? PlannerParams::kDefaultContactTolerance
-                                                                          : params.contact_tolerance;
-               world = std::make_shared<SectionSkin>(object, PlaneRegion::flatten_for(delta));
+               world = std::make_shared<SectionSkin>(object, PlaneRegion::flatten_for(params.contact_tolerance_or_default()));
              }
              else world = std::make_shared<SimulatedWorld>(object);
              out->planner = std::make_unique<Planner>(hand, world, t, pose, params);

@@ -10,6 +10,13 @@
 
 namespace hugger::test {
 
+/// A sensing stub with no object: every gap is infinite, every link free.
+class EmptySkin : public Sensing {
+ public:
+  Touch capsule(const Vec3&, const Vec3&, double, double) const override { return Touch{}; }
+  double palm(const Pose&, double, double, double) const override { return kInf; }
+};
+
 /// A simulated world holding a sphere of radius R about the origin (20 * 4^subdivisions triangles).
 inline std::shared_ptr<SimulatedWorld> sphere_world(double R, int subdivisions) {
   const auto mesh = icosphere(subdivisions, Vec3::Constant(R));

@@ -13,13 +13,6 @@ using namespace hugger;
 
 namespace {
 
-/// A sensing stub with no object: every link is free.
-class EmptySkin : public Sensing {
- public:
-  Touch capsule(const Vec3&, const Vec3&, double, double) const override { return Touch{}; }
-  double palm(const Pose&, double, double, double) const override { return kInf; }
-};
-
 Vec2 unit(double theta_abs) { return Vec2(-std::sin(theta_abs), std::cos(theta_abs)); }
 
 /// The 3-finger rim hand with the given limits on every joint.
@@ -104,7 +97,7 @@ TEST(Limits, WithinLimitsClampsToTheNearerLimit) {
 TEST(Limits, TailToHeadHoldsEveryJointWithinItsLimits) {
   // With nothing to collide with, Tail2Head from random chains and roots ends within the limits,
   // with exact link lengths, and unchanged where the rays already were within them.
-  const EmptySkin skin;
+  const test::EmptySkin skin;
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const LimitedChain lc;
@@ -121,7 +114,7 @@ TEST(Limits, TailToHeadHoldsEveryJointWithinItsLimits) {
 TEST(Limits, HeadToTailHoldsTheJointsItPassesWithinTheirLimits) {
   // Head2Tail decides joints N-1 .. 1 (joint 0, at the root, is Tail2Head's): with nothing to
   // collide with they end within their limits, with exact link lengths and the tip at the head.
-  const EmptySkin skin;
+  const test::EmptySkin skin;
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const LimitedChain lc;

@@ -93,7 +93,7 @@ Planner::Planner(HandModel hand, std::shared_ptr<const Sensing> sensing, const V
   params_.step = resolve(params.step, shortest / 20.0);
   HUGGER_CHECK_ARGUMENT(params_.step <= shortest, "step (" << params_.step << " m) must not exceed the shortest link ("
                                                            << shortest << " m)");
-  params_.contact_tolerance = resolve(params.contact_tolerance, PlannerParams::kDefaultContactTolerance);
+  params_.contact_tolerance = params.contact_tolerance_or_default();
   HUGGER_CHECK_ARGUMENT(params_.contact_tolerance < params_.step, "contact_tolerance (" << params_.contact_tolerance
                                                                                         << " m) must be smaller than step ("
                                                                                         << params_.step << " m)");

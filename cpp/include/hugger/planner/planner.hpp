@@ -2,6 +2,7 @@
 /// The Hugger algorithm (Reznik & Lumelsky 1994; docs/algorithm.md) as an iterator.
 #pragma once
 
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <string>
@@ -41,6 +42,10 @@ struct PlannerParams {
   double epsilon = std::numeric_limits<double>::quiet_NaN();  ///< overextension threshold (m); default: step / 10
   double contact_tolerance = std::numeric_limits<double>::quiet_NaN();  ///< sensing distance delta (m); default kDefaultContactTolerance
   static constexpr double kDefaultContactTolerance = 1e-4;  ///< the default sensing distance delta (m)
+  /// contact_tolerance, or the default where it is NaN (not checked: the Planner refuses a bad one).
+  double contact_tolerance_or_default() const {
+    return std::isnan(contact_tolerance) ? kDefaultContactTolerance : contact_tolerance;
+  }
   long max_iterations = 20000;     ///< bound on Phase 2 iterations, 1 .. kMaxIterations
   Rules rules = Rules::kHug;       ///< the rule set of Phase 2
 };
