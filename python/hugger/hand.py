@@ -8,7 +8,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from . import _core
+from . import _core, _stable
 from ._checks import positive
 
 from ._types import MAX_FINGERS, MAX_LINKS  # noqa: F401  (hugger.hand.MAX_FINGERS as before)
@@ -352,7 +352,7 @@ class Hand:
         phi = np.asarray(d.get("finger_angles", 2 * np.pi * np.arange(m) / m), dtype=np.float64)
         if phi.shape != (m,):
             raise ValueError(f"finger_angles must hold {m} angles, got shape {phi.shape}")
-        rim = np.stack([np.cos(phi), np.sin(phi), np.zeros(m)], axis=1)
+        rim = np.stack([_stable.cos(phi), _stable.sin(phi), np.zeros(m)], axis=1)
         lengths = _real_array("link_lengths", d["link_lengths"])
         if lengths.ndim == 0:
             lengths = np.full((m, n), float(lengths))

@@ -8,25 +8,34 @@ when that is safe (see :func:`load`).
 """
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
 
+from . import _stable
 from ._checks import positive
 from .world import Object
 
 
 def icosphere(subdivisions: int = 3) -> tuple[np.ndarray, np.ndarray]:
-    """Unit sphere: vertices (V, 3) and outward faces (F, 3); F = 20 * 4**subdivisions."""
+    """Unit sphere: vertices (V, 3) and outward faces (F, 3); F = 20 * 4**subdivisions.
+
+    Each vertex is normalised as p / sqrt(p.x*p.x + p.y*p.y + p.z*p.z), in that order: the same
+    bits on every processor (hugger._stable), and those of the benchmark's C++ icosphere."""
     t = (1.0 + 5 ** 0.5) / 2.0
     v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
          (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
     f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2), (10, 7, 6),
          (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7),
          (9, 8, 1)]
-    verts = [np.array(p, dtype=float) / np.linalg.norm(p) for p in v]
+    def unit(p: np.ndarray) -> np.ndarray:
+        x, y, z = (float(c) for c in p)
+        return p / math.sqrt(x * x + y * y + z * z)
+
+    verts = [unit(np.array(p, dtype=float)) for p in v]
     faces = f
     for _ in range(int(subdivisions)):
         cache: dict[tuple[int, int], int] = {}
@@ -35,7 +44,7 @@ def icosphere(subdivisions: int = 3) -> tuple[np.ndarray, np.ndarray]:
             key = (min(a, b), max(a, b))
             if key not in cache:
                 p = verts[a] + verts[b]
-                verts.append(p / np.linalg.norm(p))
+                verts.append(unit(p))
                 cache[key] = len(verts) - 1
             return cache[key]
 
@@ -89,8 +98,8 @@ def blob(radius: float = 0.04, amplitude: float = 0.25, seed: int = 0, center: A
     scale = np.ones(len(v))
     for _ in range(4):
         k = rng.normal(size=3)
-        k *= rng.uniform(2.0, 4.0) / np.linalg.norm(k)
-        scale += amplitude / 4 * np.sin(v @ k + rng.uniform(0, 2 * np.pi))
+        k *= rng.uniform(2.0, 4.0) / float(_stable.norm(k))
+        scale += amplitude / 4 * _stable.sin(_stable.matmul(v, k[:, None])[:, 0] + rng.uniform(0, 2 * np.pi))
     scale = np.maximum(scale, 0.4)
     return Object(v * (radius * scale)[:, None] + _center(center), f)
 
@@ -135,7 +144,7 @@ def cylinder(radius: float = 0.035, height: float = 0.1, center: Any = (0, 0, 0)
     pts = [np.array([0.0, 0.0, -height / 2]), np.array([0.0, 0.0, height / 2])]
     for k in range(r + 1):
         z = -height / 2 + height * k / r
-        pts += [np.array([radius * np.cos(a), radius * np.sin(a), z]) for a in ang]
+        pts += [np.array([radius * math.cos(a), radius * math.sin(a), z]) for a in ang]
     ring: Callable[[int, int], int] = lambda k, i: 2 + k * s + (i % s)  # noqa: E731
     faces = []
     for i in range(s):
@@ -155,9 +164,9 @@ def apple(radius: float = 0.04, center: Any = (0, 0, 0), subdivisions: int = 5) 
     """An apple: a sphere of ``radius`` (default 4 cm) widened at the equator (8.4 cm wide, 6.9 cm tall)
     with a stem dimple on top (+z) and a shallower calyx dimple below."""
     v, f = icosphere(subdivisions)
-    theta = np.arccos(np.clip(v[:, 2], -1.0, 1.0))  # angle from +z
-    rho = (1.0 - 0.30 * np.exp(-((theta / 0.38) ** 2)) - 0.15 * np.exp(-(((np.pi - theta) / 0.40) ** 2))
-           + 0.05 * np.sin(theta) ** 2)
+    theta = _stable.arccos(np.clip(v[:, 2], -1.0, 1.0))  # angle from +z
+    rho = (1.0 - 0.30 * _stable.exp(-((theta / 0.38) ** 2)) - 0.15 * _stable.exp(-(((np.pi - theta) / 0.40) ** 2))
+           + 0.05 * _stable.sin(theta) ** 2)
     rho = rho * radius
     return _star(v, f, rho, center)
 
@@ -175,8 +184,9 @@ def curvy(size: float = 0.04, center: Any = (0, 0, 0), subdivisions: int = 5) ->
     """
     v, f = icosphere(subdivisions)
     x, y, z = v.T
-    rho = (1.0 + 0.20 * np.sin(3.0 * x + 0.7) * np.cos(2.5 * y - 0.3) + 0.12 * np.sin(4.0 * z + 1.2) * np.cos(2.0 * x - 0.5)
-           + 0.10 * np.cos(3.5 * y + 0.9) * np.sin(2.5 * z) - 0.10 * np.exp(-(((x - 0.1) / 0.3) ** 2)))
+    sin, cos, exp = _stable.sin, _stable.cos, _stable.exp  # the C library's, as hugger_bench's
+    rho = (1.0 + 0.20 * sin(3.0 * x + 0.7) * cos(2.5 * y - 0.3) + 0.12 * sin(4.0 * z + 1.2) * cos(2.0 * x - 0.5)
+           + 0.10 * cos(3.5 * y + 0.9) * sin(2.5 * z) - 0.10 * exp(-(((x - 0.1) / 0.3) ** 2)))
     p = v * (rho * float(size))[:, None]
     p[:, 0] *= 1.2
     return Object(p + _center(center), f)
@@ -193,8 +203,8 @@ def torus(major_radius: float = 0.04, minor_radius: float = 0.015, center: Any =
     u = 2 * np.pi * np.arange(s) / s
     w = 2 * np.pi * np.arange(r) / r
     uu, ww = np.meshgrid(u, w, indexing="ij")
-    rad = major_radius + minor_radius * np.cos(ww)
-    pts = np.stack([rad * np.cos(uu), rad * np.sin(uu), minor_radius * np.sin(ww)], axis=-1).reshape(-1, 3)
+    rad = major_radius + minor_radius * _stable.cos(ww)
+    pts = np.stack([rad * _stable.cos(uu), rad * _stable.sin(uu), minor_radius * _stable.sin(ww)], axis=-1).reshape(-1, 3)
     i, j = np.meshgrid(np.arange(s), np.arange(r), indexing="ij")
     a, b = i * r + j, ((i + 1) % s) * r + j
     c, d = ((i + 1) % s) * r + (j + 1) % r, i * r + (j + 1) % r

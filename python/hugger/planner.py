@@ -6,7 +6,7 @@ from typing import Any, Iterator, cast
 
 import numpy as np
 
-from . import _core
+from . import _core, _stable
 from ._types import CONTACT, DONE, FROZEN, Configuration  # noqa: F401  (hugger.planner.FROZEN as before)
 from .hand import Hand, _real_array
 from .trajectory import Trajectory
@@ -16,14 +16,14 @@ def look_at(position: Any, target: Any, up: Any = None) -> np.ndarray:
     """A palm pose (4, 4) at ``position`` whose normal (z axis) points at ``target``."""
     p = np.asarray(position, dtype=np.float64).reshape(3)
     z = np.asarray(target, dtype=np.float64).reshape(3) - p
-    if not np.all(np.isfinite(z)) or np.linalg.norm(z) == 0:
+    if not np.all(np.isfinite(z)) or float(_stable.norm(z)) == 0:
         raise ValueError("position and target must be finite and distinct")
-    z /= np.linalg.norm(z)
+    z /= _stable.norm(z)  # not np.linalg.norm, whose BLAS rounds per processor (hugger._stable)
     u = np.array([0.0, 0.0, 1.0]) if up is None else np.asarray(up, dtype=np.float64).reshape(3)
-    if np.linalg.norm(np.cross(u, z)) < 1e-6:
+    if float(_stable.norm(np.cross(u, z))) < 1e-6:
         u = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     x = np.cross(u, z)
-    x /= np.linalg.norm(x)
+    x /= _stable.norm(x)
     pose = np.eye(4)
     pose[:3, 0], pose[:3, 1], pose[:3, 2], pose[:3, 3] = x, np.cross(z, x), z, p
     return pose

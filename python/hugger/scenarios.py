@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from . import objects
+from . import _stable, objects
 from ._checks import positive
 from .hand import Hand
 from .planner import look_at
@@ -39,7 +39,7 @@ def safe_distance(obj: Object, hand: Hand, target: Any, margin: float = 0.005) -
     """A palm distance from T at which the hand, in any orientation, clears the object by
     ``margin``: the object's radius about T plus the hand's radius about the palm centre."""
     t = np.asarray(target, dtype=np.float64).reshape(3)
-    body = float(np.linalg.norm(obj.vertices - t, axis=1).max())
+    body = float(_stable.norm(obj.vertices - t).max())
     hand_radius: float = max(math.hypot(hand.palm_radius, hand.reach) + hand.link_radius,
                               math.hypot(hand.palm_radius, hand.palm_thickness))
     if hand.general:  # roots anywhere on the palm, fingers at rest in any pose
@@ -57,7 +57,7 @@ def start_pose(obj: Object, hand: Hand, target: Any, direction: Any = (0.0, 0.0,
     pose = look_at(t + dist * d, t)
     if turn_deg:
         c, s = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
-        pose[:3, :3] = pose[:3, :3] @ np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+        pose[:3, :3] = _stable.matmul(pose[:3, :3], np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]))
     return pose
 
 
@@ -168,7 +168,7 @@ def _finite(name: str, value: Any) -> np.ndarray:
 
 def _unit(name: str, value: Any) -> np.ndarray:
     a = _finite(name, value)
-    n = float(np.linalg.norm(a))
+    n = float(_stable.norm(a))
     if n == 0.0:
         raise ValueError(f"{name} must be a non-zero vector")
     return a / n

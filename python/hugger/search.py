@@ -34,7 +34,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from . import _checks
+from . import _checks, _stable
 from ._types import CONTACT_DISTANCE
 from .analysis import ESCAPE_REACH
 from .hand import Hand
@@ -144,9 +144,9 @@ def approach_directions(count: int, pole: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
     """
     n = _direction_count("approaches", count)
     p = np.asarray(pole, dtype=np.float64).reshape(3)
-    if not np.all(np.isfinite(p)) or np.linalg.norm(p) == 0:
+    if not np.all(np.isfinite(p)) or float(_stable.norm(p)) == 0:
         raise ValueError(f"pole must be a finite non-zero 3-vector, got {pole!r}")
-    p = p / np.linalg.norm(p)
+    p = p / _stable.norm(p)
     if n == 1:
         return p[None].copy()
     from .planner import look_at
@@ -156,16 +156,16 @@ def approach_directions(count: int, pole: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
     z = 1.0 - 2.0 * i / (n - 1)
     r = np.sqrt(np.clip(1.0 - z * z, 0.0, None))
     phi = _GOLDEN_ANGLE * i
-    local = np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
-    out: np.ndarray = local @ frame.T
-    out /= np.linalg.norm(out, axis=1, keepdims=True)
+    local = np.column_stack([r * _stable.cos(phi), r * _stable.sin(phi), z])
+    out: np.ndarray = _stable.matmul(local, frame.T)
+    out /= _stable.norm(out)[:, None]
     out[0] = p  # exactly the pole
     return out
 
 
 def torque_scale(obj: Object, target: np.ndarray) -> float:
     """The torque scale of the ranking's grasp quality: the object's largest distance from T (m)."""
-    return float(np.linalg.norm(obj.vertices - target, axis=1).max())
+    return float(_stable.norm(obj.vertices - target).max())
 
 
 def final_grasp_quality(traj: Trajectory, hand: Hand, obj: Object, target: np.ndarray,

@@ -1,0 +1,62 @@
+"""Arithmetic whose bits do not depend on the processor, for the numbers plans are made of.
+
+NumPy chooses its loops for the processor it runs on: with AVX-512 its ``exp``, ``arccos`` or
+``sin`` can differ in the last bit from those of a processor without it, and its vector norms
+and matrix products go through the BLAS, whose kernels (chosen per processor too) add in their
+own order and with or without fused multiply-adds. A built-in object, a start pose or an
+approach direction computed so would differ between two machines, and so would every plan made
+from it. These helpers use only operations IEEE 754 rounds exactly (+, -, *, /, sqrt) in a fixed
+order, and for the elementary functions the C library, as the engine does.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Callable
+
+import numpy as np
+
+
+def _each(f: Callable[[float], float], x: Any) -> np.ndarray:
+    a = np.asarray(x, dtype=np.float64)
+    return np.fromiter(map(f, a.ravel().tolist()), dtype=np.float64, count=a.size).reshape(a.shape)
+
+
+def sin(x: Any) -> np.ndarray:
+    """Elementwise sine (the C library's)."""
+    return _each(math.sin, x)
+
+
+def cos(x: Any) -> np.ndarray:
+    """Elementwise cosine (the C library's)."""
+    return _each(math.cos, x)
+
+
+def exp(x: Any) -> np.ndarray:
+    """Elementwise exponential (the C library's)."""
+    return _each(math.exp, x)
+
+
+def arccos(x: Any) -> np.ndarray:
+    """Elementwise arc cosine (the C library's); arguments in [-1, 1]."""
+    return _each(math.acos, x)
+
+
+def norm(v: Any) -> np.ndarray:
+    """Euclidean norm along the last axis, sqrt(x0*x0 + x1*x1 + ...) added left to right (a
+    0-d array for a vector: ``float(norm(v))``)."""
+    a = np.asarray(v, dtype=np.float64)
+    s = a[..., 0] * a[..., 0]
+    for i in range(1, a.shape[-1]):
+        s = s + a[..., i] * a[..., i]
+    return np.sqrt(s)
+
+
+def matmul(a: Any, b: Any) -> np.ndarray:
+    """The matrix product a @ b of 2-D arrays, each entry's terms added left to right."""
+    x, y = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    if x.ndim != 2 or y.ndim != 2 or x.shape[1] != y.shape[0]:
+        raise ValueError(f"matmul needs 2-D arrays with matching inner sizes, got {x.shape} and {y.shape}")
+    out = x[:, :1] * y[:1, :]
+    for k in range(1, x.shape[1]):
+        out = out + x[:, k:k + 1] * y[k:k + 1, :]
+    return out
