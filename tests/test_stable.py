@@ -4,7 +4,8 @@ NumPy's loops and the BLAS kernels are chosen per processor. The test runs one s
 fresh interpreters: as this machine chooses, and with NumPy's AVX-512 loops switched off
 (NPY_DISABLE_CPU_FEATURES) and OpenBLAS held to its SSE kernels (OPENBLAS_CORETYPE=Nehalem, no
 fused multiply-adds), which is how a processor without them computes. The built-in objects,
-start poses, hand rims, approach directions and plans must come out the same, bit for bit.
+start poses, hand rims, preset hands and their URDF files read back, approach directions and plans
+must come out the same, bit for bit.
 """
 from __future__ import annotations
 
@@ -65,6 +66,13 @@ add(approach_directions(64, (0.3, -0.2, 0.9)))
 hand = hugger.Hand.from_dict(dict(fingers=3, links=3, link_lengths=0.02, link_radius=0.004, palm_radius=0.03,
                                   palm_thickness=0.01, finger_angles=[0.1, 2.3, 4.4]))
 add(np.asarray(hand.to_json().encode()))
+import os, tempfile, hugger.hands as hands
+for name in hands.PRESETS:  # the presets, and each read back from the URDF written for it
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "hand.urdf")
+        with open(path, "w") as f:
+            f.write(hands.to_urdf(hands.preset(name)))
+        add(np.asarray(hands.preset(name).to_json().encode()), np.asarray(hugger.Hand.from_urdf(path).to_json().encode()))
 for name in ("sphere", "curvy"):
     c = sc.default_case(name)
     t = hugger.Planner(c.hand, c.obj, c.target, c.palm_pose).plan()
