@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import os
+import platform
 import subprocess
 import sys
 
@@ -25,9 +26,14 @@ _AVX512 = ("X86_V4", "AVX512_SPR", "AVX512_ICL", "AVX512_CNL", "AVX512_CLX", "AV
 
 
 def _other_processor_env() -> dict[str, str]:
-    from numpy._core._multiarray_umath import __cpu_features__ as found  # type: ignore[import-not-found]
+    try:
+        from numpy._core._multiarray_umath import __cpu_features__ as found  # type: ignore[import-not-found]
+    except ImportError:  # NumPy 1.x
+        from numpy.core._multiarray_umath import __cpu_features__ as found  # type: ignore[import-not-found,no-redef]
 
-    env = dict(os.environ, OPENBLAS_CORETYPE="Nehalem")
+    env = dict(os.environ)
+    if platform.machine().lower() in ("x86_64", "amd64"):
+        env["OPENBLAS_CORETYPE"] = "Nehalem"  # SSE4.2 kernels: on every x86-64 processor since 2008
     off = [f for f in _AVX512 if found.get(f)]
     if off:
         env["NPY_DISABLE_CPU_FEATURES"] = " ".join(off)
