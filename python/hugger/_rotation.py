@@ -7,6 +7,8 @@ from typing import cast
 
 import numpy as np
 
+from . import _stable
+
 
 def quaternion_wxyz(rot: np.ndarray) -> np.ndarray:
     """The unit quaternion (w, x, y, z) of a rotation matrix (3, 3), by Shepperd's method."""
@@ -25,13 +27,13 @@ def quaternion_wxyz(rot: np.ndarray) -> np.ndarray:
         s = math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1]) * 2
         q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
     quat = np.array(q)
-    return cast(np.ndarray, quat / np.linalg.norm(quat))
+    return cast(np.ndarray, quat / _stable.norm(quat))
 
 
 def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
     """The rotation matrix (3, 3) turning by ``angle`` (rad) about ``axis`` (any length but zero),
     by Rodrigues' formula."""
     a = np.asarray(axis, dtype=np.float64)
-    a = a / np.linalg.norm(a)
+    a = a / _stable.norm(a)
     k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    return cast(np.ndarray, np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k))
+    return cast(np.ndarray, np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * _stable.matmul(k, k))

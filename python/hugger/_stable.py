@@ -11,7 +11,7 @@ order, and for the elementary functions the C library, as the engine does.
 from __future__ import annotations
 
 import math
-from typing import Any, Callable
+from typing import Any, Callable, cast
 
 import numpy as np
 
@@ -41,21 +41,43 @@ def arccos(x: Any) -> np.ndarray:
     return _each(math.acos, x)
 
 
+def arctan2(y: Any, x: Any) -> np.ndarray:
+    """Elementwise atan2(y, x) (the C library's) of two arrays of one shape."""
+    yy, xx = np.asarray(y, dtype=np.float64), np.asarray(x, dtype=np.float64)
+    if yy.shape != xx.shape:
+        raise ValueError(f"arctan2 needs arrays of one shape, got {yy.shape} and {xx.shape}")
+    out = map(math.atan2, yy.ravel().tolist(), xx.ravel().tolist())
+    return np.fromiter(out, dtype=np.float64, count=yy.size).reshape(yy.shape)
+
+
+def dot(a: Any, b: Any) -> np.ndarray:
+    """a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + ... along the last axis, added left to right
+    (a NumPy float for two vectors)."""
+    x, y = np.broadcast_arrays(np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64))
+    if x.ndim == 0 or x.shape[-1] == 0:
+        raise ValueError(f"dot needs vectors along the last axis, got shape {x.shape}")
+    s = x[..., 0] * y[..., 0]
+    for i in range(1, x.shape[-1]):
+        s = s + x[..., i] * y[..., i]
+    return cast(np.ndarray, s)
+
+
 def norm(v: Any) -> np.ndarray:
     """Euclidean norm along the last axis, sqrt(x0*x0 + x1*x1 + ...) added left to right (a
-    0-d array for a vector: ``float(norm(v))``)."""
-    a = np.asarray(v, dtype=np.float64)
-    s = a[..., 0] * a[..., 0]
-    for i in range(1, a.shape[-1]):
-        s = s + a[..., i] * a[..., i]
-    return np.sqrt(s)
+    NumPy float for a vector)."""
+    return cast(np.ndarray, np.sqrt(dot(v, v)))
 
 
 def matmul(a: Any, b: Any) -> np.ndarray:
-    """The matrix product a @ b of 2-D arrays, each entry's terms added left to right."""
+    """The matrix product a @ b, each entry's terms added left to right: 2-D arrays, or a vector
+    on either side (as ``@`` takes it)."""
     x, y = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
-    if x.ndim != 2 or y.ndim != 2 or x.shape[1] != y.shape[0]:
-        raise ValueError(f"matmul needs 2-D arrays with matching inner sizes, got {x.shape} and {y.shape}")
+    if x.ndim == 1 and y.ndim >= 1:
+        return cast(np.ndarray, matmul(x[None], y)[0])
+    if y.ndim == 1 and x.ndim >= 1:
+        return matmul(x, y[:, None])[:, 0]
+    if x.ndim != 2 or y.ndim != 2 or x.shape[1] != y.shape[0] or x.shape[1] == 0:
+        raise ValueError(f"matmul needs 2-D arrays (or vectors) with matching inner sizes, got {x.shape} and {y.shape}")
     out = x[:, :1] * y[:1, :]
     for k in range(1, x.shape[1]):
         out = out + x[:, k:k + 1] * y[k:k + 1, :]

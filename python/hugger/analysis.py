@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, Callable, cast
 
 import numpy as np
 
-from . import _core
+from . import _core, _stable
 from ._checks import positive
 from ._types import CONTACT_DISTANCE
 
@@ -127,7 +127,7 @@ class Contacts:
             raise ValueError(f"points and normals must both be (C, 3), got {p.shape} and {n.shape}")
         if not (np.all(np.isfinite(p)) and np.all(np.isfinite(n))):
             raise ValueError("points and normals must be finite")
-        length = np.linalg.norm(n, axis=1)
+        length = _stable.norm(n)
         if np.any(length < 1e-12):
             raise ValueError("normals must be non-zero")
         c = p.shape[0]
@@ -194,7 +194,7 @@ def _link_contacts(obj: Any, joints: np.ndarray, radius: float, distance: float)
     # Sample every touching link's axis densely, all in one query.
     ts, owners = [], []
     for i in touching.tolist():
-        length = float(np.linalg.norm(b[i] - a[i]))
+        length = float(_stable.norm(b[i] - a[i]))
         count = max(2, int(math.ceil(length / _link_spacing(radius, length))) + 1)
         ts.append(np.linspace(0.0, 1.0, count))
         owners.append(np.full(count, i))
@@ -230,12 +230,12 @@ def _palm_samples(radius: float, thickness: float, spacing: float) -> np.ndarray
         rho = radius * i / rings
         count = max(6, int(math.ceil(2 * math.pi * rho / spacing)))
         ang = 2 * math.pi * np.arange(count) / count
-        pts.append(np.column_stack([rho * np.cos(ang), rho * np.sin(ang), np.zeros(count)]))
+        pts.append(np.column_stack([rho * _stable.cos(ang), rho * _stable.sin(ang), np.zeros(count)]))
     count = max(6, int(math.ceil(2 * math.pi * radius / spacing)))
     ang = 2 * math.pi * np.arange(count) / count
     levels = max(1, int(math.ceil(thickness / spacing)))
     for z in -thickness * np.arange(1, levels + 1) / levels:
-        pts.append(np.column_stack([radius * np.cos(ang), radius * np.sin(ang), np.full(count, z)]))
+        pts.append(np.column_stack([radius * _stable.cos(ang), radius * _stable.sin(ang), np.full(count, z)]))
     return np.concatenate(pts)
 
 
@@ -257,7 +257,7 @@ def _palm_contacts(obj: Any, palm_pose: np.ndarray, radius: float, thickness: fl
         return np.zeros((0, 3))
     rot, origin = palm_pose[:3, :3], palm_pose[:3, 3]
     local = _palm_samples(radius, thickness, min(_MAX_SPACING, radius / 8.0, thickness / 2.0))
-    world = local @ rot.T + origin
+    world = _stable.matmul(local, rot.T) + origin
     d = obj.closest(world, max_distance=distance)["distance"]  # only the touching samples matter
     touching = np.flatnonzero(d <= distance)
     if touching.size == 0:
@@ -266,16 +266,16 @@ def _palm_contacts(obj: Any, palm_pose: np.ndarray, radius: float, thickness: fl
         # (object <- palm <- object ...) from the best sample to the nearest pair.
         p = local[int(np.argmin(d))]
         for _ in range(40):
-            q = obj.closest((p @ rot.T + origin)[None])["point"][0]
-            p_new = _project_to_palm((q - origin) @ rot, radius, thickness)
-            if np.linalg.norm(p_new - p) < 1e-10:
+            q = obj.closest((_stable.matmul(p, rot.T) + origin)[None])["point"][0]
+            p_new = _project_to_palm(_stable.matmul(q - origin, rot), radius, thickness)
+            if float(_stable.norm(p_new - p)) < 1e-10:
                 p = p_new
                 break
             p = p_new
-        return cast(np.ndarray, (p @ rot.T + origin)[None])
+        return cast(np.ndarray, (_stable.matmul(p, rot.T) + origin)[None])
     sel = local[touching]
     ang = 2 * math.pi * np.arange(_PALM_CONTACTS) / _PALM_CONTACTS
-    proj = sel[:, :2] @ np.stack([np.cos(ang), np.sin(ang)])
+    proj = _stable.matmul(sel[:, :2], np.stack([_stable.cos(ang), _stable.sin(ang)]))
     extreme = sorted(set(np.argmax(proj, axis=0).tolist()))
     return cast(np.ndarray, world[touching[extreme]])
 
@@ -354,7 +354,7 @@ def contacts_of(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joints: A
     finger = np.concatenate([np.full(len(s[2]), s[0], dtype=np.int64) for s in sources])
     link = np.concatenate([np.full(len(s[2]), s[1], dtype=np.int64) for s in sources])
     normals = np.asarray(near["normal"], dtype=np.float64)
-    normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    normals = normals / _stable.norm(normals)[:, None]
     return Contacts(points=np.asarray(near["point"], dtype=np.float64), normals=normals, finger=finger,
                     link=link, gap=np.asarray(near["distance"], dtype=np.float64) - offset,
                     num_fingers=m, num_links=n)
@@ -460,10 +460,10 @@ def wrap_angle(traj: Any, k: int = -1, distance: float = CONTACT_DISTANCE, obj: 
         sel = found.finger == f
         if np.count_nonzero(sel) < 2:
             continue
-        u = pose[:3, :3] @ np.array([math.cos(phi[f]), math.sin(phi[f]), 0.0])
+        u = _stable.matmul(pose[:3, :3], np.array([math.cos(phi[f]), math.sin(phi[f]), 0.0]))
         p = pose[:3, 2]
         rel = found.points[sel] - target
-        ang = np.unwrap(np.arctan2(rel @ p, rel @ u))
+        ang = np.unwrap(_stable.arctan2(_stable.matmul(rel, p), _stable.matmul(rel, u)))
         out[f] = math.degrees(float(ang.max() - ang.min()))
     return out
 
@@ -489,7 +489,7 @@ def _tangents(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     axis = np.argmin(np.abs(n), axis=1)
     e = np.eye(3)[axis]
     t1 = np.cross(n, e)
-    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t1 /= _stable.norm(t1)[:, None]
     return t1, np.cross(n, t1)
 
 
@@ -509,14 +509,14 @@ def primitive_wrenches(points: Any, normals: Any, center: Any, mu: float, cone_e
         raise ValueError(f"points and normals must both be (C, 3), got {p.shape} and {d.shape}")
     if not (float(torque_scale) > 0) or float(mu) < 0 or int(cone_edges) < 3:
         raise ValueError("need torque_scale > 0, mu >= 0 and cone_edges >= 3")
-    d = d / np.linalg.norm(d, axis=1, keepdims=True)
+    d = d / _stable.norm(d)[:, None]
     c = np.asarray(center, dtype=np.float64).reshape(3)
     if mu == 0:
         forces = d[:, None, :]
     else:
         t1, t2 = _tangents(d)
         a = 2 * np.pi * np.arange(cone_edges) / cone_edges
-        tangent = np.cos(a)[None, :, None] * t1[:, None, :] + np.sin(a)[None, :, None] * t2[:, None, :]
+        tangent = _stable.cos(a)[None, :, None] * t1[:, None, :] + _stable.sin(a)[None, :, None] * t2[:, None, :]
         forces = d[:, None, :] + mu * tangent
     arms = np.broadcast_to((p - c)[:, None, :], forces.shape)
     torques = np.cross(arms, forces) / torque_scale
@@ -562,9 +562,9 @@ def grasp_quality(contacts: Contacts, center: Any, mu: float = 0.5, cone_edges: 
         raise ValueError(f"cone_edges must be a whole number from 3 to 64, got {cone_edges!r}")
     if torque_scale is None:
         if obj is not None:
-            torque_scale = float(np.linalg.norm(np.asarray(obj.vertices) - c, axis=1).max())
+            torque_scale = float(_stable.norm(np.asarray(obj.vertices) - c).max())
         else:
-            torque_scale = float(np.linalg.norm(contacts.points - c, axis=1).max()) if len(contacts) else 1.0
+            torque_scale = float(_stable.norm(contacts.points - c).max()) if len(contacts) else 1.0
     scale = positive("torque_scale", torque_scale)
     r = _core.grasp_quality(contacts.points.reshape(-1, 3), contacts.normals.reshape(-1, 3), c, mu_f,
                             int(cone_edges), scale, bool(volume))

@@ -30,6 +30,15 @@ PLAUSIBLE_SIZE = (1e-3, 3.0)
 RIGID_TOLERANCE: float = _core.RIGID_TOLERANCE
 
 
+
+def rim_directions(finger_angles: Any) -> np.ndarray:
+    """(M, 3): (cos phi_m, sin phi_m, 0) for the finger angles phi_m (rad), the same bits on every
+    processor (hugger._stable); ``ValueError`` for an angle that is not finite."""
+    phi = np.asarray(finger_angles, dtype=np.float64).reshape(-1)
+    if not np.all(np.isfinite(phi)):
+        raise ValueError(f"finger_angles must be finite, got {phi.tolist()}")
+    return np.stack([_stable.cos(phi), _stable.sin(phi), np.zeros(phi.shape)], axis=1)
+
 def _count(name: str, value: Any) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise ValueError(f"{name} must be a whole number, got {value!r}")
@@ -352,7 +361,7 @@ class Hand:
         phi = np.asarray(d.get("finger_angles", 2 * np.pi * np.arange(m) / m), dtype=np.float64)
         if phi.shape != (m,):
             raise ValueError(f"finger_angles must hold {m} angles, got shape {phi.shape}")
-        rim = np.stack([_stable.cos(phi), _stable.sin(phi), np.zeros(m)], axis=1)
+        rim = rim_directions(phi)
         lengths = _real_array("link_lengths", d["link_lengths"])
         if lengths.ndim == 0:
             lengths = np.full((m, n), float(lengths))

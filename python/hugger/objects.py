@@ -25,7 +25,7 @@ def icosphere(subdivisions: int = 3) -> tuple[np.ndarray, np.ndarray]:
 
     Each vertex is normalised as p / sqrt(p.x*p.x + p.y*p.y + p.z*p.z), in that order: the same
     bits on every processor (hugger._stable), and those of the benchmark's C++ icosphere."""
-    t = (1.0 + 5 ** 0.5) / 2.0
+    t = (1.0 + math.sqrt(5.0)) / 2.0
     v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
          (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
     f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2), (10, 7, 6),

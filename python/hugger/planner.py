@@ -16,9 +16,10 @@ def look_at(position: Any, target: Any, up: Any = None) -> np.ndarray:
     """A palm pose (4, 4) at ``position`` whose normal (z axis) points at ``target``."""
     p = np.asarray(position, dtype=np.float64).reshape(3)
     z = np.asarray(target, dtype=np.float64).reshape(3) - p
-    if not np.all(np.isfinite(z)) or float(_stable.norm(z)) == 0:
+    length = float(_stable.norm(z))  # not np.linalg.norm, whose BLAS rounds per processor
+    if not np.all(np.isfinite(z)) or length == 0:
         raise ValueError("position and target must be finite and distinct")
-    z /= _stable.norm(z)  # not np.linalg.norm, whose BLAS rounds per processor (hugger._stable)
+    z /= length
     u = np.array([0.0, 0.0, 1.0]) if up is None else np.asarray(up, dtype=np.float64).reshape(3)
     if float(_stable.norm(np.cross(u, z))) < 1e-6:
         u = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])

@@ -144,9 +144,10 @@ def approach_directions(count: int, pole: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
     """
     n = _direction_count("approaches", count)
     p = np.asarray(pole, dtype=np.float64).reshape(3)
-    if not np.all(np.isfinite(p)) or float(_stable.norm(p)) == 0:
+    length = float(_stable.norm(p))
+    if not np.all(np.isfinite(p)) or length == 0:
         raise ValueError(f"pole must be a finite non-zero 3-vector, got {pole!r}")
-    p = p / float(_stable.norm(p))
+    p = p / length
     if n == 1:
         return p[None].copy()
     from .planner import look_at

@@ -19,7 +19,8 @@ from typing import Any, Callable, cast
 import numpy as np
 
 from .._rotation import axis_angle
-from ..hand import Hand
+from .. import _stable
+from ..hand import Hand, rim_directions
 
 #: Planarity tolerance: metres for points off the finger plane, and sine of the angle for axes.
 PLANAR_TOLERANCE = 1e-6
@@ -91,20 +92,20 @@ def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | No
     z = np.array([0.0, 0.0, 1.0])
     for c in chains:
         a0 = c.axes[0]
-        if abs(float(a0 @ z)) > PLANAR_TOLERANCE:
+        if abs(float(_stable.dot(a0, z))) > PLANAR_TOLERANCE:
             raise ValueError(f"{source}: joint {c.joints[0]!r} has axis {np.round(a0, 6).tolist()} (palm frame), not "
                              f"normal to the palm normal z: its finger plane does not contain the palm normal")
         signs = []
         for name, a in zip(c.joints, c.axes):
-            if np.linalg.norm(np.cross(a, a0)) > PLANAR_TOLERANCE:
+            if float(_stable.norm(np.cross(a, a0))) > PLANAR_TOLERANCE:
                 raise ValueError(f"{source}: joint {name!r} breaks planarity: its axis {np.round(a, 6).tolist()} is "
                                  f"not parallel to {c.joints[0]!r}'s {np.round(a0, 6).tolist()} (palm frame); hold it "
                                  f"with fixed_joints={{{name!r}: value}}")
-            signs.append(1.0 if float(a @ a0) > 0 else -1.0)
+            signs.append(1.0 if float(_stable.dot(a, a0)) > 0 else -1.0)
         points = c.anchors + [cast(np.ndarray, c.tip)]
         names = c.joints + ["the fingertip"]
         for name, p in zip(names, points):
-            off = abs(float((p - c.anchors[0]) @ a0))
+            off = abs(float(_stable.dot(p - c.anchors[0], a0)))
             if off > PLANAR_TOLERANCE:
                 raise ValueError(f"{source}: joint {name!r} breaks planarity: it lies {off:.3g} m off the plane of "
                                  f"{c.joints[0]!r} (normal to its axis)")
@@ -114,15 +115,15 @@ def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | No
                              f"frame, not on the palm's front face (z = 0)")
         u = np.cross(z, a0)
         u[2] = 0.0
-        u /= np.linalg.norm(u)
-        xi = [float((p - root) @ u) for p in points]
+        u /= _stable.norm(u)
+        xi = [float(_stable.dot(p - root, u)) for p in points]
         eta = [float(p[2] - root[2]) for p in points]
         seg = np.diff(np.stack([xi, eta], axis=1), axis=0)
-        ll = np.linalg.norm(seg, axis=1)
+        ll = _stable.norm(seg)
         if np.any(ll <= 0):
             k = int(np.argmin(ll))
             raise ValueError(f"{source}: joint {names[k]!r} and {names[k + 1]!r} coincide: a link of zero length")
-        absolute = np.arctan2(-seg[:, 0], seg[:, 1])
+        absolute = _stable.arctan2(-seg[:, 0], seg[:, 1])
         rel = np.diff(absolute, prepend=0.0)
         rel = np.remainder(rel + math.pi, 2 * math.pi) - math.pi
         lim = []
@@ -191,7 +192,7 @@ def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_
         if j.type in ("revolute", "continuous") and value != 0.0:
             rot = np.eye(4)
             rot[:3, :3] = axis_angle(np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0]), value)
-            return origin @ rot
+            return _stable.matmul(origin, rot)
         return origin
 
     def is_fixed(j: Any) -> bool:
@@ -203,7 +204,7 @@ def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_
             g = col.geometry
             if g is not None and g.cylinder is not None:
                 o = np.eye(4) if col.origin is None else np.asarray(col.origin, dtype=np.float64)
-                out.append((frame @ o, float(g.cylinder.radius), float(g.cylinder.length)))
+                out.append((_stable.matmul(frame, o), float(g.cylinder.radius), float(g.cylinder.length)))
         return out
 
     # the palm group: links reached from the palm link through fixed joints
@@ -213,7 +214,7 @@ def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_
         link = stack.pop(0)
         for j in children.get(link, []):
             if is_fixed(j):
-                frames[j.child] = frames[link] @ motion(j, fixed.get(j.name, 0.0))
+                frames[j.child] = _stable.matmul(frames[link], motion(j, fixed.get(j.name, 0.0)))
                 stack.append(j.child)
             elif j.type in ("revolute", "continuous"):
                 starts.append((frames[link], j))
@@ -223,11 +224,11 @@ def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_
     for frame, j in starts:
         c = _Chain()
         while j is not None:
-            f = frame @ motion(j, 0.0)
+            f = _stable.matmul(frame, motion(j, 0.0))
             c.joints.append(j.name)
             c.anchors.append(f[:3, 3].copy())
             axis = np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0], dtype=np.float64)
-            c.axes.append(f[:3, :3] @ (axis / np.linalg.norm(axis)))
+            c.axes.append(_stable.matmul(f[:3, :3], axis / _stable.norm(axis)))
             lim = j.limit
             if j.type == "continuous" or lim is None or lim.lower is None or lim.upper is None:
                 c.limits.append((-math.inf, math.inf))
@@ -239,7 +240,7 @@ def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_
             while walk:
                 link, lf = walk.pop()
                 for k in children.get(link, []):
-                    kf = lf @ motion(k, fixed.get(k.name, 0.0))
+                    kf = _stable.matmul(lf, motion(k, fixed.get(k.name, 0.0)))
                     if is_fixed(k):
                         if tip is None:
                             tip = kf[:3, 3].copy()
@@ -259,7 +260,7 @@ def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_
                         raise ValueError(f"{source}: cannot find the fingertip after joint {j.name!r}: give its last "
                                          f"link a fixed child link at the tip, or a collision cylinder")
                     ends = [o[:3, 3] + s * o[:3, 2] * length / 2 for o, _, length in cyl for s in (1, -1)]
-                    tip = max(ends, key=lambda e: float(np.linalg.norm(e - c.anchors[-1])))
+                    tip = max(ends, key=lambda e: float(_stable.norm(e - c.anchors[-1])))
                 c.tip = tip
                 j = None
             else:
@@ -279,7 +280,7 @@ def _finger_geometry(hand: Hand) -> list[tuple[np.ndarray, np.ndarray]]:
     for m in range(hand.fingers):
         u = hand.finger_directions[m]
         theta = np.cumsum(hand.rest_angles[m])
-        d = -np.sin(theta)[:, None] * u + np.cos(theta)[:, None] * z
+        d = -_stable.sin(theta)[:, None] * u + _stable.cos(theta)[:, None] * z
         pts = np.vstack([hand.finger_roots[m], hand.finger_roots[m] + np.cumsum(hand.link_lengths[m][:, None] * d, axis=0)])
         out.append((pts, np.cross(u, z)))
     return out
@@ -289,7 +290,7 @@ def _general(hand: Hand) -> Hand:
     if hand.general:
         return hand
     phi = hand.finger_angles
-    rim = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=1)
+    rim = rim_directions(phi)
     return Hand.from_layout(hand.palm_radius * rim, rim, hand.link_lengths, link_radius=hand.link_radius,
                             palm_radius=hand.palm_radius, palm_thickness=hand.palm_thickness, name=hand.name)
 
@@ -314,9 +315,9 @@ def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
         return t
 
     def along(d: np.ndarray) -> np.ndarray:  # a rotation taking z onto the unit vector d
-        d = d / np.linalg.norm(d)
+        d = d / _stable.norm(d)
         v = np.cross([0.0, 0.0, 1.0], d)
-        s, c = np.linalg.norm(v), float(d[2])
+        s, c = float(_stable.norm(v)), float(d[2])
         if s < 1e-15:
             return np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
         return axis_angle(v, math.atan2(s, c))
@@ -409,7 +410,7 @@ def from_mjcf(path: str | os.PathLike[str], palm_body: str | None = None, fixed_
         if palm < 0:
             raise ValueError(f"{source}: no body called {palm_body!r}")
     rot_p, pos_p = data.xmat[palm].reshape(3, 3), data.xpos[palm]
-    to_palm: Callable[[Any], np.ndarray] = lambda x: rot_p.T @ (np.asarray(x) - pos_p)  # noqa: E731
+    to_palm: Callable[[Any], np.ndarray] = lambda x: _stable.matmul(rot_p.T, np.asarray(x) - pos_p)  # noqa: E731
     body_joints = {b: [j for j in range(model.njnt) if model.jnt_bodyid[j] == b] for b in range(model.nbody)}
 
     def moving(b: int) -> list[int]:
@@ -454,7 +455,7 @@ def from_mjcf(path: str | os.PathLike[str], palm_body: str | None = None, fixed_
             j = moving(b)[0]
             c.joints.append(jname(j))
             c.anchors.append(to_palm(data.xanchor[j]))
-            c.axes.append(rot_p.T @ data.xaxis[j])
+            c.axes.append(_stable.matmul(rot_p.T, data.xaxis[j]))
             lo, hi = model.jnt_range[j] if model.jnt_limited[j] else (-math.inf, math.inf)
             c.limits.append((float(lo), float(hi)))
             c.radii += [r for r, _, _ in geoms(b)]
@@ -475,7 +476,7 @@ def from_mjcf(path: str | os.PathLike[str], palm_body: str | None = None, fixed_
                 if not ends:
                     raise ValueError(f"{source}: cannot find the fingertip of body {bname(b)!r}: add a site at the tip "
                                      f"or a capsule geom")
-                c.tip = max(ends, key=lambda e: float(np.linalg.norm(e - c.anchors[-1])))
+                c.tip = max(ends, key=lambda e: float(_stable.norm(e - c.anchors[-1])))
             b = None
         chains.append(c)
     palm_r = palm_t = None
