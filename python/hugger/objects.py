@@ -24,7 +24,8 @@ def icosphere(subdivisions: int = 3) -> tuple[np.ndarray, np.ndarray]:
     """Unit sphere: vertices (V, 3) and outward faces (F, 3); F = 20 * 4**subdivisions.
 
     Each vertex is normalised as p / sqrt(p.x*p.x + p.y*p.y + p.z*p.z), in that order: the same
-    bits on every processor (hugger._stable), and those of the benchmark's C++ icosphere."""
+    bits on every x86-64 processor with FMA (hugger._stable), and those of the benchmark's C++
+    icosphere."""
     t = (1.0 + math.sqrt(5.0)) / 2.0
     v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
          (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
