@@ -23,8 +23,8 @@ from hugger import _stable
 
 def _other_processor_env() -> dict[str, str]:
     """The environment of a processor without AVX-512 and FMA, as far as NumPy and OpenBLAS go:
-    NumPy's AVX-512 loops switched off (only targets it dispatches to can be), OpenBLAS on its
-    SSE4.2 kernels (x86-64 only)."""
+    NumPy's AVX-512 loops switched off (only targets it dispatches to and this processor has can
+    be), OpenBLAS on its SSE4.2 kernels (x86-64 only)."""
     try:
         from numpy._core import _multiarray_umath as umath  # type: ignore[attr-defined]
     except ImportError:  # NumPy 1.x
@@ -32,8 +32,8 @@ def _other_processor_env() -> dict[str, str]:
     env = dict(os.environ)
     if platform.machine().lower() in ("x86_64", "amd64"):
         env["OPENBLAS_CORETYPE"] = "Nehalem"
-    dispatched = getattr(umath, "__cpu_dispatch__", [])
-    off = [f for f in dispatched if f.startswith("AVX512") or f == "X86_V4"]
+    dispatched, found = getattr(umath, "__cpu_dispatch__", []), getattr(umath, "__cpu_features__", {})
+    off = [f for f in dispatched if (f.startswith("AVX512") or f == "X86_V4") and found.get(f)]
     if off:
         env["NPY_DISABLE_CPU_FEATURES"] = " ".join(off)
     return env
