@@ -112,8 +112,8 @@ def test_former_stalls_end_promptly(name, normal, rules, checker, tmp_path):
 #: with the 1 µm flattening of the section skin before e4ee900, the other three with its 10 µm
 #: (with the cycle rule taken out, each ran to max_iterations with the hug rules and the section
 #: skin, seed 86 with the mesh skin too; with it every plan here ends within 320 iterations). The
-#: cylinders are made with NumPy's sin and cos, which may round differently on another processor
-#: (docs/objects.md): there they may end without the cycle; the box is made without them.
+#: objects are turned by tests/helpers.py with NumPy's matrix product, which may round differently
+#: on another processor (docs/objects.md): there a case may end without the cycle.
 CYCLES = [(100, "cylinder", 0.01), (47, "cylinder", 0.03), (86, "cylinder", 0.03), (386, "box", 0.01)]
 
 

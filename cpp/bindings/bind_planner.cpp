@@ -226,8 +226,9 @@ void bind_planner(py::module_& m) {
              if (skin == "section") {
                // The skin keeps links off O by at most its flattening: a tenth of delta at most.
                world = std::make_shared<SectionSkin>(object, PlaneRegion::flatten_for(params.contact_tolerance_or_default()));
+             } else {
+               world = std::make_shared<SimulatedWorld>(object);
              }
-             else world = std::make_shared<SimulatedWorld>(object);
              out->planner = std::make_unique<Planner>(hand, world, t, pose, params);
              return out;
            }),

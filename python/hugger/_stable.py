@@ -16,9 +16,14 @@ from typing import Any, Callable, cast
 import numpy as np
 
 
-def _each(f: Callable[[float], float], x: Any) -> np.ndarray:
-    a = np.asarray(x, dtype=np.float64)
-    return np.fromiter(map(f, a.ravel().tolist()), dtype=np.float64, count=a.size).reshape(a.shape)
+def _each(f: Callable[..., float], *args: Any) -> np.ndarray:
+    """f of the arguments' elements, one call each (arrays of one shape)."""
+    arrays = [np.asarray(x, dtype=np.float64) for x in args]
+    shape = arrays[0].shape
+    if any(a.shape != shape for a in arrays):
+        raise ValueError(f"{f.__name__} needs arrays of one shape, got {[a.shape for a in arrays]}")
+    out = map(f, *(a.ravel().tolist() for a in arrays))
+    return np.fromiter(out, dtype=np.float64, count=arrays[0].size).reshape(shape)
 
 
 def sin(x: Any) -> np.ndarray:
@@ -43,11 +48,7 @@ def arccos(x: Any) -> np.ndarray:
 
 def arctan2(y: Any, x: Any) -> np.ndarray:
     """Elementwise atan2(y, x) (the C library's) of two arrays of one shape."""
-    yy, xx = np.asarray(y, dtype=np.float64), np.asarray(x, dtype=np.float64)
-    if yy.shape != xx.shape:
-        raise ValueError(f"arctan2 needs arrays of one shape, got {yy.shape} and {xx.shape}")
-    out = map(math.atan2, yy.ravel().tolist(), xx.ravel().tolist())
-    return np.fromiter(out, dtype=np.float64, count=yy.size).reshape(yy.shape)
+    return _each(math.atan2, y, x)
 
 
 def dot(a: Any, b: Any) -> np.ndarray:
@@ -66,6 +67,11 @@ def norm(v: Any) -> np.ndarray:
     """Euclidean norm along the last axis, sqrt(x0*x0 + x1*x1 + ...) added left to right (a
     NumPy float for a vector)."""
     return cast(np.ndarray, np.sqrt(dot(v, v)))
+
+
+def farthest(points: Any, centre: Any) -> float:
+    """The largest distance of the points (k, 3) from ``centre`` (3,): an object's radius about T."""
+    return float(norm(np.asarray(points, dtype=np.float64) - np.asarray(centre, dtype=np.float64)).max())
 
 
 def matmul(a: Any, b: Any) -> np.ndarray:

@@ -562,9 +562,9 @@ def grasp_quality(contacts: Contacts, center: Any, mu: float = 0.5, cone_edges: 
         raise ValueError(f"cone_edges must be a whole number from 3 to 64, got {cone_edges!r}")
     if torque_scale is None:
         if obj is not None:
-            torque_scale = float(_stable.norm(np.asarray(obj.vertices) - c).max())
+            torque_scale = _stable.farthest(obj.vertices, c)
         else:
-            torque_scale = float(_stable.norm(contacts.points - c).max()) if len(contacts) else 1.0
+            torque_scale = _stable.farthest(contacts.points, c) if len(contacts) else 1.0
     scale = positive("torque_scale", torque_scale)
     r = _core.grasp_quality(contacts.points.reshape(-1, 3), contacts.normals.reshape(-1, 3), c, mu_f,
                             int(cone_edges), scale, bool(volume))

@@ -30,7 +30,6 @@ PLAUSIBLE_SIZE = (1e-3, 3.0)
 RIGID_TOLERANCE: float = _core.RIGID_TOLERANCE
 
 
-
 def rim_directions(finger_angles: Any) -> np.ndarray:
     """(M, 3): (cos phi_m, sin phi_m, 0) for the finger angles phi_m (rad), the same bits on every
     processor (hugger._stable); ``ValueError`` for an angle that is not finite."""
@@ -38,6 +37,7 @@ def rim_directions(finger_angles: Any) -> np.ndarray:
     if not np.all(np.isfinite(phi)):
         raise ValueError(f"finger_angles must be finite, got {phi.tolist()}")
     return np.stack([_stable.cos(phi), _stable.sin(phi), np.zeros(phi.shape)], axis=1)
+
 
 def _count(name: str, value: Any) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):

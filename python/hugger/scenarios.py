@@ -39,7 +39,7 @@ def safe_distance(obj: Object, hand: Hand, target: Any, margin: float = 0.005) -
     """A palm distance from T at which the hand, in any orientation, clears the object by
     ``margin``: the object's radius about T plus the hand's radius about the palm centre."""
     t = np.asarray(target, dtype=np.float64).reshape(3)
-    body = float(_stable.norm(obj.vertices - t).max())
+    body = _stable.farthest(obj.vertices, t)
     hand_radius: float = max(math.hypot(hand.palm_radius, hand.reach) + hand.link_radius,
                               math.hypot(hand.palm_radius, hand.palm_thickness))
     if hand.general:  # roots anywhere on the palm, fingers at rest in any pose

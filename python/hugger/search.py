@@ -166,7 +166,7 @@ def approach_directions(count: int, pole: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
 
 def torque_scale(obj: Object, target: np.ndarray) -> float:
     """The torque scale of the ranking's grasp quality: the object's largest distance from T (m)."""
-    return float(_stable.norm(obj.vertices - target).max())
+    return _stable.farthest(obj.vertices, target)
 
 
 def final_grasp_quality(traj: Trajectory, hand: Hand, obj: Object, target: np.ndarray,
