@@ -391,7 +391,7 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
   // clinging tolerance: below a D_n of twice that without asking. (Sampling a link that needed
   // none changes no answer: its samples are clear.)
   const double rest_gap = 2.0 * snake_tolerance();
-  bool any = false;
+  int last = -1;  // the distal-most link sampled
   for (int n = 0; n < N; ++n) {
     cum += a1[n] - a0[n];
     reach += hand_.link_length(m, n) * std::abs(cum);
@@ -399,17 +399,17 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
     bound = std::max(bound, D);
     sample[n] = (turned != nullptr && turned[n] && D > rest_gap) ||
                 sensing_->link_gap_below(planes_[m], next[n], next[n + 1], r, D);
-    any = any || sample[n];
+    if (sample[n]) last = n;
   }
-  if (!any) return true;
+  if (last < 0) return true;
   const double h = std::max(r, s) / 4.0;
   const int S = std::clamp(static_cast<int>(std::ceil(bound / h - 1e-9)), 1, 128);
-  Chain c;
+  std::array<Vec2, kMaxLinks + 1> c;  // the joints up to the last sampled link's end
   for (int i = 1; i < S; ++i) {
     const double t = static_cast<double>(i) / S;
-    for (int n = 0; n < N; ++n) a[n] = a0[n] + t * (a1[n] - a0[n]);
-    hand_.forward_planar(m, old[0] + t * (next[0] - old[0]), a.data(), &c);
-    for (int n = 0; n < N; ++n)
+    for (int n = 0; n <= last; ++n) a[n] = a0[n] + t * (a1[n] - a0[n]);
+    hand_.forward_planar(m, old[0] + t * (next[0] - old[0]), a.data(), last + 1, c.data());
+    for (int n = 0; n <= last; ++n)
       if (sample[n] && !swept_link_ok(m, c[n], c[n + 1])) return false;
   }
   return true;
@@ -623,10 +623,17 @@ void Planner::phase2_iteration() {
 
   // (b) FollowBoundary and Head2Tail for every CONTACT finger (hug rule: a finger that never
   // touched closes until it touches instead).
-  const std::vector<Chain> old = chains_;
-  std::vector<Chain> cand = chains_;
-  std::vector<char> touching(M, 0);  // the finger touches O (not closing)
-  std::vector<char> prefer_open(M, 0);
+  // The iteration's chains and flags live in the planner's scratch (copies keep their room): a
+  // plan makes no allocation per iteration for them.
+  Scratch& w = scratch_;
+  w.old = chains_;
+  w.cand = chains_;
+  const std::vector<Chain>& old = w.old;
+  std::vector<Chain>& cand = w.cand;
+  std::vector<char>& touching = w.touching;  // the finger touches O (not closing)
+  std::vector<char>& prefer_open = w.prefer_open;
+  touching.assign(M, 0);
+  prefer_open.assign(M, 0);
   for (int m = 0; m < M; ++m) {
     if (states_[m] != TipState::kContact) continue;
     if (closing_[m]) {
@@ -733,7 +740,8 @@ void Planner::phase2_iteration() {
   // (d) Tail2Head toward the moved roots; commit finger by finger, checking the motion of each
   // finger (joint steps, swept collision) and the fingers against each other. If anything fails
   // with the palm moved, retry with a shorter palm step, and finally with the palm still.
-  std::vector<char> opened_now(M, 0);
+  std::vector<char>& opened_now = w.opened_now;
+  opened_now.assign(M, 0);
   auto attempt = [&](double sig, std::vector<Chain>& out, std::vector<TipState>& st) {
     const bool last = sig == 0.0;  // the palm still: what cannot move stays where it is, DONE
     std::fill(opened_now.begin(), opened_now.end(), 0);
@@ -741,7 +749,7 @@ void Planner::phase2_iteration() {
     st = states_;
     const double new_eta = eta_ + sig;
     for (int m = 0; m < M; ++m) {
-      Chain c;
+      Chain& c = w.chain;
       bool checked = false;  // c was found clear of the other fingers and itself, against `out`
       switch (st[m]) {
         case TipState::kFrozen:
@@ -801,12 +809,12 @@ void Planner::phase2_iteration() {
         st[m] = TipState::kDone;
         ++stats_.finger_collisions;
       }
-      out[m] = std::move(c);
+      std::swap(out[m], c);  // c keeps out[m]'s room for the next finger
     }
     return true;
   };
-  std::vector<Chain> next;
-  std::vector<TipState> next_states;
+  std::vector<Chain>& next = w.next;
+  std::vector<TipState>& next_states = w.next_states;
   bool committed = false;
   for (double sig = sigma; sig >= min_sigma && !committed; sig *= 0.25) {
     committed = attempt(sig, next, next_states);
@@ -877,8 +885,8 @@ void Planner::phase2_iteration() {
   ++stats_.phase2_iterations;
   // Never emit an unchanged configuration: when nothing moved and no state changed, nothing
   // can move any more.
-  chains_ = std::move(next);
-  states_ = std::move(next_states);
+  std::swap(chains_, next);  // next keeps the old chains' room for the next iteration
+  std::swap(states_, next_states);
   eta_ += sigma;
   for (double& lb : frozen_lb_) lb -= sigma + 1e-12;  // a picometre for rounding
   const bool all_done = std::all_of(states_.begin(), states_.end(), [](TipState t) { return t == TipState::kDone; });
