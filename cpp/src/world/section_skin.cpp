@@ -1521,19 +1521,27 @@ bool finite_plane(const FingerPlane& plane, double radius) {
 }  // namespace
 
 const PlaneRegion* SectionSkin::find(const FingerPlane& plane, double radius) const {
-  // Every query asks for its plane's region, and the fingers' queries interleave: the table of
-  // hashes answers most with one comparison (a miss or a collision falls back to the scan).
+  // A finger's queries come in runs (its propagations, its motion check): the entry found last
+  // is asked first, by its bits (equal bits are equal planes; a zero of the other sign only
+  // sends the query on). Threads that share the skin may overwrite it: each load is checked.
+  static_assert(sizeof(FingerPlane) == 9 * sizeof(double), "FingerPlane: three Vec3, no padding");
+  if (const Entry* e = last_.load(std::memory_order_acquire);
+      e != nullptr && e->radius == radius && std::memcmp(&e->plane, &plane, sizeof(FingerPlane)) == 0)
+    return &e->region;
+  // The fingers' queries interleave: the table of hashes answers most of the others with one
+  // comparison (a miss or a collision falls back to the scan).
+  const Entry* found = nullptr;
   const int hinted = by_hash_[plane_slot(plane, radius, kHashBits)].load(std::memory_order_acquire);
   if (hinted > 0) {
     const Entry* e = slots_[hinted - 1].load(std::memory_order_acquire);
-    if (same_plane(e->plane, e->radius, plane, radius)) return &e->region;
+    if (same_plane(e->plane, e->radius, plane, radius)) found = e;
   }
-  const int n = count_.load(std::memory_order_acquire);
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0, n = found ? 0 : count_.load(std::memory_order_acquire); i < n && !found; ++i) {
     const Entry* e = slots_[i].load(std::memory_order_acquire);
-    if (same_plane(e->plane, e->radius, plane, radius)) return &e->region;
+    if (same_plane(e->plane, e->radius, plane, radius)) found = e;
   }
-  return nullptr;
+  if (found) last_.store(found, std::memory_order_release);
+  return found ? &found->region : nullptr;
 }
 
 const PlaneRegion* SectionSkin::insert(std::unique_ptr<Entry> entry) const {

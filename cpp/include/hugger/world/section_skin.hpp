@@ -328,6 +328,8 @@ class SectionSkin final : public Sensing {
   static constexpr int kHashBits = 7, kHashSlots = 1 << kHashBits;
   mutable std::array<std::atomic<int>, kHashSlots> by_hash_{};
   mutable std::atomic<int> count_{0};
+  /// find()'s entry found last (nullptr: none yet); entries live as long as the skin.
+  mutable std::atomic<const Entry*> last_{nullptr};
   int build_threads_ = 0;
 };
 
