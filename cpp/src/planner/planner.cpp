@@ -623,17 +623,15 @@ void Planner::phase2_iteration() {
 
   // (b) FollowBoundary and Head2Tail for every CONTACT finger (hug rule: a finger that never
   // touched closes until it touches instead).
-  // The iteration's chains and flags live in the planner's scratch (copies keep their room): a
-  // plan makes no allocation per iteration for them.
+  // chains_ holds the old chains until the end of the iteration. The new ones are made in the
+  // planner's scratch, whose chains are copied into the room they have: a plan makes no
+  // allocation per iteration for them. The flags, one per finger, live on the stack.
   Scratch& w = scratch_;
-  w.old = chains_;
+  const std::vector<Chain>& old = chains_;
   w.cand = chains_;
-  const std::vector<Chain>& old = w.old;
   std::vector<Chain>& cand = w.cand;
-  std::vector<char>& touching = w.touching;  // the finger touches O (not closing)
-  std::vector<char>& prefer_open = w.prefer_open;
-  touching.assign(M, 0);
-  prefer_open.assign(M, 0);
+  std::array<char, kMaxFingers> touching{};  // the finger touches O (not closing)
+  std::array<char, kMaxFingers> prefer_open{};
   for (int m = 0; m < M; ++m) {
     if (states_[m] != TipState::kContact) continue;
     if (closing_[m]) {
@@ -740,11 +738,10 @@ void Planner::phase2_iteration() {
   // (d) Tail2Head toward the moved roots; commit finger by finger, checking the motion of each
   // finger (joint steps, swept collision) and the fingers against each other. If anything fails
   // with the palm moved, retry with a shorter palm step, and finally with the palm still.
-  std::vector<char>& opened_now = w.opened_now;
-  opened_now.assign(M, 0);
+  std::array<char, kMaxFingers> opened_now{};
   auto attempt = [&](double sig, std::vector<Chain>& out, std::vector<TipState>& st) {
     const bool last = sig == 0.0;  // the palm still: what cannot move stays where it is, DONE
-    std::fill(opened_now.begin(), opened_now.end(), 0);
+    opened_now.fill(0);
     out = old;
     st = states_;
     const double new_eta = eta_ + sig;
@@ -885,7 +882,7 @@ void Planner::phase2_iteration() {
   ++stats_.phase2_iterations;
   // Never emit an unchanged configuration: when nothing moved and no state changed, nothing
   // can move any more.
-  std::swap(chains_, next);  // next keeps the old chains' room for the next iteration
+  std::swap(chains_, next);  // old (chains_) is the new chains now; next keeps the old ones' room
   std::swap(states_, next_states);
   eta_ += sigma;
   for (double& lb : frozen_lb_) lb -= sigma + 1e-12;  // a picometre for rounding

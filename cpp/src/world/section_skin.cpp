@@ -1530,18 +1530,21 @@ const PlaneRegion* SectionSkin::find(const FingerPlane& plane, double radius) co
     return &e->region;
   // The fingers' queries interleave: the table of hashes answers most of the others with one
   // comparison (a miss or a collision falls back to the scan).
-  const Entry* found = nullptr;
+  auto found = [&](const Entry* e) {
+    last_.store(e, std::memory_order_release);
+    return &e->region;
+  };
   const int hinted = by_hash_[plane_slot(plane, radius, kHashBits)].load(std::memory_order_acquire);
   if (hinted > 0) {
     const Entry* e = slots_[hinted - 1].load(std::memory_order_acquire);
-    if (same_plane(e->plane, e->radius, plane, radius)) found = e;
+    if (same_plane(e->plane, e->radius, plane, radius)) return found(e);
   }
-  for (int i = 0, n = found ? 0 : count_.load(std::memory_order_acquire); i < n && !found; ++i) {
+  const int n = count_.load(std::memory_order_acquire);
+  for (int i = 0; i < n; ++i) {
     const Entry* e = slots_[i].load(std::memory_order_acquire);
-    if (same_plane(e->plane, e->radius, plane, radius)) found = e;
+    if (same_plane(e->plane, e->radius, plane, radius)) return found(e);
   }
-  if (found) last_.store(found, std::memory_order_release);
-  return found ? &found->region : nullptr;
+  return nullptr;
 }
 
 const PlaneRegion* SectionSkin::insert(std::unique_ptr<Entry> entry) const {

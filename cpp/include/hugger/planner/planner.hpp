@@ -217,11 +217,10 @@ class Planner {
     int last = 0;  ///< the slot used last; a new chain takes the other
   };
   mutable std::vector<AngleMemo> angle_memo_;
-  /// phase2_iteration's working chains and flags, kept between iterations for their room.
+  /// phase2_iteration's new chains and states, kept between iterations for their room.
   struct Scratch {
-    std::vector<Chain> old, cand, next;
+    std::vector<Chain> cand, next;
     std::vector<TipState> next_states;
-    std::vector<char> touching, prefer_open, opened_now;
     Chain chain;
   };
   Scratch scratch_;
