@@ -149,6 +149,26 @@ def test_target_not_strictly_inside_is_refused(hand, sphere, where):
         hugger.Planner(hand, sphere, target, start())
 
 
+@pytest.mark.parametrize("rules", ["paper", "hug"])
+@pytest.mark.parametrize("centre", [(0.3, 0.0, 0.0), (0.0, -0.3, 0.0), (0.05, 0.0, -0.3)])
+def test_a_skin_whose_object_is_not_at_the_target_stops_the_palm_at_the_target(hand, rules, centre):
+    # A skin cannot be asked whether T lies inside its object (a displaced object in simulation,
+    # a user's skin): nothing is ever touched here. The palm stops with its front plane at T and
+    # the fingers close (the hand is blocked): the plan ends in a few hundred configurations.
+    # Before the palm was bounded by T, each approach iteration advanced by the growing gap, and
+    # max_iterations bounded neither time nor memory.
+    target = np.zeros(3)
+    planner = hugger.Planner(hand, hugger.skins.SphereSkin(0.04, centre), target, hugger.look_at([0, 0.2, 0], target),
+                             rules=rules, max_iterations=200)
+    traj = planner.plan()
+    assert traj.status == "done"
+    assert (traj.tip_state[-1] == 2).all()  # DONE
+    origin, p = traj.palm_pose[:, :3, 3], traj.palm_pose[:, :3, 2]
+    ahead = ((target - origin) * p).sum(axis=1)  # how far T lies ahead of the palm's front plane
+    assert ahead.min() >= -1e-12 and ahead[-1] <= 1e-12  # it reaches T and never passes it
+    assert len(traj) < 0.2 / planner.params["step"] + 200
+
+
 def test_target_just_inside_a_vertex_is_accepted(hand, sphere):
     target = sphere.vertices[7] * (1 - 1e-6)
     assert hugger.Planner(hand, sphere, target, start(), max_iterations=2).plan().status == "max_iterations"

@@ -162,6 +162,7 @@ void Planner::plan_phase1(const Pose& start) {
   }
   // Phase 2 state: each finger in its plane, fixed in the world while the palm translates.
   palm2_ = history_.back().palm;
+  eta_target_ = std::max(0.0, (target_ - palm2_.translation()).dot(palm2_.linear().col(2)));
   for (int m = 0; m < hand_.fingers(); ++m) {
     planes_.push_back(hand_.plane(palm2_, m));
     chains_.push_back(hand_.rest_chain(m));  // the rim hand's rest is straight: (R, 0), (R, L0), ...
@@ -555,8 +556,9 @@ bool Planner::approach() {
     const Chain& c = chains_[m];
     for (int n = 0; n < N; ++n) free = std::min(free, link_gap(m, c[n], c[n + 1], free));
   }
-  const double total = free - level;
-  if (!(total >= s) || !std::isfinite(total)) return false;  // within a step of O: the regular iteration lands
+  // Never past T (eta_target_): with nothing sensed ahead, the hand advances to T in one iteration.
+  const double total = std::min(free - level, eta_target_ - eta_);
+  if (!(total >= s) || !std::isfinite(total)) return false;  // within a step of O or T: the regular iteration lands
   const long pieces = static_cast<long>(std::ceil(total / s - 1e-12));
   const double eta0 = eta_;
   for (long k = 1; k <= pieces; ++k) {
@@ -709,6 +711,9 @@ void Planner::phase2_iteration() {
         if (states_[m] == TipState::kContact) sigma += (cand[m][0].y() - eta_) / M;
       sigma = std::clamp(sigma, 0.0, s);
     }
+    // The palm stops with its front plane at T: there the hand is blocked (below), as if it
+    // touched O, and the FROZEN fingers close.
+    sigma = std::min(sigma, std::max(0.0, eta_target_ - eta_));
     if (sigma > 0.0) {
       double free = palm_gap;
       const double cap = s + delta;

@@ -204,6 +204,10 @@ class Planner {
   /// their contact gaps. -inf: unknown.
   std::vector<double> frozen_lb_;
   double eta_ = 0.0;
+  /// How far the palm may advance along p: until its front plane reaches T. T lies inside O, so
+  /// the palm touches O first; a skin whose object is elsewhere (a displaced object, a wrong T)
+  /// would otherwise let the hand approach forever.
+  double eta_target_ = kInf;
   bool palm_touched_ = false;
   bool any_contact_ = false;
   std::vector<char> closing_;  ///< hug rule: per finger, closing until contact
