@@ -111,6 +111,37 @@ def test_other_settings_in_the_same_folder_are_refused(reference, tmp_path):
         dataset.generate(OBJECTS, out, approaches=4, workers=1)
 
 
+def test_a_run_that_would_leave_shards_out_of_the_index_is_refused(reference, tmp_path):
+    # Fewer objects, or other settings with no shard name in common (before, the new index simply
+    # replaced the old one, whose shards were then listed nowhere).
+    import shutil
+
+    out = tmp_path / "ds"
+    shutil.copytree(reference, out)
+    index = (out / "index.json").read_bytes()
+    with pytest.raises(ValueError, match="other settings or objects: 1 of its 3 shards"):
+        dataset.generate(OBJECTS[:2], out, approaches=3, workers=1)
+    with pytest.raises(ValueError, match="3 of its 3 shards"):
+        dataset.generate(OBJECTS, out, approaches=3, hands=["4x4"], workers=1)
+    assert (out / "index.json").read_bytes() == index
+    (out / "index.json").write_text("[1, 2]")
+    with pytest.raises(ValueError, match="not the index of a hugger dataset"):
+        dataset.generate(OBJECTS, out, approaches=3, workers=1)
+
+
+def test_a_run_may_add_objects_to_a_dataset(reference, tmp_path):
+    import shutil
+
+    out = tmp_path / "ds"
+    shutil.copytree(reference, out)
+    before = shard_bytes(out)
+    index = dataset.generate([*OBJECTS, "sphere"], out, approaches=3, workers=1)
+    assert [s["object"] for s in index["shards"]] == [*OBJECTS, "sphere"]
+    after = shard_bytes(out)
+    assert {k: after[k] for k in before} == before  # the shards made before are kept as they were
+    assert len(hugger.Dataset(out)) == 3 * (len(OBJECTS) + 1)
+
+
 def test_loader_and_every_saved_grasp_passes_the_checker(reference, tmp_path, checker):
     ds = hugger.Dataset(reference)
     assert len(ds) == 3 * len(OBJECTS)
@@ -165,6 +196,16 @@ def test_ray_backend_gives_the_same_shards(reference, tmp_path):
 def test_bad_input(tmp_path, capsys):
     assert main(["generate", "box", "--out", str(tmp_path), "--hands", "5y5"]) == 2
     assert "hand spec" in capsys.readouterr().err
+    a_file = tmp_path / "plan.npz"
+    a_file.write_bytes(b"")
+    assert main(["generate", "box", "--out", str(a_file)]) == 2  # a file is not a folder: no traceback
+    err = capsys.readouterr().err
+    assert "is a file" in err and "Traceback" not in err and err.count("\n") == 1
+    # Every object is checked before any shard is made: an open mesh after a good object.
+    open_mesh = tmp_path / "open.obj"
+    open_mesh.write_text("v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\nf 1 2 3\nf 1 2 4\nf 1 3 4\n")
+    assert main(["generate", "box", str(open_mesh), "--out", str(tmp_path / "ds")]) == 2
+    assert not (tmp_path / "ds").exists()
     assert main(["generate", "nothing.stl", "--out", str(tmp_path)]) == 2
     assert main(["generate", "box", "--out", str(tmp_path), "--address", "x:1"]) == 2
     with pytest.raises(ValueError, match="twice"):

@@ -98,6 +98,7 @@ def _object_entry(spec: str, scale: float) -> dict[str, Any]:
         return {"name": spec, "path": spec, "builtin": True, "sha256": digest, "scale": scale}
     if not os.path.isfile(spec):
         raise ValueError(f"{spec!r} is neither a built-in object nor a mesh file")
+    load_object(spec, scale)  # refuses a mesh the planner cannot take before any shard is made
     return {"name": Path(spec).stem, "path": spec, "builtin": False, "sha256": _sha256_file(spec), "scale": scale}
 
 
@@ -216,6 +217,30 @@ def _shard_done(path: Path, key: str) -> bool:
     return True
 
 
+def _check_index(root: Path, tasks: list[dict[str, Any]]) -> None:
+    """Refuses a folder whose index lists a shard this run would not make (other objects, hands or
+    settings): the run would write an index without it. The same command, or one that adds
+    objects or hands with the same settings, finishes or grows the dataset."""
+    path = root / "index.json"
+    if not path.exists():
+        return
+    try:
+        old = json.loads(path.read_text(encoding="utf-8"))
+        listed = None
+        if old.get("format") == DATASET_FORMAT:
+            listed = [(str(e["file"]), str(e["task_sha256"])) for e in old["shards"]]
+    except (OSError, ValueError, TypeError, KeyError, AttributeError):
+        listed = None
+    if listed is None:
+        raise ValueError(f"{path} is not the index of a hugger dataset; write this dataset to a new folder")
+    ours = {(f"shards/{t['file']}", t["key"]) for t in tasks}
+    left_out = [f for f, key in listed if (f, key) not in ours]
+    if left_out:
+        raise ValueError(f"{root} holds a dataset made with other settings or objects: {len(left_out)} of its "
+                         f"{len(listed)} shards (e.g. {left_out[0]}) are not part of this run; write this dataset to "
+                         f"a new folder, or repeat the command that made it (it may add objects or hands)")
+
+
 # --------------------------------------------------------------------------------------------
 # the run
 
@@ -266,9 +291,9 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     if len(set(names)) != len(names):
         raise ValueError(f"two objects share a name: {sorted(x for x in names if names.count(x) > 1)}")
     root = Path(out)
-    shard_dir = root / "shards"
-    shard_dir.mkdir(parents=True, exist_ok=True)
-    remove_temporaries(shard_dir)  # left by a killed run
+    if root.exists() and not root.is_dir():
+        raise NotADirectoryError(f"{root} is a file; a dataset is a folder (give a new folder, or the folder of a "
+                                 f"dataset to finish)")
     tasks: list[dict[str, Any]] = []
     from .hand import Hand
 
@@ -280,6 +305,10 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
             task["file"] = f"{safe_name}__{entry['label']}.npz"
             task["key"] = _task_key(task)
             tasks.append(task)
+    _check_index(root, tasks)
+    shard_dir = root / "shards"
+    shard_dir.mkdir(parents=True, exist_ok=True)
+    remove_temporaries(shard_dir)  # left by a killed run
     todo = [t for t in tasks if not _shard_done(shard_dir / t["file"], t["key"])]
     say = log or (lambda s: None)
     say(f"{len(tasks) - len(todo)} of {len(tasks)} shards already done; making {len(todo)}")
