@@ -151,7 +151,11 @@ def test_mesh_files_are_read_once_per_process(tmp_path, monkeypatch):
     (["plan", "x.stl", "--out", "x.npz", "--scale", "0"], "scale"),
     (["plan", "sphere", "--out", "no/such/dir/x.npz"], "no such directory 'no/such/dir'"),
     (["plan", "sphere", "--out", "x.txt"], "--out must end in .npz, got 'x.txt'"),
-    (["plan", "sphere", "--out", "."], "--out must end in .npz"),
+    (["plan", "sphere", "--out", "."], "--out '.' is a directory"),
+    (["plan", "sphere", "--out", "x.npz", "--hand", "barrett_bh8", "--fingers", "3"],
+     "--fingers cannot be combined with it"),
+    (["plan", "sphere", "--out", "x.npz", "--hand", "barrett_bh8", "--links", "4", "--palm-radius", "0.04"],
+     "--links, --palm-radius cannot be combined"),
     (["render", "p.npz", "--out", "no/such/dir/x.png"], "no such directory"),
     (["render", "p.npz", "--out", "x.png", "--figure", "animation"], "--figure animation writes .gif or .mp4"),
     (["render", "p.npz", "--out", "x.gif", "--figure", "fig4"], "--figure fig4 writes .png, .pdf or .svg"),
@@ -389,6 +393,7 @@ def test_demo_writes_figures_animation_and_summary(tmp_path, capsys):
     for name in ("plan.npz", "fig4.png", "fig5.png", "tipstate.png", "animation.gif", "summary.json"):
         assert (out / name).stat().st_size > 0, name
     summary = json.loads((out / "summary.json").read_text())
+    assert sorted(summary["files"]) == sorted(p.name for p in out.iterdir())  # every file, itself included
     assert summary["status"] == "done" and summary["phase1_configurations"] > 0
     assert summary["palm_contact"] and summary["links_in_contact"] >= 12
     assert "written to" in text

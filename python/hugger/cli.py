@@ -64,15 +64,16 @@ class _Parser(argparse.ArgumentParser):
 
 def _hand_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("hand (defaults: the paper's 5 x 5 hand)")
-    g.add_argument("--fingers", type=int, default=5, help="M, number of fingers (default 5)")
-    g.add_argument("--links", type=int, default=5, help="N, links per finger (default 5)")
-    g.add_argument("--link-length", type=float, default=0.02, help="link length, m (default 0.02)")
-    g.add_argument("--link-radius", type=float, default=0.004, help="link (capsule) radius, m (default 0.004)")
-    g.add_argument("--palm-radius", type=float, default=0.03, help="palm radius, m (default 0.03)")
-    g.add_argument("--palm-thickness", type=float, default=0.01, help="palm thickness, m (default 0.01)")
+    # Defaults None: _hand() fills in _HAND_DEFAULTS, and refuses these options beside --hand.
+    g.add_argument("--fingers", type=int, help="M, number of fingers (default 5)")
+    g.add_argument("--links", type=int, help="N, links per finger (default 5)")
+    g.add_argument("--link-length", type=float, help="link length, m (default 0.02)")
+    g.add_argument("--link-radius", type=float, help="link (capsule) radius, m (default 0.004)")
+    g.add_argument("--palm-radius", type=float, help="palm radius, m (default 0.03)")
+    g.add_argument("--palm-thickness", type=float, help="palm thickness, m (default 0.01)")
     g.add_argument("--hand", metavar="FILE|PRESET",
                    help="a preset hand (see 'hugger hands'), a URDF (.urdf), MJCF (.xml) or hand JSON file; "
-                        "replaces the options above (URDF/MJCF need hugger[hands])")
+                        "replaces the options above, which are refused beside it (URDF/MJCF need hugger[hands])")
     g.add_argument("--fixed-joint", action="append", default=[], metavar="NAME=RAD",
                    help="with --hand FILE: hold this joint at RAD (repeatable; e.g. a spread joint)")
 
@@ -110,10 +111,19 @@ def _case_options(p: argparse.ArgumentParser) -> None:
                    help="plan even when the object's size is implausible for a hand (millimetres read as metres)")
 
 
+#: The hand options of _hand_options and their defaults (the paper's 5 x 5 hand, as hugger.Hand()).
+_HAND_DEFAULTS: dict[str, Any] = {"fingers": 5, "links": 5, "link_length": 0.02, "link_radius": 0.004,
+                                  "palm_radius": 0.03, "palm_thickness": 0.01}
+
+
 def _hand(args: argparse.Namespace) -> Hand:
     import hugger
 
+    given = [k for k in _HAND_DEFAULTS if getattr(args, k, None) is not None]
     if getattr(args, "hand", None):
+        if given:
+            options = ", ".join("--" + k.replace("_", "-") for k in given)
+            raise UsageError(f"--hand gives the whole hand; {options} cannot be combined with it")
         from . import hands
 
         fixed = {}
@@ -128,8 +138,8 @@ def _hand(args: argparse.Namespace) -> Hand:
         return hands.load(args.hand, fixed_joints=fixed or None)
     if getattr(args, "fixed_joint", None):
         raise UsageError("--fixed-joint needs --hand FILE")
-    return hugger.Hand(fingers=args.fingers, links=args.links, link_length=args.link_length,
-                       link_radius=args.link_radius, palm_radius=args.palm_radius, palm_thickness=args.palm_thickness)
+    shape: dict[str, Any] = {k: getattr(args, k) if k in given else v for k, v in _HAND_DEFAULTS.items()}
+    return hugger.Hand(**shape)
 
 
 def _params(args: argparse.Namespace) -> dict[str, Any]:
@@ -152,10 +162,10 @@ def _out_path(value: str, suffixes: Sequence[str], option: str = "--out") -> Pat
     """``value`` as an output path: its directory must exist (nothing is created silently) and
     its suffix must be one of ``suffixes`` (case-insensitive); otherwise a UsageError (exit 2)."""
     out = Path(value)
-    if out.suffix.lower() not in suffixes:
-        raise UsageError(f"{option} must end in {' or '.join(suffixes)}, got {out.name!r}")
     if out.is_dir():
         raise UsageError(f"{option} {value!r} is a directory, expected a file name ending in {' or '.join(suffixes)}")
+    if out.suffix.lower() not in suffixes:
+        raise UsageError(f"{option} must end in {' or '.join(suffixes)}, got {out.name!r}")
     parent = out.parent
     if not parent.is_dir():
         raise UsageError(f"{option}: no such directory {str(parent)!r} (create it first)")
@@ -351,9 +361,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
         with Progress(f"writing {name}", total=1) as p, atomic_path(out / name) as tmp:
             viz.animate(traj, tmp, max_frames=120, hold=1.0, progress=p.update)
         written.append(name)
+    written.append("summary.json")
     summary["files"] = written
     write_atomic(out / "summary.json", json.dumps(summary, indent=2) + "\n")
-    written.append("summary.json")
     _print_table(summary)
     print(f"written to {out}/: {', '.join(written)}")
     if traj.status != "done":
@@ -800,7 +810,8 @@ def _main(argv: Sequence[str] | None) -> int:
         args = build_parser().parse_args(argv)
         args._argv = [str(a) for a in argv] if argv is not None else sys.argv[1:]
         return int(args.func(args))
-    except (UsageError, ValueError, FileNotFoundError, IsADirectoryError, PermissionError, ImportError) as exc:
+    except (UsageError, ValueError, FileNotFoundError, IsADirectoryError, NotADirectoryError, PermissionError,
+            ImportError) as exc:
         print(f"hugger: error: {exc}", file=sys.stderr)
     except KeyboardInterrupt:
         print("hugger: interrupted", file=sys.stderr)
