@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import hashlib
+import json
 import math
 import os
 import subprocess
@@ -149,24 +150,41 @@ def test_target_not_strictly_inside_is_refused(hand, sphere, where):
         hugger.Planner(hand, sphere, target, start())
 
 
-@pytest.mark.parametrize("rules", ["paper", "hug"])
-@pytest.mark.parametrize("centre", [(0.3, 0.0, 0.0), (0.0, -0.3, 0.0), (0.05, 0.0, -0.3)])
-def test_a_skin_whose_object_is_not_at_the_target_stops_the_palm_at_the_target(hand, rules, centre):
-    # A skin cannot be asked whether T lies inside its object (a displaced object in simulation,
-    # a user's skin): nothing is ever touched here. The palm stops with its front plane at T and
-    # the fingers close (the hand is blocked): the plan ends in a few hundred configurations.
-    # Before the palm was bounded by T, each approach iteration advanced by the growing gap, and
-    # max_iterations bounded neither time nor memory.
+def _plan_off_target(rules, centre):
+    """A plan whose skin has its object away from T (see the test below): (status, final tip
+    states, the least distance T lies ahead of the palm's front plane, that distance at the end,
+    configurations, the steps of the palm, first_contact_iteration)."""
+    hand = hugger.Hand()
     target = np.zeros(3)
     planner = hugger.Planner(hand, hugger.skins.SphereSkin(0.04, centre), target, hugger.look_at([0, 0.2, 0], target),
                              rules=rules, max_iterations=200)
     traj = planner.plan()
-    assert traj.status == "done"
-    assert (traj.tip_state[-1] == 2).all()  # DONE
     origin, p = traj.palm_pose[:, :3, 3], traj.palm_pose[:, :3, 2]
-    ahead = ((target - origin) * p).sum(axis=1)  # how far T lies ahead of the palm's front plane
-    assert ahead.min() >= -1e-12 and ahead[-1] <= 1e-12  # it reaches T and never passes it
-    assert len(traj) < 0.2 / planner.params["step"] + 200
+    ahead = ((target - origin) * p).sum(axis=1)
+    return (traj.status, traj.tip_state[-1].tolist(), float(ahead.min()), float(ahead[-1]), len(traj),
+            planner.params["step"], traj.stats["first_contact_iteration"])
+
+
+CENTRES = [(0.3, 0.0, 0.0), (0.0, -0.3, 0.0), (0.05, 0.0, -0.3)]
+
+
+@pytest.mark.parametrize("rules", ["paper", "hug"])
+def test_a_skin_whose_object_is_not_at_the_target_stops_the_palm_at_the_target(rules):
+    # A skin cannot be asked whether T lies inside its object (a displaced object in simulation,
+    # a user's skin): nothing is ever touched here. The palm stops with its front plane at T and
+    # the fingers close (the hand is blocked): the plan ends in a few hundred configurations.
+    # Before the palm was bounded by T, each approach iteration advanced by the growing gap (the
+    # plan grew without bound inside one iteration): in a subprocess, so that such a regression
+    # fails by the timeout instead of taking the machine's memory.
+    code = ("import json, sys; sys.path.insert(0, sys.argv[1]); import test_planner as t; "
+            f"print(json.dumps([t._plan_off_target({rules!r}, c) for c in t.CENTRES]))")
+    out = subprocess.run([sys.executable, "-c", code, str(HERE.parent)], capture_output=True, text=True, timeout=120,
+                         check=True)
+    for status, states, least, last, n, step, first_contact in json.loads(out.stdout):
+        assert status == "done" and states == [2] * 5  # every finger DONE
+        assert least >= -1e-12 and abs(last) <= 1e-12  # the palm reaches T and never passes it
+        assert n < 0.2 / step + 200
+        assert first_contact == -1  # nothing was felt (the fingers were released at T, not touched)
 
 
 def test_target_just_inside_a_vertex_is_accepted(hand, sphere):

@@ -604,6 +604,7 @@ void Planner::phase2_iteration() {
     for (int n = 0; n < N; ++n)
       if (frozen_gap(m, n, delta, true) <= delta) {
         states_[m] = TipState::kContact;
+        felt_ = true;
         break;
       }
   }
@@ -612,16 +613,15 @@ void Planner::phase2_iteration() {
     palm_gap = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), s + delta);
     if (palm_gap <= delta) {
       palm_touched_ = true;
+      felt_ = true;
       stats_.palm_contact_iteration = it;
     }
   }
   if (palm_touched_)  // decision 3: the palm stops for good; every finger closes
     for (int m = 0; m < M; ++m) release(states_, m);
   for (auto st : states_)
-    if (st != TipState::kFrozen && !any_contact_) {
-      any_contact_ = true;
-      stats_.first_contact_iteration = it;
-    }
+    if (st != TipState::kFrozen && !any_contact_) any_contact_ = true;  // felt, or released at T (below)
+  if (felt_ && stats_.first_contact_iteration < 0) stats_.first_contact_iteration = it;
 
   // (b) FollowBoundary and Head2Tail for every CONTACT finger (hug rule: a finger that never
   // touched closes until it touches instead).
@@ -711,9 +711,6 @@ void Planner::phase2_iteration() {
         if (states_[m] == TipState::kContact) sigma += (cand[m][0].y() - eta_) / M;
       sigma = std::clamp(sigma, 0.0, s);
     }
-    // The palm stops with its front plane at T: there the hand is blocked (below), as if it
-    // touched O, and the FROZEN fingers close.
-    sigma = std::min(sigma, std::max(0.0, eta_target_ - eta_));
     if (sigma > 0.0) {
       double free = palm_gap;
       const double cap = s + delta;
@@ -733,6 +730,10 @@ void Planner::phase2_iteration() {
       } else {
         sigma = std::min(sigma, std::max(0.0, free - level));
       }
+      // Until something is felt the palm stops with its front plane at T: there the hand is
+      // blocked (below) and the FROZEN fingers close. (With T inside O the free distance is the
+      // smaller; after a touch, an object that moved in simulation may be followed past T.)
+      if (!felt_) sigma = std::min(sigma, std::max(0.0, eta_target_ - eta_));
       for (int m = 0; m < M && sigma > 0.0; ++m)
         if (states_[m] == TipState::kDone) sigma = translation_free(m, old[m], sigma);
       // Steps below a hundredth of delta are rounding, not motion (they would crawl forever).

@@ -204,12 +204,13 @@ class Planner {
   /// their contact gaps. -inf: unknown.
   std::vector<double> frozen_lb_;
   double eta_ = 0.0;
-  /// How far the palm may advance along p: until its front plane reaches T. T lies inside O, so
-  /// the palm touches O first; a skin whose object is elsewhere (a displaced object, a wrong T)
-  /// would otherwise let the hand approach forever.
+  /// How far the palm may advance along p before anything is felt: until its front plane reaches
+  /// T. T lies inside O, so the palm touches O first; a skin whose object is elsewhere (a
+  /// displaced object, a wrong T) would otherwise let the hand approach forever.
   double eta_target_ = kInf;
   bool palm_touched_ = false;
   bool any_contact_ = false;
+  bool felt_ = false;  ///< some part of the hand has sensed O (a FROZEN finger or the palm touched)
   std::vector<char> closing_;  ///< hug rule: per finger, closing until contact
   std::vector<char> closed_;   ///< hug rule: per finger, has closed (or is closing) once
   std::vector<char> opened_;   ///< hug rule: per finger, opened to yield and not closed again yet
