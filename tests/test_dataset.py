@@ -121,9 +121,14 @@ def test_a_run_that_would_leave_shards_out_of_the_index_is_refused(reference, tm
     index = (out / "index.json").read_bytes()
     with pytest.raises(ValueError, match="other settings or objects: 1 of its 3 shards"):
         dataset.generate(OBJECTS[:2], out, approaches=3, workers=1)
-    with pytest.raises(ValueError, match="3 of its 3 shards"):
+    with pytest.raises(ValueError, match="3 of its 3 shards.*or remove index.json"):
         dataset.generate(OBJECTS, out, approaches=3, hands=["4x4"], workers=1)
     assert (out / "index.json").read_bytes() == index
+    older = json.loads(index)
+    older["hugger_version"] = "0.0.1"
+    (out / "index.json").write_text(json.dumps(older))
+    with pytest.raises(ValueError, match=r"made by hugger 0\.0\.1; this is"):
+        dataset.generate(OBJECTS[:1], out, approaches=3, workers=1)
     (out / "index.json").write_text("[1, 2]")
     with pytest.raises(ValueError, match="not the index of a hugger dataset"):
         dataset.generate(OBJECTS, out, approaches=3, workers=1)

@@ -89,7 +89,7 @@ def _sha256_file(path: str) -> str:
 def _object_entry(spec: str, scale: float) -> dict[str, Any]:
     """Index entry of one object: name, path (as given, or the built-in name) and content hash."""
     from . import objects
-    from .scenarios import load_object
+    from .scenarios import default_case, load_object
 
     if spec in objects.BUILTINS:
         _, obj, _ = load_object(spec, scale)
@@ -98,7 +98,9 @@ def _object_entry(spec: str, scale: float) -> dict[str, Any]:
         return {"name": spec, "path": spec, "builtin": True, "sha256": digest, "scale": scale}
     if not os.path.isfile(spec):
         raise ValueError(f"{spec!r} is neither a built-in object nor a mesh file")
-    load_object(spec, scale)  # refuses a mesh the planner cannot take before any shard is made
+    # Refuses what a worker would, before any shard is made: a mesh the planner cannot take, or
+    # one whose natural target T is not inside it (the start pose depends on the hand; T does not).
+    default_case(spec, scale=scale)
     return {"name": Path(spec).stem, "path": spec, "builtin": False, "sha256": _sha256_file(spec), "scale": scale}
 
 
@@ -236,9 +238,12 @@ def _check_index(root: Path, tasks: list[dict[str, Any]]) -> None:
     ours = {(f"shards/{t['file']}", t["key"]) for t in tasks}
     left_out = [f for f, key in listed if (f, key) not in ours]
     if left_out:
-        raise ValueError(f"{root} holds a dataset made with other settings or objects: {len(left_out)} of its "
+        made_by = old.get("hugger_version")
+        why = f" (made by hugger {made_by}; this is {VERSION})" if made_by != VERSION else ""
+        raise ValueError(f"{root} holds a dataset made with other settings or objects{why}: {len(left_out)} of its "
                          f"{len(listed)} shards (e.g. {left_out[0]}) are not part of this run; write this dataset to "
-                         f"a new folder, or repeat the command that made it (it may add objects or hands)")
+                         f"a new folder, or repeat the command that made it (it may add objects or hands), or "
+                         f"remove {path.name} to make an index of this run's shards alone")
 
 
 # --------------------------------------------------------------------------------------------
@@ -274,6 +279,9 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
     if not objects:
         raise ValueError("give at least one object")
+    if Path(out).exists() and not Path(out).is_dir():
+        raise NotADirectoryError(f"{out} is a file; a dataset is a folder (give a new folder, or the folder of a "
+                                 f"dataset to finish)")
     workers = _checks.workers("workers", workers)
     ray: Any = _ray() if backend == "ray" else None
     from .batch import _PARAMS
@@ -291,9 +299,6 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     if len(set(names)) != len(names):
         raise ValueError(f"two objects share a name: {sorted(x for x in names if names.count(x) > 1)}")
     root = Path(out)
-    if root.exists() and not root.is_dir():
-        raise NotADirectoryError(f"{root} is a file; a dataset is a folder (give a new folder, or the folder of a "
-                                 f"dataset to finish)")
     tasks: list[dict[str, Any]] = []
     from .hand import Hand
 
