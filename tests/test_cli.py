@@ -152,6 +152,7 @@ def test_mesh_files_are_read_once_per_process(tmp_path, monkeypatch):
     (["plan", "sphere", "--out", "no/such/dir/x.npz"], "no such directory 'no/such/dir'"),
     (["plan", "sphere", "--out", "x.txt"], "--out must end in .npz, got 'x.txt'"),
     (["plan", "sphere", "--out", "."], "--out '.' is a directory"),
+    (["plan", "sphere", "--out", ""], "--out is empty"),
     (["plan", "sphere", "--out", "x.npz", "--hand", "barrett_bh8", "--fingers", "3"],
      "--fingers cannot be combined with it"),
     (["plan", "sphere", "--out", "x.npz", "--hand", "barrett_bh8", "--links", "4", "--palm-radius", "0.04"],
@@ -217,6 +218,7 @@ def test_plan_records_provenance(tmp_path, capsys):
     assert prov["command"] == ["hugger", *args]
     assert prov["object"] == "ellipsoid" and prov["object_source"] == "builtin"
     assert prov["arguments"]["fingers"] == 3 and prov["arguments"]["step"] == 0.002
+    assert prov["arguments"]["links"] == 5 and prov["arguments"]["palm_radius"] == 0.03  # defaults included
     assert prov["hugger_version"] == hugger.__version__
     assert prov["object_sha256"] == traj.object_sha256() and len(prov["object_sha256"]) == 64
     # a mesh file is recorded by its absolute path

@@ -139,6 +139,8 @@ def _hand(args: argparse.Namespace) -> Hand:
     if getattr(args, "fixed_joint", None):
         raise UsageError("--fixed-joint needs --hand FILE")
     shape: dict[str, Any] = {k: getattr(args, k) if k in given else v for k, v in _HAND_DEFAULTS.items()}
+    for k, v in shape.items():  # as parsed with these defaults: the file's provenance records them
+        setattr(args, k, v)
     return hugger.Hand(**shape)
 
 
@@ -161,6 +163,8 @@ def _load(path: str) -> Trajectory:
 def _out_path(value: str, suffixes: Sequence[str], option: str = "--out") -> Path:
     """``value`` as an output path: its directory must exist (nothing is created silently) and
     its suffix must be one of ``suffixes`` (case-insensitive); otherwise a UsageError (exit 2)."""
+    if not value:
+        raise UsageError(f"{option} is empty, expected a file name ending in {' or '.join(suffixes)}")
     out = Path(value)
     if out.is_dir():
         raise UsageError(f"{option} {value!r} is a directory, expected a file name ending in {' or '.join(suffixes)}")

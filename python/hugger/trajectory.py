@@ -175,8 +175,8 @@ class Trajectory:
             raise ValueError(f"{source}: missing keys {missing}")
         version = np.asarray(data["format_version"])
         if version.shape != () or version.dtype.kind not in "iu" or int(version) != FORMAT_VERSION:
-            raise ValueError(f"{source}: format_version must be {FORMAT_VERSION}, got {version.tolist()!r}"
-                             + ("" if version.dtype.kind in "iu" else f" ({version.dtype})"))
+            got = f"{version.item()!r} ({version.dtype})" if version.shape == () else f"an array of shape {version.shape}"
+            raise ValueError(f"{source}: format_version must be {FORMAT_VERSION}, got {got}")
         strings: dict[str, str] = {}
         for key in (*_STRINGS, "stats_json", "provenance_json"):
             if key not in data:
