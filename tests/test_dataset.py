@@ -134,6 +134,21 @@ def test_a_run_that_would_leave_shards_out_of_the_index_is_refused(reference, tm
         dataset.generate(OBJECTS, out, approaches=3, workers=1)
 
 
+def test_the_rule_set_is_honoured_from_the_cli_and_from_params(tmp_path):
+    # --rules reached search() twice (as rules= and among the parameters): every run crashed.
+    cli_out, api_out, hug_out = tmp_path / "cli", tmp_path / "api", tmp_path / "hug"
+    assert main(["generate", "box", "--approaches", "2", "--rules", "paper", "--out", str(cli_out), "--workers", "1"]) == 0
+    index = dataset.generate(["box"], api_out, approaches=2, params={"rules": "paper"}, workers=1)
+    assert index["parameters"]["rules"] == "paper"
+    assert shard_bytes(cli_out) == shard_bytes(api_out)
+    dataset.generate(["box"], hug_out, approaches=2, workers=1)
+    assert shard_bytes(hug_out) != shard_bytes(api_out)  # the rule set made a difference
+    with pytest.raises(ValueError, match="given twice"):
+        dataset.generate(["box"], tmp_path / "x", approaches=2, rules="hug", params={"rules": "paper"})
+    with pytest.raises(ValueError, match="rules must be one of"):
+        dataset.generate(["box"], tmp_path / "x", approaches=2, rules="papr")
+
+
 def test_a_run_may_add_objects_to_a_dataset(reference, tmp_path):
     import shutil
 

@@ -517,10 +517,12 @@ def cmd_generate(args: argparse.Namespace) -> int:
     interactive = sys.stderr.isatty()
     log = None if interactive else _note  # plain lines in logs, a bar on a terminal
     argv = args._argv
+    params = _params(args)
+    rules = params.pop("rules", None)  # generate() takes the rule set apart from the planner's numbers
     with Progress("generating shards", total=1, delay=0.0) as p:
         index = dataset.generate(args.objects, args.out, approaches=args.approaches, hands=args.hands or ["5x5"],
                                  validate=args.validate, workers=args.workers, backend=args.backend,
-                                 address=args.address, scale=args.scale, params=_params(args),
+                                 address=args.address, scale=args.scale, rules=rules, params=params,
                                  command=["hugger", *argv], log=log, progress=p.update)
     grasps = len(index["shards"]) * int(index["parameters"]["approaches"])
     print(f"wrote {args.out}/index.json: {len(index['shards'])} shards, {grasps} grasps")

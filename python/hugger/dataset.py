@@ -290,7 +290,16 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     bad = set(params) - set(_PARAMS)
     if bad:
         raise ValueError(f"unknown planner parameters {sorted(bad)}")
+    if params.get("rules") is not None:  # the rule set given among the planner parameters
+        if rules is not None and rules != params["rules"]:
+            raise ValueError(f"the rule set is given twice: rules={rules!r} and params['rules']={params['rules']!r}")
+        rules = params["rules"]
+    from .planner import RULES
+
+    if rules is not None and rules not in RULES:
+        raise ValueError(f"rules must be one of {list(RULES)}, got {rules!r}")
     params = {k: params.get(k) for k in _PARAMS}
+    params["rules"] = None  # the rule set is the task's own "rules" (as in the keys of earlier datasets)
     hand_list = [parse_hand(h) for h in hands]
     if len({label for label, _ in hand_list}) != len(hand_list):
         raise ValueError("the same hand is given twice")
