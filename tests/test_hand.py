@@ -119,6 +119,21 @@ def test_the_largest_allowed_hand_works(sphere):
     assert traj.joints.shape[1:] == (MAX_FINGERS, 5, 3) and p.stats["phase2_iterations"] == 3
 
 
+def test_hand_from_dict_places_fingers_at_the_given_finger_angles():
+    # finger_angles (docs/file-format.md) without the other layout keys was dropped: the fingers
+    # stayed at 2 pi m / M, and a list of the wrong length was accepted.
+    d = hugger.Hand(fingers=3, links=2).to_dict()
+    assert hugger.Hand.from_dict(d).same_as(hugger.Hand(fingers=3, links=2))  # the default angles: the rim hand
+    angles = [0.0, 0.5 * np.pi, np.pi]
+    h = hugger.Hand.from_dict({**d, "finger_angles": angles})
+    np.testing.assert_allclose(h.finger_roots, 0.03 * np.stack([np.cos(angles), np.sin(angles), np.zeros(3)], axis=1),
+                               atol=1e-12)
+    with pytest.raises(ValueError, match="finger_angles must hold 3 angles"):
+        hugger.Hand.from_dict({**d, "finger_angles": [0.0, 1.0]})
+    with pytest.raises(ValueError, match="finger_angles"):
+        hugger.Hand.from_dict({**d, "finger_angles": ["a", "b", "c"]})
+
+
 def test_hand_from_dict_refuses_incomplete_descriptions(hand):
     d = hand.to_dict()
     for key in ("fingers", "link_lengths", "palm_thickness"):

@@ -349,7 +349,15 @@ class Hand:
         whole: Callable[[Any], Any] = lambda x: int(x) if isinstance(x, float) and x.is_integer() else x  # noqa: E731  (JSON may say 5.0)
         fingers, links = whole(d["fingers"]), whole(d["links"])
         layout_keys = ("finger_roots", "finger_directions", "rest_angles", "joint_limits")
-        if not any(k in d for k in layout_keys):
+        # Fingers at other than the evenly spaced rim angles 2 pi m / M are a layout too.
+        spread = False
+        if "finger_angles" in d:
+            m = _count("fingers", fingers)
+            phi = _real_array("finger_angles", d["finger_angles"])
+            if phi.shape != (m,):
+                raise ValueError(f"finger_angles must hold {m} angles, got shape {phi.shape}")
+            spread = not np.allclose(phi, 2 * np.pi * np.arange(m) / m, rtol=0.0, atol=1e-12)
+        if not spread and not any(k in d for k in layout_keys):
             hand = cls(fingers=fingers, links=links, link_length=d["link_lengths"], link_radius=d["link_radius"],
                        palm_radius=d["palm_radius"], palm_thickness=d["palm_thickness"])
             hand.name = d.get("name") if isinstance(d.get("name"), str) else None
