@@ -364,6 +364,29 @@ def test_sensor_model_is_deterministic(hand):
     assert np.array_equal(a.joints, b.joints) and a.status == b.status
 
 
+def test_sensor_model_range_within_the_contact_tolerance_is_refused_as_such(hand):
+    # The engine would report the hand touching at the start, and advise moving the palm.
+    for rng, kw, delta in ((5e-5, dict(), 1e-4), (2e-4, dict(contact_tolerance=2e-4), 2e-4)):
+        with pytest.raises(ValueError, match=f"range .* must exceed the planner's contact_tolerance \\({delta:g} m\\)"):
+            hugger.Planner(hand, skins.SensorModel(skins.SphereSkin(0.04), range=rng), [0, 0, 0], start(), **kw)
+    assert hugger.Planner(hand, skins.SensorModel(skins.SphereSkin(0.04), range=2e-4), [0, 0, 0], start(),
+                          max_iterations=1).plan().status == "max_iterations"
+    assert hugger._core.DEFAULT_CONTACT_TOLERANCE == hugger.Planner(hand, skins.SphereSkin(0.04), [0, 0, 0],
+                                                                    start()).params["contact_tolerance"]
+
+
+@pytest.mark.parametrize("bad", ["yes", None, 1])
+def test_capsule_clear_must_answer_a_bool(hand, bad):
+    # Any other answer was cast (None read as False) or failed with pybind11's own message.
+    cls = type("BadClear", (Ball,), {"capsule_clear": lambda self, a, b, radius, a_outside: bad})
+    with pytest.raises(TypeError, match="capsule_clear must return a bool"):
+        hugger.Planner(hand, cls([0, 0, 0], 0.04), [0, 0, 0], start()).plan()
+    good = type("NumpyClear", (Ball,), {"capsule_clear": lambda self, a, b, radius, a_outside: np.bool_(
+        Ball.capsule(self, a, b, radius, 0.0).gap > 0.0)})
+    assert hugger.Planner(hand, good([0, 0, 0], 0.04), [0, 0, 0], start(), max_iterations=3).plan().status in (
+        "max_iterations", "done")
+
+
 def test_sensor_model_refuses_bad_settings():
     for kw in (dict(range=0), dict(range=-1), dict(gap_noise=float("nan")), dict(taxel_spacing=0), dict(normal_noise=-1)):
         with pytest.raises(ValueError):

@@ -58,7 +58,14 @@ class PySensing : public Sensing {
     {
       py::gil_scoped_acquire gil;
       py::function f = py::get_override(static_cast<const Sensing*>(this), "capsule_clear");
-      if (f) return f(a, b, radius, a_outside).cast<bool>();
+      if (f) {
+        // A bool, or NumPy's: anything else (None, a string, a number) is a mistake, not an answer.
+        const py::object r = f(a, b, radius, a_outside);
+        const std::string type = py::str(py::type::of(r).attr("__name__"));
+        if (type == "bool" || type == "bool_") return r.cast<bool>();  // Python's, or NumPy's (1.x: bool_)
+        throw py::type_error("Sensing.capsule_clear must return a bool (whether the capsule is clear of the "
+                             "object), got " + type);
+      }
     }
     return Sensing::capsule_clear(a, b, radius, a_outside);
   }

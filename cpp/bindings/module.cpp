@@ -23,6 +23,7 @@ PYBIND11_MODULE(_core, m) {
   m.attr("MAX_FINGERS") = hugger::kMaxFingers;
   m.attr("MAX_LINKS") = hugger::kMaxLinks;
   m.attr("MAX_ITERATIONS") = hugger::kMaxIterations;
+  m.attr("DEFAULT_CONTACT_TOLERANCE") = hugger::PlannerParams::kDefaultContactTolerance;
   // The names the planner accepts, owned by the engine (rules) and the binding (skins).
   m.attr("RULES") = py::make_tuple(to_string(hugger::Rules::kPaper), to_string(hugger::Rules::kHug));
   m.attr("SKINS") = py::make_tuple(hugger::py_helpers::kSkins[0], hugger::py_helpers::kSkins[1]);

@@ -449,6 +449,8 @@ MAX_FINGERS: int
 MAX_LINKS: int
 #: Largest max_iterations of a plan.
 MAX_ITERATIONS: int
+#: The planner's contact tolerance delta (m) when none is given.
+DEFAULT_CONTACT_TOLERANCE: float
 #: The Phase 2 rule sets a PlannerParams accepts (docs/algorithm.md).
 RULES: tuple[str, ...]
 #: How a Planner senses an Object: "mesh" (3D queries) or "section" (2D per finger plane).

@@ -102,6 +102,14 @@ class Planner:
         # (ValueError saying what is wrong), then plans Phase 1.
         params = _core.PlannerParams(step=step, epsilon=epsilon, contact_tolerance=contact_tolerance,
                                      max_iterations=max_iterations, rules=rules)
+        from .skins.sensor import SensorModel
+
+        if isinstance(sensing, SensorModel):  # (the engine would find every part touching at the start)
+            given = params.contact_tolerance
+            tolerance = _core.DEFAULT_CONTACT_TOLERANCE if given is None else given
+            if not sensing.range > tolerance:
+                raise ValueError(f"the SensorModel's range ({sensing.range:g} m) must exceed the planner's "
+                                 f"contact_tolerance ({tolerance:g} m): every part within range reads as touching")
         self._core = _core.Planner(hand._core, cast(Object, obj)._core if sensing is None else sensing, t, pose,
                                    params, DEFAULT_SKIN if skin is None else skin)
         delta = params.contact_tolerance  # what only Python sees: the recorded mesh's extent
