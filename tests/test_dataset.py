@@ -230,9 +230,34 @@ def test_bad_input(tmp_path, capsys):
     assert main(["generate", "box", "--out", str(tmp_path), "--address", "x:1"]) == 2
     with pytest.raises(ValueError, match="twice"):
         dataset.generate(["box"], tmp_path, hands=["5x5", "5x5"])
+    with pytest.raises(ValueError, match="link_length is given twice"):
+        dataset.parse_hand("5x5:link_length=0.02,link_length=0.03")
     assert dataset.parse_hand("4x3:link_length=0.025,palm_radius=0.035") == (
         "4x3_link_length0.025_palm_radius0.035",
         {"fingers": 4, "links": 3, "link_length": 0.025, "palm_radius": 0.035})
+
+
+def test_a_damaged_shard_is_named_and_made_again(reference, tmp_path):
+    import shutil
+    import warnings
+
+    out = tmp_path / "ds"
+    shutil.copytree(reference, out)
+    shard = out / "shards" / f"{OBJECTS[0]}__5x5.npz"
+    shard.write_bytes(shard.read_bytes()[:3000])  # a truncated copy
+    with pytest.raises(ValueError, match=f"{shard.name} is not a whole shard"):
+        hugger.Dataset(out)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the damaged file is closed (it was left open: a ResourceWarning)
+        assert main(["generate", *OBJECTS, "--approaches", "3", "--out", str(out), "--workers", "1"]) == 0
+    assert shard_bytes(out) == shard_bytes(reference)
+    ds = hugger.Dataset(out)
+    with pytest.raises(TypeError, match="integer"):
+        ds["0"]
+    with pytest.raises(TypeError, match="integer"):
+        ds[1.0]
+    with pytest.raises(IndexError, match="out of range"):
+        ds[len(ds)]
 
 
 def test_a_temporary_left_by_a_killed_writer_is_removed_on_resume(reference, tmp_path):

@@ -185,6 +185,9 @@ def test_search_rejects_bad_input(hand):
         hugger.search(hand, obj, approaches=2, threads=0)
     with pytest.raises(ValueError, match="hand"):
         hugger.search("hand", obj)
+    for answer in ("x", None, float("nan")):  # the scorer's mistake, named as such
+        with pytest.raises(ValueError, match="score must return a finite number"):
+            hugger.search(hand, obj, approaches=2, score=lambda c, a=answer: a)
 
 
 def test_cli_plan_approaches(tmp_path, capsys, checker):

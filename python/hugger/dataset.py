@@ -15,6 +15,7 @@ same command, whatever the number of workers and the backend (``local`` process 
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import io
 import json
@@ -63,6 +64,8 @@ def parse_hand(spec: str) -> tuple[str, dict[str, Any]]:
         if key not in _HAND_KEYS or not value:
             raise ValueError(f"hand spec {spec!r}: unknown or empty setting {item!r}; expected some of "
                              f"{sorted(_HAND_KEYS)}")
+        if key in kwargs:
+            raise ValueError(f"hand spec {spec!r}: {key} is given twice")
         try:
             kwargs[key] = _HAND_KEYS[key](value)
         except ValueError:
@@ -204,12 +207,28 @@ def make_shard(task: dict[str, Any]) -> bytes:
     return _npz_bytes(a)
 
 
+@contextlib.contextmanager
+def _open_shard(path: Path) -> Iterator[Any]:
+    """The arrays of a shard file (np.load without pickles), the file closed whatever happens;
+    ``ValueError`` naming the file when it is not a whole .npz."""
+    with open(path, "rb") as fh:
+        try:
+            z = np.load(fh, allow_pickle=False)
+            if not isinstance(z, np.lib.npyio.NpzFile):
+                raise ValueError("a single array, not an .npz")
+        except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
+            raise ValueError(f"{path} is not a whole shard ({exc}); 'hugger generate' with the command in "
+                             f"index.json makes it again") from None
+        with z:
+            yield z
+
+
 def _shard_done(path: Path, key: str) -> bool:
     """Whether the shard under its final name exists and was made for this task."""
     if not path.is_file():
         return False
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with _open_shard(path) as z:
             stored = str(z["task_sha256"])
     except (OSError, ValueError, KeyError, zipfile.BadZipFile):
         return False  # not ours or damaged: made again
@@ -447,7 +466,7 @@ class Dataset:
         self._objects: dict[str, Object] = {}
         self._sizes = []
         for s in self.shards:  # the grasp counts only: whole shards load on first use (shard())
-            with np.load(self.root / s["file"], allow_pickle=False) as z:
+            with _open_shard(self.root / s["file"]) as z:
                 self._sizes.append(int(z["status"].shape[0]))
         self._starts = np.concatenate([[0], np.cumsum(self._sizes)]).astype(int)
 
@@ -457,12 +476,14 @@ class Dataset:
     def shard(self, i: int) -> dict[str, np.ndarray]:
         """Every array of shard i (see docs/generation.md), loaded without pickles."""
         if i not in self._cache:
-            with np.load(self.root / self.shards[i]["file"], allow_pickle=False) as z:
+            with _open_shard(self.root / self.shards[i]["file"]) as z:
                 self._cache[i] = {k: z[k] for k in z.files}
         return self._cache[i]
 
     def _locate(self, i: int) -> tuple[int, int]:
-        if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not -len(self) <= i < len(self):
+        if isinstance(i, bool) or not isinstance(i, (int, np.integer)):
+            raise TypeError(f"a grasp index must be an integer, got {type(i).__name__}")
+        if not -len(self) <= i < len(self):
             raise IndexError(f"grasp {i!r} is out of range for a dataset of {len(self)} grasps")
         i = int(i) % len(self)
         s = int(np.searchsorted(self._starts, i, side="right") - 1)

@@ -230,7 +230,11 @@ def rank(candidates: Sequence[Candidate], judge: Callable[[Candidate], Candidate
     if score is not None:
         for c in working:
             j = caged(out[c.index])
-            s = float(score(j))
+            answer = score(j)
+            try:
+                s = float(answer)
+            except (TypeError, ValueError):
+                raise ValueError(f"score must return a finite number, got {answer!r} for candidate {c.index}") from None
             if not math.isfinite(s):
                 raise ValueError(f"score must return a finite number, got {s!r} for candidate {c.index}")
             out[c.index] = replace(j, score=s)
@@ -319,8 +323,9 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
     """The firmest of ``approaches`` grasps of ``obj``, approached evenly from all around T.
 
     ``target``: T (default :func:`hugger.scenarios.interior_target`). Direction 0 is ``pole``
-    (default +z, the command line's default approach), so ``approaches=1`` is the single default
-    plan. ``rules`` is passed to :class:`hugger.Planner` when given (the Phase 2 rule set), as are
+    (default +z). The command line passes its default approach (``default_case``'s palm position
+    less T, +x for the built-in cylinder and torus), so there ``approaches=1`` is the single
+    default plan. ``rules`` is passed to :class:`hugger.Planner` when given (the Phase 2 rule set), as are
     ``params`` (``step``, ``epsilon``, ``contact_tolerance``, ``max_iterations``) and ``timeout``
     (seconds per plan). ``threads``: worker threads (default: the CPUs this process may use).
     ``score``: see :func:`rank`. ``keep_all`` keeps every candidate's trajectory and final contacts in the result.
