@@ -59,12 +59,13 @@ class PySensing : public Sensing {
       py::gil_scoped_acquire gil;
       py::function f = py::get_override(static_cast<const Sensing*>(this), "capsule_clear");
       if (f) {
-        // A bool, or NumPy's: anything else (None, a string, a number) is a mistake, not an answer.
+        // pybind11's bool caster without conversion takes Python's bool and NumPy's, nothing else:
+        // None, a string or a number is a mistake, not an answer.
         const py::object r = f(a, b, radius, a_outside);
-        const std::string type = py::str(py::type::of(r).attr("__name__"));
-        if (type == "bool" || type == "bool_") return r.cast<bool>();  // Python's, or NumPy's (1.x: bool_)
+        py::detail::make_caster<bool> answer;
+        if (answer.load(r, /*convert=*/false)) return py::detail::cast_op<bool>(answer);
         throw py::type_error("Sensing.capsule_clear must return a bool (whether the capsule is clear of the "
-                             "object), got " + type);
+                             "object), got " + py::str(py::type::of(r).attr("__name__")).cast<std::string>());
       }
     }
     return Sensing::capsule_clear(a, b, radius, a_outside);

@@ -64,7 +64,7 @@ class _Parser(argparse.ArgumentParser):
 
 def _hand_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("hand (defaults: the paper's 5 x 5 hand)")
-    # Defaults None: _hand() fills in _HAND_DEFAULTS, and refuses these options beside --hand.
+    # Defaults None: _hand() fills in hugger.Hand's defaults, and refuses these options beside --hand.
     g.add_argument("--fingers", type=int, help="M, number of fingers (default 5)")
     g.add_argument("--links", type=int, help="N, links per finger (default 5)")
     g.add_argument("--link-length", type=float, help="link length, m (default 0.02)")
@@ -111,15 +111,14 @@ def _case_options(p: argparse.ArgumentParser) -> None:
                    help="plan even when the object's size is implausible for a hand (millimetres read as metres)")
 
 
-#: The hand options of _hand_options and their defaults (the paper's 5 x 5 hand, as hugger.Hand()).
-_HAND_DEFAULTS: dict[str, Any] = {"fingers": 5, "links": 5, "link_length": 0.02, "link_radius": 0.004,
-                                  "palm_radius": 0.03, "palm_thickness": 0.01}
-
-
 def _hand(args: argparse.Namespace) -> Hand:
+    import inspect
+
     import hugger
 
-    given = [k for k in _HAND_DEFAULTS if getattr(args, k, None) is not None]
+    # The hand options of _hand_options are hugger.Hand's arguments, with its defaults.
+    defaults = {k: p.default for k, p in inspect.signature(hugger.Hand).parameters.items()}
+    given = [k for k in defaults if getattr(args, k, None) is not None]
     if getattr(args, "hand", None):
         if given:
             options = ", ".join("--" + k.replace("_", "-") for k in given)
@@ -138,7 +137,7 @@ def _hand(args: argparse.Namespace) -> Hand:
         return hands.load(args.hand, fixed_joints=fixed or None)
     if getattr(args, "fixed_joint", None):
         raise UsageError("--fixed-joint needs --hand FILE")
-    shape: dict[str, Any] = {k: getattr(args, k) if k in given else v for k, v in _HAND_DEFAULTS.items()}
+    shape: dict[str, Any] = {k: getattr(args, k) if k in given else v for k, v in defaults.items()}
     for k, v in shape.items():  # as parsed with these defaults: the file's provenance records them
         setattr(args, k, v)
     return hugger.Hand(**shape)
@@ -517,12 +516,10 @@ def cmd_generate(args: argparse.Namespace) -> int:
     interactive = sys.stderr.isatty()
     log = None if interactive else _note  # plain lines in logs, a bar on a terminal
     argv = args._argv
-    params = _params(args)
-    rules = params.pop("rules", None)  # generate() takes the rule set apart from the planner's numbers
     with Progress("generating shards", total=1, delay=0.0) as p:
         index = dataset.generate(args.objects, args.out, approaches=args.approaches, hands=args.hands or ["5x5"],
                                  validate=args.validate, workers=args.workers, backend=args.backend,
-                                 address=args.address, scale=args.scale, rules=rules, params=params,
+                                 address=args.address, scale=args.scale, params=_params(args),
                                  command=["hugger", *argv], log=log, progress=p.update)
     grasps = len(index["shards"]) * int(index["parameters"]["approaches"])
     print(f"wrote {args.out}/index.json: {len(index['shards'])} shards, {grasps} grasps")

@@ -22,6 +22,7 @@ import json
 import os
 import re
 import zipfile
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
@@ -210,17 +211,36 @@ def make_shard(task: dict[str, Any]) -> bytes:
 @contextlib.contextmanager
 def _open_shard(path: Path) -> Iterator[Any]:
     """The arrays of a shard file (np.load without pickles), the file closed whatever happens;
-    ``ValueError`` naming the file when it is not a whole .npz."""
+    ``ValueError`` naming the file when it is not a whole .npz (on opening, or on reading an
+    array of it)."""
+    def damaged(why: object) -> ValueError:
+        return ValueError(f"{path} is not a whole shard ({why}); 'hugger generate' with the command in "
+                          f"index.json makes it again")
+
     with open(path, "rb") as fh:
         try:
             z = np.load(fh, allow_pickle=False)
-            if not isinstance(z, np.lib.npyio.NpzFile):
-                raise ValueError("a single array, not an .npz")
         except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
-            raise ValueError(f"{path} is not a whole shard ({exc}); 'hugger generate' with the command in "
-                             f"index.json makes it again") from None
+            raise damaged(exc) from None
+        if not isinstance(z, np.lib.npyio.NpzFile):
+            raise damaged("a single array, not an .npz")
         with z:
-            yield z
+            try:
+                yield z
+            except (EOFError, zipfile.BadZipFile, zlib.error) as exc:
+                raise damaged(exc) from None
+
+
+def _read_index(path: Path) -> dict[str, Any]:
+    """A dataset's index.json; ``ValueError`` unless it is one of this format and version."""
+    try:
+        index = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{path} is not the index of a hugger dataset ({exc})") from None
+    if not isinstance(index, dict) or index.get("format") != DATASET_FORMAT or \
+            index.get("format_version") != DATASET_VERSION or not isinstance(index.get("shards"), list):
+        raise ValueError(f"{path} is not the index of a hugger dataset of version {DATASET_VERSION}")
+    return index
 
 
 def _shard_done(path: Path, key: str) -> bool:
@@ -230,7 +250,7 @@ def _shard_done(path: Path, key: str) -> bool:
     try:
         with _open_shard(path) as z:
             stored = str(z["task_sha256"])
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile):
+    except (OSError, ValueError, KeyError):
         return False  # not ours or damaged: made again
     if stored != key:
         raise ValueError(f"{path} was made with other settings (objects, hand, approaches, planner parameters or "
@@ -246,14 +266,10 @@ def _check_index(root: Path, tasks: list[dict[str, Any]]) -> None:
     if not path.exists():
         return
     try:
-        old = json.loads(path.read_text(encoding="utf-8"))
-        listed = None
-        if old.get("format") == DATASET_FORMAT:
-            listed = [(str(e["file"]), str(e["task_sha256"])) for e in old["shards"]]
-    except (OSError, ValueError, TypeError, KeyError, AttributeError):
-        listed = None
-    if listed is None:
-        raise ValueError(f"{path} is not the index of a hugger dataset; write this dataset to a new folder")
+        old = _read_index(path)
+        listed = [(str(e["file"]), str(e["task_sha256"])) for e in old["shards"]]
+    except (ValueError, TypeError, KeyError) as exc:
+        raise ValueError(f"{exc}; write this dataset to a new folder") from None
     ours = {(f"shards/{t['file']}", t["key"]) for t in tasks}
     left_out = [f for f, key in listed if (f, key) not in ours]
     if left_out:
@@ -458,9 +474,7 @@ class Dataset:
         index_path = self.root / "index.json"
         if not index_path.is_file():
             raise ValueError(f"{self.root} holds no dataset index (index.json); make one with 'hugger generate'")
-        self.index = json.loads(index_path.read_text())
-        if self.index.get("format") != DATASET_FORMAT or self.index.get("format_version") != DATASET_VERSION:
-            raise ValueError(f"{index_path} is not a hugger dataset index of version {DATASET_VERSION}")
+        self.index = _read_index(index_path)
         self.shards: list[dict[str, Any]] = list(self.index["shards"])
         self._cache: dict[int, dict[str, np.ndarray]] = {}
         self._objects: dict[str, Object] = {}

@@ -349,7 +349,8 @@ class Hand:
         whole: Callable[[Any], Any] = lambda x: int(x) if isinstance(x, float) and x.is_integer() else x  # noqa: E731  (JSON may say 5.0)
         fingers, links = whole(d["fingers"]), whole(d["links"])
         layout_keys = ("finger_roots", "finger_directions", "rest_angles", "joint_limits")
-        # Fingers at other than the evenly spaced rim angles 2 pi m / M are a layout too.
+        # The rim angles as given (default 2 pi m / M): fingers at other angles are a layout too.
+        phi: np.ndarray | None = None
         spread = False
         if "finger_angles" in d:
             m = _count("fingers", fingers)
@@ -366,10 +367,7 @@ class Hand:
         if not (1 <= m <= MAX_FINGERS and 1 <= n <= MAX_LINKS):
             raise ValueError(f"fingers and links must be in 1..{MAX_FINGERS} and 1..{MAX_LINKS}, got {m}, {n}")
         palm_r = _size("palm_radius", d["palm_radius"])
-        phi = np.asarray(d.get("finger_angles", 2 * np.pi * np.arange(m) / m), dtype=np.float64)
-        if phi.shape != (m,):
-            raise ValueError(f"finger_angles must hold {m} angles, got shape {phi.shape}")
-        rim = rim_directions(phi)
+        rim = rim_directions(2 * np.pi * np.arange(m) / m if phi is None else phi)
         lengths = _real_array("link_lengths", d["link_lengths"])
         if lengths.ndim == 0:
             lengths = np.full((m, n), float(lengths))

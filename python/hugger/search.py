@@ -234,9 +234,9 @@ def rank(candidates: Sequence[Candidate], judge: Callable[[Candidate], Candidate
             try:
                 s = float(answer)
             except (TypeError, ValueError):
-                raise ValueError(f"score must return a finite number, got {answer!r} for candidate {c.index}") from None
+                s = math.nan  # not a number at all: refused below, as NaN is
             if not math.isfinite(s):
-                raise ValueError(f"score must return a finite number, got {s!r} for candidate {c.index}")
+                raise ValueError(f"score must return a finite number, got {answer!r} for candidate {c.index}")
             out[c.index] = replace(j, score=s)
         chosen = max((c for c in out if c.ok), key=lambda c: (c.score, -c.index))
         return chosen.index, out
