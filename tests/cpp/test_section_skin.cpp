@@ -2,6 +2,7 @@
 // inside tests on random queries in random planes, and plans made with it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -287,6 +288,71 @@ TEST(SectionSkin, RegionSizeBarelyGrowsWithTheMesh) {
   // Chains of pieces are simplified to the flattening tolerance: 64 times the triangles, less
   // than twice the segments (unsimplified, 2.7 times).
   EXPECT_LT(counts.back(), 2 * counts.front());
+}
+
+namespace {
+
+/// The distance between segments [p, q] and [s, t] in the plane, plainly: zero where they cross,
+/// else the least of the four end-point-to-segment distances.
+double segments_apart(const Vec2& p, const Vec2& q, const Vec2& s, const Vec2& t) {
+  auto cross = [](const Vec2& x, const Vec2& y) { return x.x() * y.y() - x.y() * y.x(); };
+  auto to_segment = [](const Vec2& x, const Vec2& a, const Vec2& b) {
+    const Vec2 d = b - a;
+    const double dd = d.squaredNorm();
+    const double t = dd > 0.0 ? std::clamp((x - a).dot(d) / dd, 0.0, 1.0) : 0.0;
+    return (a + t * d - x).norm();
+  };
+  const double d1 = cross(q - p, s - p), d2 = cross(q - p, t - p), d3 = cross(t - s, p - s), d4 = cross(t - s, q - s);
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return 0.0;
+  return std::min({to_segment(p, s, t), to_segment(q, s, t), to_segment(s, p, q), to_segment(t, p, q)});
+}
+
+}  // namespace
+
+// any_within (the clearance tests' question) against every segment of R's boundary, on links
+// laid along the boundary (tangent to it, a hair to a few millimetres off, either side: the
+// links resting on O that the tree and the hull test settle) and on random ones, for thresholds
+// from touching to millimetres. Cases within a picometre of the threshold are left to rounding.
+TEST(SectionSkin, AnyWithinMatchesEverySegment) {
+  long checked = 0, hits = 0;
+  for (const test::Mesh& m : {test::icosphere(3, Vec3::Constant(0.04)), test::curvy(4),
+                              test::cylinder(0.035, 0.05, 48), test::box(Vec3(0.03, 0.02, 0.05))}) {
+    Scene s(m, 11);
+    for (int k = 0; k < 8; ++k) {
+      const FingerPlane pl = test::random_plane(s.rng, s.c);
+      const PlaneRegion* R = s.skin.region(pl, (k % 2) * 0.004);
+      ASSERT_NE(R, nullptr);
+      const auto& segs = R->segments();
+      if (segs.empty()) continue;
+      for (int q = 0; q < 400; ++q) {
+        Vec2 a, b;
+        if (q % 4 != 3) {  // along a boundary segment, off it along its normal by 10^-13 to 10^-2.5 m
+          const PlaneRegion::Segment& g = segs[static_cast<std::size_t>(s.u() * segs.size())];
+          const double off = std::pow(10.0, -13.0 + 10.5 * s.u()) * (q % 4 == 2 ? -1.0 : 1.0);
+          const Vec2 at = g.a + s.u() * (g.b - g.a) + off * g.normal;
+          const double tilt = (s.u() - 0.5) * 0.02, len = (0.1 + s.u()) * 0.02;
+          const Vec2 along = rotate_planar((g.b - g.a).normalized(), tilt);
+          const double back = s.u() * len;
+          a = at - back * along;
+          b = at + (len - back) * along;
+        } else {
+          a = Vec2(s.u() - 0.5, s.u() - 0.5) * 1.4 * s.size;
+          b = a + s.u() * 0.4 * s.size * Vec2(std::cos(s.u() * 2 * kPi), std::sin(s.u() * 2 * kPi));
+        }
+        double best = kInf;
+        for (const auto& g : segs) best = std::min(best, segments_apart(a, b, g.a, g.b));
+        for (double d : {1e-12, 1e-9, 1e-6, 1e-4, 3e-3}) {
+          if (std::abs(best - d) < 1e-12) continue;
+          ASSERT_EQ(R->any_within(a, b, d), best <= d) << "plane " << k << " query " << q << " d " << d << " best " << best;
+          ++checked;
+          hits += best <= d;
+        }
+      }
+    }
+  }
+  std::printf("  %ld decisions, %ld within\n", checked, hits);
+  EXPECT_GE(checked, 40000);
+  EXPECT_GE(hits, 5000);
 }
 
 // link_gap_below (the motion check's question) gives link(...).gap < below with both skins, also

@@ -36,6 +36,14 @@ inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y(
 /// v turned a quarter to the left.
 inline Vec2 left_of(const Vec2& v) { return Vec2(-v.y(), v.x()); }
 
+/// A pseudo-angle of direction v (non-zero) in [0, 4): monotone in its true angle from +x,
+/// counter-clockwise (the "diamond angle"), with one division.
+inline double diamond_angle(const Vec2& v) {
+  const double x = v.x(), y = v.y();
+  if (y >= 0.0) return x >= 0.0 ? y / (x + y) : 1.0 - x / (y - x);
+  return x < 0.0 ? 2.0 - y / (-x - y) : 3.0 + x / (x - y);
+}
+
 /// A point of the plane with an id, for close_pairs.
 struct IdPoint {
   double x, y;
@@ -1061,6 +1069,48 @@ void PlaneRegion::build_bvh() {
   order_.clear();
   order_.shrink_to_fit();
   if (depth_ + 2 > 96) throw std::runtime_error("PlaneRegion: BVH too deep");
+  build_hull();
+}
+
+void PlaneRegion::build_hull() {
+  std::vector<Vec2> pts;
+  pts.reserve(2 * segments_.size());
+  for (const Segment& s : segments_) {
+    pts.push_back(s.a);
+    pts.push_back(s.b);
+  }
+  // Andrew's monotone chain: the lower hull left to right, then the upper right to left
+  // (counter-clockwise); points on an edge are left out.
+  std::sort(pts.begin(), pts.end(),
+            [](const Vec2& p, const Vec2& q) { return p.x() < q.x() || (p.x() == q.x() && p.y() < q.y()); });
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  std::vector<Vec2> h;
+  if (pts.size() <= 2) {
+    h = pts;
+  } else {
+    for (int pass = 0; pass < 2; ++pass) {
+      const std::size_t floor = h.size();
+      for (std::size_t k = 0; k < pts.size(); ++k) {
+        const Vec2& p = pass == 0 ? pts[k] : pts[pts.size() - 1 - k];
+        while (h.size() >= floor + 2 && cross2(h[h.size() - 1] - h[h.size() - 2], p - h[h.size() - 2]) <= 0.0)
+          h.pop_back();
+        h.push_back(p);
+      }
+      h.pop_back();  // the first point of the other pass
+    }
+  }
+  // From the edge of smallest pseudo-angle; the angles made non-decreasing (rounding of nearly
+  // parallel edges) so that a binary search finds an edge.
+  const int k = static_cast<int>(h.size());
+  std::vector<double> angle(k, 0.0);
+  for (int i = 0; i < k && k > 1; ++i) angle[i] = diamond_angle(h[(i + 1) % k] - h[i]);
+  const int start = k > 0 ? static_cast<int>(std::min_element(angle.begin(), angle.end()) - angle.begin()) : 0;
+  hull_.clear();
+  hull_angle_.clear();
+  for (int i = 0; i < k; ++i) {
+    hull_.push_back(h[(start + i) % k]);
+    hull_angle_.push_back(i == 0 ? angle[start] : std::max(angle[(start + i) % k], hull_angle_.back()));
+  }
 }
 
 namespace {
@@ -1096,6 +1146,18 @@ inline bool node_farther(const Node& nd, const Query& q, double d) {
 }
 
 }  // namespace
+
+template <class Q>
+bool PlaneRegion::hull_apart(const Q& q, double limit) const {
+  if (!q.line || hull_.empty()) return false;
+  // The hull's vertex farthest along a direction v starts its first edge turned a right angle
+  // counter-clockwise from v, or past it (v = n: the edge along -u; v = -n: along u).
+  auto extreme = [&](const Vec2& edge) -> const Vec2& {
+    const auto at = std::lower_bound(hull_angle_.begin(), hull_angle_.end(), diamond_angle(edge));
+    return hull_[at == hull_angle_.end() ? 0 : at - hull_angle_.begin()];
+  };
+  return q.n.dot(extreme(-q.u) - q.a) < -limit || q.n.dot(extreme(q.u) - q.a) > limit;
+}
 
 template <class Skip, class Visit>
 bool PlaneRegion::visit_segments(Skip&& skip, Visit&& visit) const {
@@ -1187,6 +1249,8 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
 bool PlaneRegion::any_within(const Vec2& a, const Vec2& b, double distance) const {
   const Query q(a, b);
   const double limit = distance + q.slack(extent_);
+  // The root's box first, then its hull (which a link tangent to a convex R is apart from).
+  if (nodes_.empty() || node_farther(nodes_[0], q, distance) || hull_apart(q, limit)) return false;
   return visit_segments([&](const Node& nd) { return node_farther(nd, q, distance); },
                         [&](int i) {
                           const Segment& s = segments_[i];

@@ -170,6 +170,14 @@ class PlaneRegion {
   bool visit_segments(Skip&& skip, Visit&& visit) const;
   void build_pieces();
   void build_bvh();
+  /// The convex hull of the segments' end points (hull_, hull_angle_).
+  void build_hull();
+  /// True when the whole boundary lies farther than `limit` (> 0, with the rounding margin) from
+  /// the line of query `q` (a segment query), all of it on one side: then no segment comes within
+  /// `limit` of the query. Two binary searches over the hull, which settle the queries of links
+  /// tangent to a convex R without the tree (links resting on O mostly are).
+  template <class Q>
+  bool hull_apart(const Q& q, double limit) const;
   /// Drops the runs of segments that lie inside R (found from their loose ends and junctions,
   /// each tested once in 3D) and the closed loops inside R (one test each; neither for r = 0),
   /// then replaces the chains of segments (joined end to end, two at each inner vertex) by fewer
@@ -209,6 +217,11 @@ class PlaneRegion {
   std::vector<Piece> pieces_;
   std::vector<Node> nodes_;
   std::vector<int> order_;                       ///< while building the BVH
+  /// The boundary's convex hull, counter-clockwise from its edge of smallest pseudo-angle;
+  /// hull_angle_[i]: the pseudo-angle in [0, 4) (diamond_angle) of the edge from hull_[i] to the
+  /// next vertex, non-decreasing.
+  std::vector<Vec2> hull_;
+  std::vector<double> hull_angle_;
   /// A crossing of a segment by a piece of another feature, while building: where, and on which
   /// side of the crossing segment (its inner side: towards its feature) the segment goes on.
   struct Cut {
