@@ -1247,17 +1247,23 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
 }
 
 bool PlaneRegion::any_within(const Vec2& a, const Vec2& b, double distance) const {
+  return reach(a, b, distance) == Reach::kWithin;
+}
+
+PlaneRegion::Reach PlaneRegion::reach(const Vec2& a, const Vec2& b, double distance) const {
   const Query q(a, b);
   const double limit = distance + q.slack(extent_);
-  // The root's box first, then its hull (which a link tangent to a convex R is apart from).
-  if (nodes_.empty() || node_farther(nodes_[0], q, distance) || hull_apart(q, limit)) return false;
+  // The root's box first, then the hull (which a link tangent to a convex R is apart from).
+  if (nodes_.empty() || node_farther(nodes_[0], q, distance) || hull_apart(q, limit)) return Reach::kApart;
   return visit_segments([&](const Node& nd) { return node_farther(nd, q, distance); },
                         [&](int i) {
                           const Segment& s = segments_[i];
                           if (farther_than(q, s.a, s.b, s.normal, limit)) return false;
                           Vec2 c1, c2;
                           return segment_distance(a, b, s.a, s.b, &c1, &c2) <= distance;
-                        });
+                        })
+             ? Reach::kWithin
+             : Reach::kBeyond;
 }
 
 namespace {
@@ -1307,7 +1313,13 @@ bool capsule_interval(const Vec2& a, const Vec2& d, const Vec2& p, const Vec2& q
 }  // namespace
 
 bool PlaneRegion::clear(const Vec2& a, const Vec2& b, bool a_outside) const {
-  return !any_within(a, b, kTouch) && (a_outside || !inside(a));
+  // A segment apart from the boundary's box or hull lies outside it: outside R.
+  switch (reach(a, b, kTouch)) {
+    case Reach::kWithin: return false;
+    case Reach::kApart: return true;
+    case Reach::kBeyond: break;
+  }
+  return a_outside || !inside(a);
 }
 
 bool PlaneRegion::depth_within(const Vec2& a, const Vec2& b, double allow) const {

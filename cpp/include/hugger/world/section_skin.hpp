@@ -178,6 +178,11 @@ class PlaneRegion {
   /// tangent to a convex R without the tree (links resting on O mostly are).
   template <class Q>
   bool hull_apart(const Q& q, double limit) const;
+  /// How near segment [a, b] comes to the boundary: within `distance` of a piece; apart from
+  /// the boundary's box or hull by more (so outside them: outside R); or beyond `distance` of
+  /// every piece, found by the tree.
+  enum class Reach : std::uint8_t { kWithin, kApart, kBeyond };
+  Reach reach(const Vec2& a, const Vec2& b, double distance) const;
   /// Drops the runs of segments that lie inside R (found from their loose ends and junctions,
   /// each tested once in 3D) and the closed loops inside R (one test each; neither for r = 0),
   /// then replaces the chains of segments (joined end to end, two at each inner vertex) by fewer
