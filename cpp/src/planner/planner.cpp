@@ -322,12 +322,14 @@ bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>&
     box = Aabb();
     for (int n = 0; n <= N; ++n) box.grow(out[n] = planes_[k].to_world(c[n]));
   };
+  // The finger against itself within its plane (an isometric copy of the world's), then the
+  // others in the world.
+  for (int a = 0; a < N; ++a)
+    for (int b = a + 2; b < N; ++b)
+      if (segment_segment_squared_2d(chain[a], chain[a + 1], chain[b], chain[b + 1]) < sep2) return false;
   std::array<Vec3, kMaxLinks + 1> mine, theirs;
   Aabb my_box, their_box;
   to_world(m, chain, mine, my_box);
-  for (int a = 0; a < N; ++a)
-    for (int b = a + 2; b < N; ++b)
-      if (segment_segment_squared(mine[a], mine[a + 1], mine[b], mine[b + 1]) < sep2) return false;
   for (int k = 0; k < hand_.fingers(); ++k) {
     if (k == m) continue;
     to_world(k, others[k], theirs, their_box);
