@@ -1152,9 +1152,19 @@ bool PlaneRegion::hull_apart(const Q& q, double limit) const {
   if (!q.line || hull_.empty()) return false;
   // The hull's vertex farthest along a direction v starts its first edge turned a right angle
   // counter-clockwise from v, or past it (v = n: the edge along -u; v = -n: along u).
+  // A binary search without branches on the data (the comparisons pick indices): the
+  // directions asked are all round, which a predictor cannot learn.
   auto extreme = [&](const Vec2& edge) -> const Vec2& {
-    const auto at = std::lower_bound(hull_angle_.begin(), hull_angle_.end(), diamond_angle(edge));
-    return hull_[at == hull_angle_.end() ? 0 : at - hull_angle_.begin()];
+    const double t = diamond_angle(edge);
+    const double* a = hull_angle_.data();
+    std::size_t lo = 0, n = hull_angle_.size();
+    while (n > 1) {
+      const std::size_t half = n / 2;
+      lo = a[lo + half - 1] < t ? lo + half : lo;
+      n -= half;
+    }
+    lo += a[lo] < t;  // the first angle at or past t; past the last, the first vertex
+    return hull_[lo == hull_angle_.size() ? 0 : lo];
   };
   return q.n.dot(extreme(-q.u) - q.a) < -limit || q.n.dot(extreme(q.u) - q.a) > limit;
 }
@@ -1370,7 +1380,7 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
   Vec2 last_q(kInf, kInf);  // the last end point seen and its pseudo-angle (neighbours share ends)
   double last_p = 0.0;
   auto add = [&](const Vec2& q0, const Vec2& q1) {
-    double p0 = q0 == last_q ? last_p : pseudo_angle(u, q0), p1 = pseudo_angle(u, q1);
+    double p0 = q0.x() == last_q.x() && q0.y() == last_q.y() ? last_p : pseudo_angle(u, q0), p1 = pseudo_angle(u, q1);
     last_q = q1;
     last_p = p1;
     const Vec2 *v0 = &q0, *v1 = &q1;
