@@ -17,7 +17,8 @@
 /// simplified outward with what remains of the tolerance (every point at most `flatten` outside
 /// R), so that their number follows R's curvature rather than the mesh. A 2D BVH over the
 /// segments answers every query of a link in the plane in about a thousand instructions, nearly
-/// independently of the mesh size. Gaps it reports are measured within the plane (never smaller
+/// independently of the mesh size; the boundary's convex hull settles first the clearance tests
+/// of links with the whole boundary on one side of their line (links tangent to a convex R). Gaps it reports are measured within the plane (never smaller
 /// than the 3D gap).
 #pragma once
 
