@@ -355,6 +355,82 @@ TEST(SectionSkin, AnyWithinMatchesEverySegment) {
   EXPECT_GE(hits, 5000);
 }
 
+// The hull settles a query only where every segment agrees. Lines across each region's hull (at
+// fractions of its width, in random and axis directions and along its own segments, where
+// nearly collinear hull edges lie) and lines just outside it, on boxes (flat faces: collinear
+// boundary segments), a cylinder and a sphere, in axis-aligned and random planes: any_within
+// against every segment, and clear() against the test it shortcuts (no segment touching, a
+// outside R). One box plane where two collinear edges' pseudo-angles round in the wrong order is
+// asked first: there the hull started at the wrong edge and called a crossing line apart.
+TEST(SectionSkin, HullSettlesOnlyWhatEverySegmentSays) {
+  {
+    const test::Mesh m = test::box(Vec3(0.04, 0.04, 0.01), Vec3(0.01, 0.0, 0.02));
+    FingerPlane pl;
+    pl.origin = Vec3(0.012786536585010411, 0.005175785164235309, 0.017614383141039747);
+    pl.u = Vec3(0.35343720609972001, -0.79492588510811368, -0.49312775071933046);
+    pl.p = Vec3(0.79730224577810538, -0.019733635020856254, 0.6032575838943538);
+    const PlaneRegion R(std::make_shared<Object>(m.vertices, m.faces), pl, 0.0, kFlatten);
+    const Vec2 a(0.0064364275191014118, -0.032941890050551433), b(-0.04317482144392118, -0.039164749226926088);
+    ASSERT_EQ(R.nearest(a, b).distance, 0.0);  // the line crosses the boundary
+    EXPECT_TRUE(R.any_within(a, b, 1e-6));
+    EXPECT_FALSE(R.clear(a, b, false));
+  }
+  long checked = 0, crossing = 0, outside = 0;
+  for (const test::Mesh& m : {test::box(Vec3(0.03, 0.02, 0.05)), test::box(Vec3(0.04, 0.04, 0.01), Vec3(0.01, 0.0, 0.02)),
+                              test::cylinder(0.035, 0.05, 48), test::icosphere(3, Vec3::Constant(0.04))}) {
+    Scene s(m, 21);
+    const Vec3 axes[3] = {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()};
+    for (int k = 0; k < 24; ++k) {
+      FingerPlane pl;
+      const Vec3 at = s.c + Vec3(s.u() - 0.5, s.u() - 0.5, s.u() - 0.5) * 0.02;
+      if (k % 2 == 0) {  // a face's normal in the plane, or the plane along a face
+        const int ax = (k / 2) % 3;
+        const double t = (k % 4 == 0) ? 0.0 : s.u() * 2 * kPi;
+        pl.origin = at;
+        pl.p = axes[ax];
+        pl.u = (std::cos(t) * axes[(ax + 1) % 3] + std::sin(t) * axes[(ax + 2) % 3]).normalized();
+      } else {
+        pl = test::random_plane(s.rng, at);
+      }
+      const PlaneRegion* R = s.skin.region(pl, (k % 3 == 0) ? 0.0 : (k % 3 == 1 ? 0.001 : 0.004));
+      ASSERT_NE(R, nullptr);
+      const auto& segs = R->segments();
+      if (segs.empty()) continue;
+      std::vector<Vec2> dirs = {Vec2(1, 0), Vec2(0, 1), Vec2(-1, 0), Vec2(0, -1)};
+      for (int i = 0; i < 8; ++i) dirs.push_back(rotate_planar(Vec2(1, 0), s.u() * 2 * kPi));
+      for (std::size_t i = 0; i < segs.size(); i += std::max<std::size_t>(1, segs.size() / 24))
+        if (segs[i].b != segs[i].a) dirs.push_back((segs[i].b - segs[i].a).normalized());
+      for (const Vec2& u : dirs) {
+        const Vec2 n(-u.y(), u.x());
+        double lo = kInf, hi = -kInf;
+        for (const auto& g : segs) lo = std::min({lo, n.dot(g.a), n.dot(g.b)}), hi = std::max({hi, n.dot(g.a), n.dot(g.b)});
+        for (double f : {0.02, 0.3, 0.5, 0.7, 0.98, -1e-9, -1e-6, 1.0 + 1e-9, 1.0 + 1e-6}) {
+          const double off = f < 0.0 ? lo + f : (f > 1.0 ? hi + (f - 1.0) : lo + f * (hi - lo));
+          const Vec2 a = off * n + (s.u() - 0.5) * 0.1 * u, b = a + 0.05 * u;
+          double best = kInf;
+          for (const auto& g : segs) best = std::min(best, segments_apart(a, b, g.a, g.b));
+          if (std::abs(best - 1e-6) > 1e-12) {
+            ASSERT_EQ(R->any_within(a, b, 1e-6), best <= 1e-6) << "plane " << k << " offset " << f << " best " << best;
+            ++checked;
+          }
+          if (best > 2e-12) {
+            ASSERT_EQ(R->clear(a, b, false), !R->inside(a)) << "plane " << k << " offset " << f << " best " << best;
+            ++checked;
+            outside += f < 0.0 || f > 1.0;
+          } else if (best == 0.0) {
+            ASSERT_FALSE(R->clear(a, b, false)) << "plane " << k << " offset " << f;
+            ++crossing;
+          }
+        }
+      }
+    }
+  }
+  std::printf("  %ld decisions, %ld crossing lines, %ld lines outside the hull\n", checked, crossing, outside);
+  EXPECT_GE(checked, 20000);
+  EXPECT_GE(crossing, 3000);
+  EXPECT_GE(outside, 3000);
+}
+
 // link_gap_below (the motion check's question) gives link(...).gap < below with both skins, also
 // for bounds at and next to the link's own gap, where a shortcut would first disagree.
 TEST(SectionSkin, LinkGapBelowAgreesWithLink) {

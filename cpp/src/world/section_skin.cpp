@@ -1099,12 +1099,22 @@ void PlaneRegion::build_hull() {
       h.pop_back();  // the first point of the other pass
     }
   }
-  // From the edge of smallest pseudo-angle; the angles made non-decreasing (rounding of nearly
-  // parallel edges) so that a binary search finds an edge.
+  // From the edge after the angles' wrap round (the largest drop from one edge to the next:
+  // nearly 4 there, rounding elsewhere; the smallest angle is no guide, as two nearly collinear
+  // edges may round in the wrong order), the angles made non-decreasing (those roundings) so that
+  // a binary search finds an edge.
   const int k = static_cast<int>(h.size());
   std::vector<double> angle(k, 0.0);
   for (int i = 0; i < k && k > 1; ++i) angle[i] = diamond_angle(h[(i + 1) % k] - h[i]);
-  const int start = k > 0 ? static_cast<int>(std::min_element(angle.begin(), angle.end()) - angle.begin()) : 0;
+  int start = 0;
+  double drop = -kInf;
+  for (int i = 0; i < k; ++i) {
+    const double d = angle[(i + k - 1) % k] - angle[i];
+    if (d > drop) {
+      drop = d;
+      start = i;
+    }
+  }
   hull_.clear();
   hull_angle_.clear();
   for (int i = 0; i < k; ++i) {
