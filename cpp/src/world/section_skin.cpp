@@ -36,14 +36,6 @@ inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y(
 /// v turned a quarter to the left.
 inline Vec2 left_of(const Vec2& v) { return Vec2(-v.y(), v.x()); }
 
-/// A pseudo-angle of direction v (non-zero) in [0, 4): monotone in its true angle from +x,
-/// counter-clockwise (the "diamond angle"), with one division.
-inline double diamond_angle(const Vec2& v) {
-  const double x = v.x(), y = v.y();
-  if (y >= 0.0) return x >= 0.0 ? y / (x + y) : 1.0 - x / (y - x);
-  return x < 0.0 ? 2.0 - y / (-x - y) : 3.0 + x / (x - y);
-}
-
 /// A point of the plane with an id, for close_pairs.
 struct IdPoint {
   double x, y;
@@ -1099,13 +1091,13 @@ void PlaneRegion::build_hull() {
       h.pop_back();  // the first point of the other pass
     }
   }
-  // From the edge after the angles' wrap round (the largest drop from one edge to the next:
-  // nearly 4 there, rounding elsewhere; the smallest angle is no guide, as two nearly collinear
+  // The edges' pseudo-angles from +x, in [-2, 2]. From the edge after their wrap round (the
+  // largest drop from one edge to the next: nearly 4 there, rounding elsewhere; the smallest angle is no guide, as two nearly collinear
   // edges may round in the wrong order), the angles made non-decreasing (those roundings) so that
   // a binary search finds an edge.
   const int k = static_cast<int>(h.size());
   std::vector<double> angle(k, 0.0);
-  for (int i = 0; i < k && k > 1; ++i) angle[i] = diamond_angle(h[(i + 1) % k] - h[i]);
+  for (int i = 0; i < k && k > 1; ++i) angle[i] = pseudo_angle(Vec2::UnitX(), h[(i + 1) % k] - h[i]);
   int start = 0;
   double drop = -kInf;
   for (int i = 0; i < k; ++i) {
@@ -1165,7 +1157,7 @@ bool PlaneRegion::hull_apart(const Q& q, double limit) const {
   // A binary search without branches on the data (the comparisons pick indices): the
   // directions asked are all round, which a predictor cannot learn.
   auto extreme = [&](const Vec2& edge) -> const Vec2& {
-    const double t = diamond_angle(edge);
+    const double t = pseudo_angle(Vec2::UnitX(), edge);
     const double* a = hull_angle_.data();
     std::size_t lo = 0, n = hull_angle_.size();
     while (n > 1) {
@@ -1390,7 +1382,7 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
   Vec2 last_q(kInf, kInf);  // the last end point seen and its pseudo-angle (neighbours share ends)
   double last_p = 0.0;
   auto add = [&](const Vec2& q0, const Vec2& q1) {
-    double p0 = q0.x() == last_q.x() && q0.y() == last_q.y() ? last_p : pseudo_angle(u, q0), p1 = pseudo_angle(u, q1);
+    double p0 = q0 == last_q ? last_p : pseudo_angle(u, q0), p1 = pseudo_angle(u, q1);
     last_q = q1;
     last_p = p1;
     const Vec2 *v0 = &q0, *v1 = &q1;

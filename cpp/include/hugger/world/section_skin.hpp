@@ -18,8 +18,8 @@
 /// R), so that their number follows R's curvature rather than the mesh. A 2D BVH over the
 /// segments answers every query of a link in the plane in about a thousand instructions, nearly
 /// independently of the mesh size; the boundary's convex hull settles first the clearance tests
-/// of links with the whole boundary on one side of their line (links tangent to a convex R). Gaps it reports are measured within the plane (never smaller
-/// than the 3D gap).
+/// of links with the whole boundary on one side of their line (links tangent to a convex R).
+/// Gaps it reports are measured within the plane (never smaller than the 3D gap).
 #pragma once
 
 #include <algorithm>
@@ -223,9 +223,9 @@ class PlaneRegion {
   std::vector<Piece> pieces_;
   std::vector<Node> nodes_;
   std::vector<int> order_;                       ///< while building the BVH
-  /// The boundary's convex hull, counter-clockwise from its edge of smallest pseudo-angle;
-  /// hull_angle_[i]: the pseudo-angle in [0, 4) (diamond_angle) of the edge from hull_[i] to the
-  /// next vertex, non-decreasing.
+  /// The boundary's convex hull, counter-clockwise from the edge after its edges' pseudo-angles
+  /// wrap round; hull_angle_[i]: the pseudo-angle (pseudo_angle from +x) of the edge from hull_[i]
+  /// to the next vertex, non-decreasing.
   std::vector<Vec2> hull_;
   std::vector<double> hull_angle_;
   /// A crossing of a segment by a piece of another feature, while building: where, and on which
