@@ -324,9 +324,19 @@ bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>&
   };
   // The finger against itself within its plane (an isometric copy of the world's), then the
   // others in the world.
+  // Two links whose boxes are sep apart are at least that far apart: most pairs are settled by
+  // their boxes, cheaper than the distance.
+  std::array<Vec2, kMaxLinks> lo, hi;
+  for (int a = 0; a < N; ++a) {
+    lo[a] = chain[a].cwiseMin(chain[a + 1]);
+    hi[a] = chain[a].cwiseMax(chain[a + 1]);
+  }
   for (int a = 0; a < N; ++a)
-    for (int b = a + 2; b < N; ++b)
+    for (int b = a + 2; b < N; ++b) {
+      const Vec2 gap = (lo[b] - hi[a]).cwiseMax(lo[a] - hi[b]).cwiseMax(0.0);
+      if (gap.squaredNorm() >= sep2) continue;
       if (segment_segment_squared_2d(chain[a], chain[a + 1], chain[b], chain[b + 1]) < sep2) return false;
+    }
   std::array<Vec3, kMaxLinks + 1> mine, theirs;
   Aabb my_box, their_box;
   to_world(m, chain, mine, my_box);
@@ -394,6 +404,8 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
   // clinging tolerance: below a D_n of twice that without asking. (Sampling a link that needed
   // none changes no answer: its samples are clear.)
   const double rest_gap = 2.0 * snake_tolerance();
+  // A chain Tail2Head made (`turned` given) has every link found free: its joints lie outside O.
+  const bool joints_outside = turned != nullptr;
   int last = -1;  // the distal-most link sampled
   for (int n = 0; n < N; ++n) {
     cum += a1[n] - a0[n];
@@ -401,7 +413,7 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
     const double D = d_root + reach;
     bound = std::max(bound, D);
     sample[n] = (turned != nullptr && turned[n] && D > rest_gap) ||
-                sensing_->link_gap_below(planes_[m], next[n], next[n + 1], r, D);
+                sensing_->link_gap_below(planes_[m], next[n], next[n + 1], r, D, joints_outside);
     if (sample[n]) last = n;
   }
   if (last < 0) return true;

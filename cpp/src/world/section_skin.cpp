@@ -1575,6 +1575,22 @@ SectionSkin::~SectionSkin() = default;
 
 namespace {
 
+/// Whether two planes have the same bits (equal bits are equal planes; a zero of the other sign
+/// differs): nine word compares without a branch, where memcmp of 72 bytes is a library call.
+inline bool same_bits(const FingerPlane& x, const FingerPlane& y) {
+  static_assert(sizeof(FingerPlane) == 9 * sizeof(double), "FingerPlane: three Vec3, no padding");
+  const auto* px = reinterpret_cast<const unsigned char*>(&x);
+  const auto* py = reinterpret_cast<const unsigned char*>(&y);
+  std::uint64_t diff = 0;
+  for (std::size_t i = 0; i < sizeof(FingerPlane); i += sizeof(std::uint64_t)) {
+    std::uint64_t a, b;
+    std::memcpy(&a, px + i, sizeof a);
+    std::memcpy(&b, py + i, sizeof b);
+    diff |= a ^ b;
+  }
+  return diff == 0;
+}
+
 bool same_plane(const FingerPlane& x, double rx, const FingerPlane& y, double ry) {
   // Scalar comparisons that stop at the first difference, u first: a hand's finger planes
   // mostly differ in u (parallel and opposed fingers share it, and differ in the origin) and
@@ -1612,9 +1628,8 @@ const PlaneRegion* SectionSkin::find(const FingerPlane& plane, double radius) co
   // A finger's queries come in runs (its propagations, its motion check): the entry found last
   // is asked first, by its bits (equal bits are equal planes; a zero of the other sign only
   // sends the query on). Threads that share the skin may overwrite it: each load is checked.
-  static_assert(sizeof(FingerPlane) == 9 * sizeof(double), "FingerPlane: three Vec3, no padding");
   if (const Entry* e = last_.load(std::memory_order_acquire);
-      e != nullptr && e->radius == radius && std::memcmp(&e->plane, &plane, sizeof(FingerPlane)) == 0)
+      e != nullptr && e->radius == radius && same_bits(e->plane, plane))
     return &e->region;
   // The fingers' queries interleave: the table of hashes answers most of the others with one
   // comparison (a miss or a collision falls back to the scan).
@@ -1653,6 +1668,15 @@ const PlaneRegion* SectionSkin::insert(std::unique_ptr<Entry> entry) const {
 }
 
 const PlaneRegion* SectionSkin::region(const FingerPlane& plane, double radius) const {
+  // The entry found last answers most queries (a finger's come in runs): that test inline, the
+  // rest of find() and the build out of line.
+  if (const Entry* e = last_.load(std::memory_order_acquire);
+      e != nullptr && e->radius == radius && same_bits(e->plane, plane))
+    return &e->region;
+  return find_or_build(plane, radius);
+}
+
+const PlaneRegion* SectionSkin::find_or_build(const FingerPlane& plane, double radius) const {
   if (const PlaneRegion* r = find(plane, radius)) return r;
   if (!finite_plane(plane, radius)) return nullptr;
   {
@@ -1807,14 +1831,14 @@ double SectionSkin::contact_gap_bound(const FingerPlane& plane, const Vec2& a, c
 }
 
 bool SectionSkin::link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
-                                 double below) const {
+                                 double below, bool a_outside) const {
   // A piece of R's boundary closer than `below` to the axis: link() would find the nearest piece
   // at most that close, and report a gap below `below` on either side of it. With none that
   // close, link() reports a gap of at least `below` outside R and a negative one inside: the
-  // side of the axis (of its end a) decides.
+  // side of the axis (of its end a) decides: outside where the caller knows a to be.
   const PlaneRegion* R = below > 0.0 ? region(plane, radius) : nullptr;
   if (!R) return link(plane, a, b, radius, below).gap < below;
-  return R->any_within(a, b, std::nextafter(below, 0.0)) || R->inside(a);
+  return R->any_within(a, b, std::nextafter(below, 0.0)) || (!a_outside && R->inside(a));
 }
 
 namespace {

@@ -32,7 +32,7 @@ Touch SimulatedWorld::capsule(const Vec3& a, const Vec3& b, double radius, doubl
 }
 
 bool SimulatedWorld::link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
-                                    double below) const {
+                                    double below, bool /*a_outside*/) const {
   const Vec3 wa = plane.to_world(a), wb = plane.to_world(b);
   // A triangle closer than radius + below (less a relative margin, far above rounding): the
   // nearest one is at least that close, and capsule() reports a gap below `below`.

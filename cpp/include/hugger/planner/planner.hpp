@@ -137,7 +137,8 @@ class Planner {
   double translation_free(int m, const Chain& chain, double sigma) const;
   /// The motion old -> next of finger m (root moved by d_eta, joint angles interpolated
   /// linearly, as a robot executes it) keeps every joint within 4 s and is collision-free.
-  /// `turned` (N entries, or nullptr): tail_to_head's for next, the links known to rest on O.
+  /// `turned` (N entries, or nullptr): tail_to_head's for next, the links known to rest on O;
+  /// given, next is tail_to_head's chain, every link of it found free.
   bool motion_ok(int m, const Chain& old, const Chain& next, const char* turned = nullptr) const;
   /// A link sampled on such a motion: clear of O, or into it by at most a quarter of the
   /// collision tolerance.

@@ -98,8 +98,11 @@ class Sensing {
   }
   /// True when the link's gap (as `link` reports it) is below `below` (> 0). Override with a test
   /// that can stop at the first piece of O closer than that; the default asks `link`.
-  virtual bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
-                              double below) const {
+  /// `a_outside`: as link_free's (a is the end of a link found free), which spares an override
+  /// the inside test where nothing is that close; the default has no use for it.
+  virtual bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double below,
+                              bool a_outside = false) const {
+    (void)a_outside;
     return link(plane, a, b, radius, below).gap < below;
   }
   /// The gap that decides contact (the sensing distance `delta` > 0): at most delta exactly when

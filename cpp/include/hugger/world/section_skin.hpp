@@ -277,8 +277,8 @@ class SectionSkin final : public Sensing {
   bool link_free(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double front,
                  bool a_outside = false) const override;
   /// As link(...).gap < below, stopping at the first boundary piece closer than `below`.
-  bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
-                      double below) const override;
+  bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double below,
+                      bool a_outside = false) const override;
   /// Exact up to `need`; beyond it `far` where threshold tests (R's boundary, then the object's
   /// BVH in space) find nothing within `far`, else a value just above `need`.
   double contact_gap_bound(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double delta,
@@ -332,6 +332,8 @@ class SectionSkin final : public Sensing {
   struct Entry;
   /// The region of the plane and radius if built, else nullptr (no lock).
   const PlaneRegion* find(const FingerPlane& plane, double radius) const;
+  /// region() past its test of the entry found last: find(), else build.
+  const PlaneRegion* find_or_build(const FingerPlane& plane, double radius) const;
   /// Adds a built region unless one of its plane and radius is there (under the lock); returns
   /// the region kept, or nullptr past kMaxRegions.
   const PlaneRegion* insert(std::unique_ptr<Entry> entry) const;

@@ -20,8 +20,8 @@ class SimulatedWorld final : public Sensing {
     return object_->capsule_clear(a, b, radius, a_outside);
   }
   /// As link(...).gap < below, stopping at the first triangle clearly closer than that.
-  bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
-                      double below) const override;
+  bool link_gap_below(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double below,
+                      bool a_outside = false) const override;
   /// The generic answer, after a clearance test that settles the links that are clear (most of
   /// those asked), cheaper than their gap.
   bool link_depth_within(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
