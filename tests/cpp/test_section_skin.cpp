@@ -432,11 +432,12 @@ TEST(SectionSkin, HullSettlesOnlyWhatEverySegmentSays) {
 }
 
 // link_gap_below (the motion check's question) gives link(...).gap < below with both skins, also
-// for bounds at and next to the link's own gap, where a shortcut would first disagree.
+// for bounds at and next to the link's own gap, where a shortcut would first disagree; and told
+// that a lies outside (a_outside, for links found free), the same.
 TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
   for (const test::Mesh& m : {test::icosphere(3, Vec3::Constant(0.04)), test::curvy(4)}) {
     Scene s(m, 7);
-    long checked = 0;
+    long checked = 0, told_outside = 0;
     for (int k = 0; k < 12; ++k) {
       const FingerPlane pl = test::random_plane(s.rng, s.c);
       const double r = (k % 3) * 0.03 * s.size;
@@ -446,16 +447,24 @@ TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
         const Vec2 b = a + len * Vec2(std::cos(ang), std::sin(ang));
         for (const Sensing* sense : {static_cast<const Sensing*>(&s.skin), static_cast<const Sensing*>(&s.mesh)}) {
           const double g = sense->link(pl, a, b, r).gap;
+          const bool free = sense->link_free(pl, a, b, r, -kInf);
           for (double below : {0.01 * s.size, 0.1 * s.size, g, std::nextafter(g, kInf), std::nextafter(g, 0.0)}) {
             if (!(below > 0.0) || !std::isfinite(below)) continue;
-            EXPECT_EQ(sense->link_gap_below(pl, a, b, r, below), sense->link(pl, a, b, r, below).gap < below)
+            const bool want = sense->link(pl, a, b, r, below).gap < below;
+            EXPECT_EQ(sense->link_gap_below(pl, a, b, r, below), want)
                 << "plane " << k << " query " << q << " below " << below;
             ++checked;
+            if (free) {
+              EXPECT_EQ(sense->link_gap_below(pl, a, b, r, below, true), want)
+                  << "plane " << k << " query " << q << " below " << below << " (a outside)";
+              ++told_outside;
+            }
           }
         }
       }
     }
     EXPECT_GE(checked, 2000);
+    EXPECT_GE(told_outside, 500);
   }
 }
 
