@@ -312,10 +312,11 @@ SnakeRequest Planner::snake_request(int m, double front) const {
   return req;
 }
 
+double Planner::finger_separation() const { return std::max(2.0 * hand_.link_radius(), 1e-7); }
+
 bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const {
   const int N = hand_.links();
-  const double r = hand_.link_radius();
-  const double sep = std::max(2.0 * r, 1e-7);
+  const double sep = finger_separation();
   const double sep2 = sep * sep;
   // On the stack, as in motion_ok.
   auto to_world = [&](int k, const Chain& c, std::array<Vec3, kMaxLinks + 1>& out, Aabb& box) {
@@ -324,19 +325,8 @@ bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>&
   };
   // The finger against itself within its plane (an isometric copy of the world's), then the
   // others in the world.
-  // Two links whose boxes are sep apart are at least that far apart: most pairs are settled by
-  // their boxes, cheaper than the distance.
-  std::array<Vec2, kMaxLinks> lo, hi;
-  for (int a = 0; a < N; ++a) {
-    lo[a] = chain[a].cwiseMin(chain[a + 1]);
-    hi[a] = chain[a].cwiseMax(chain[a + 1]);
-  }
-  for (int a = 0; a < N; ++a)
-    for (int b = a + 2; b < N; ++b) {
-      const Vec2 gap = (lo[b] - hi[a]).cwiseMax(lo[a] - hi[b]).cwiseMax(0.0);
-      if (gap.squaredNorm() >= sep2) continue;
-      if (segment_segment_squared_2d(chain[a], chain[a + 1], chain[b], chain[b + 1]) < sep2) return false;
-    }
+  for (int b = 2; b < N; ++b)
+    if (!link_clear_of_chain(chain.data(), b, sep)) return false;
   std::array<Vec3, kMaxLinks + 1> mine, theirs;
   Aabb my_box, their_box;
   to_world(m, chain, mine, my_box);
@@ -484,7 +474,10 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
     b[0] -= phi;
     Chain c = hand_.forward_planar(m, root, b.data());
     std::array<char, kMaxLinks> turned;
-    if (!tail_to_head(*sensing_, snake_request(m, new_eta), root, c, turned.data())) continue;
+    // A chain that folds onto itself is refused below: Tail2Head stops at the link that does.
+    SnakeRequest req = snake_request(m, new_eta);
+    req.self_separation = finger_separation();
+    if (!tail_to_head(*sensing_, req, root, c, turned.data())) continue;
     // The cheap test first: a chain that hits a finger needs no motion check.
     if (!fingers_clear(m, c, others) || !motion_ok(m, old, c, turned.data())) continue;
     out = std::move(c);
@@ -505,7 +498,9 @@ bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others
   b[0] += inc;
   Chain c = hand_.forward_planar(m, chain[0], b.data());
   std::array<char, kMaxLinks> turned;
-  if (!tail_to_head(*sensing_, snake_request(m, chain[0].y()), chain[0], c, turned.data())) return false;
+  SnakeRequest req = snake_request(m, chain[0].y());
+  req.self_separation = finger_separation();  // as in open_step
+  if (!tail_to_head(*sensing_, req, chain[0], c, turned.data())) return false;
   if (largest_move(chain, c) < params_.epsilon) return false;
   // A step the motion rules or the other fingers would refuse ends the closing here, so that the
   // ordinary rules move the finger in this same iteration.

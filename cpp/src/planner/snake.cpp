@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 
+#include "hugger/geometry/distance.hpp"
+
 namespace hugger {
 
 namespace {
@@ -14,6 +16,19 @@ Vec2 base_of(const Chain& chain, int joint) {
 }
 
 }  // namespace
+
+bool link_clear_of_chain(const Vec2* chain, int b, double separation) {
+  const double sep2 = separation * separation;
+  const Vec2 lo_b = chain[b].cwiseMin(chain[b + 1]), hi_b = chain[b].cwiseMax(chain[b + 1]);
+  for (int a = 0; a + 2 <= b; ++a) {
+    // Two links whose boxes are `separation` apart are at least that far apart: most pairs are
+    // settled by their boxes, cheaper than the distance.
+    const Vec2 lo_a = chain[a].cwiseMin(chain[a + 1]), hi_a = chain[a].cwiseMax(chain[a + 1]);
+    if ((lo_b - hi_a).cwiseMax(lo_a - hi_b).cwiseMax(0.0).squaredNorm() >= sep2) continue;
+    if (segment_segment_squared_2d(chain[a], chain[a + 1], chain[b], chain[b + 1]) < sep2) return false;
+  }
+  return true;
+}
 
 double relative_angle(const Chain& chain, int joint, const Vec2& dir) {
   return signed_angle(base_of(chain, joint), dir);
@@ -108,10 +123,12 @@ bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& r
   const int N = static_cast<int>(chain.size()) - 1;
   const auto old = stack_copy(chain);
   chain[0] = root;
-  for (int n = 0; n < N; ++n)
+  for (int n = 0; n < N; ++n) {
     if (!place(sensing, req, old.data(), n, n + 1, req.lengths[n], req.start_outside || n > 0, chain,
                turned != nullptr ? turned + n : nullptr))
       return false;
+    if (req.self_separation > 0.0 && !link_clear_of_chain(chain.data(), n, req.self_separation)) return false;
+  }
   return true;
 }
 

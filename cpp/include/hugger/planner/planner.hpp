@@ -158,7 +158,11 @@ class Planner {
   /// clinging for the rest). Returns false when the finger moves less than epsilon or the motion
   /// rules or the `others` fingers refuse the step.
   bool reclose_step(int m, Chain& chain, const std::vector<Chain>& others) const;
+  /// Chain m clears itself (links not next to each other, in its plane) and the `others`
+  /// fingers (in the world) by finger_separation().
   bool fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const;
+  /// How far apart two links of the hand must stay: two link radii (at least 0.1 µm).
+  double finger_separation() const;
   /// HandModel::planar_angles of finger m's `chain`, bit for bit, remembered for the last two
   /// chains of each finger (the one it holds and the one tried last): the motion check and the
   /// configuration ask about the same chains in turn. Valid until the next call for finger m.

@@ -30,7 +30,16 @@ struct SnakeRequest {
   /// nullptr: unlimited. Tail2Head holds each joint within them (see joint_within_limits).
   const double* lower = nullptr;
   const double* upper = nullptr;
+  /// > 0: Tail2Head gives up (returns false) as soon as a link it places comes within this of a
+  /// link of the chain not next to it (link_clear_of_chain), a chain the caller would refuse
+  /// anyway. 0: the chain is placed whole.
+  double self_separation = 0.0;
 };
+
+/// True when link b of the chain (joints chain[b], chain[b + 1]) is at least `separation` from
+/// each of the links 0 .. b - 2 before it (links next to each other share a joint): the test of
+/// a finger against itself, one link at a time.
+bool link_clear_of_chain(const Vec2* chain, int b, double separation);
 
 /// Slack (rad) on the joint limits: rounding of angles recomputed from joint positions.
 constexpr double kLimitSlack = 1e-12;
