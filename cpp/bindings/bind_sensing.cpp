@@ -78,7 +78,7 @@ void bind_sensing(py::module_& m) {
   py::class_<Touch>(m, "Touch",
                     "What a piece of skin senses. ``gap`` (m) between the part's surface and O: signed, "
                     "negative when the part penetrates O (FCL's convention); exact when <= the query's cap, "
-                    "otherwise any value >= cap (+inf: nothing sensed). ``on_hand`` (3,): nearest point of the "
+                    "otherwise any value above cap (+inf: nothing sensed). ``on_hand`` (3,): nearest point of the "
                     "capsule's axis; ``on_object`` (3,): nearest point of O; ``normal`` (3,): unit gradient of the "
                     "signed distance at on_hand, pointing out of O toward the hand.")
       .def(py::init([](double gap, const ArrayD& on_hand, const ArrayD& on_object, const ArrayD& normal) {

@@ -145,7 +145,7 @@ class Object:
         """
 class Touch:
     """
-    What a piece of skin senses. ``gap`` (m) between the part's surface and O: signed, negative when the part penetrates O (FCL's convention); exact when <= the query's cap, otherwise any value >= cap (+inf: nothing sensed). ``on_hand`` (3,): nearest point of the capsule's axis; ``on_object`` (3,): nearest point of O; ``normal`` (3,): unit gradient of the signed distance at on_hand, pointing out of O toward the hand.
+    What a piece of skin senses. ``gap`` (m) between the part's surface and O: signed, negative when the part penetrates O (FCL's convention); exact when <= the query's cap, otherwise any value above cap (+inf: nothing sensed). ``on_hand`` (3,): nearest point of the capsule's axis; ``on_object`` (3,): nearest point of O; ``normal`` (3,): unit gradient of the signed distance at on_hand, pointing out of O toward the hand.
     """
     def __init__(self, gap: typing.SupportsFloat | typing.SupportsIndex, on_hand: typing.Annotated[numpy.typing.ArrayLike, numpy.float64] = ..., on_object: typing.Annotated[numpy.typing.ArrayLike, numpy.float64] = ..., normal: typing.Annotated[numpy.typing.ArrayLike, numpy.float64] = ...) -> None:
         ...

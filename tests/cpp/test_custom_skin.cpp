@@ -55,6 +55,26 @@ class FailingSkin : public BallSkin {
   long after_;
 };
 
+/// The ball, answering every gap above the query's cap with `beyond(cap)`: the least a skin may
+/// say there (the next double above the cap), or +inf ("nothing within cap").
+class CappedBallSkin : public BallSkin {
+ public:
+  CappedBallSkin(Vec3 c, double R, bool infinite) : BallSkin(std::move(c), R), infinite_(infinite) {}
+  Touch capsule(const Vec3& a, const Vec3& b, double radius, double cap) const override {
+    Touch t = BallSkin::capsule(a, b, radius, cap);
+    if (t.gap > cap) t.gap = beyond(cap);
+    return t;
+  }
+  double palm(const Pose& pose, double radius, double thickness, double cap) const override {
+    const double g = BallSkin::palm(pose, radius, thickness, cap);
+    return g > cap ? beyond(cap) : g;
+  }
+
+ private:
+  double beyond(double cap) const { return infinite_ ? kInf : std::nextafter(cap, kInf); }
+  bool infinite_;
+};
+
 }  // namespace
 
 TEST(CustomSkin, AnalyticSphereAgreesWithAFineMesh) {
@@ -76,4 +96,36 @@ TEST(CustomSkin, AnExceptionInTheSkinReachesTheCaller) {
   // configurations are appended only when an iteration completes
   EXPECT_GE(planner.history().size(), before);
   for (const auto& c : planner.history()) EXPECT_EQ(static_cast<int>(c.joints.size()), 5 * 6);
+}
+
+// The planner decides nothing from a gap beyond the cap it asked with (the start's check, contact,
+// the palm step, the lasting bounds of the palm's and the FROZEN fingers' gaps): a skin that
+// answers those with the least value it may (the next double above the cap: the cap itself
+// would read as a gap within it), or with +inf, gives the same plan, bit for bit, from starts
+// above and tilted towards the ball, the palm landing on it.
+TEST(CustomSkin, AnswersBeyondTheCapLeaveThePlanAsItIs) {
+  const HandModel hand = HandModel::uniform(5, 5, 0.02, 0.004, 0.03, 0.01);
+  Pose tilted = test::facing_down(0.2);
+  tilted.linear() = tilted.linear() * Eigen::AngleAxisd(0.3, Vec3::UnitX()).toRotationMatrix();
+  tilted.translation() = Vec3(0.01, -0.02, 0.2);
+  int compared = 0;
+  for (const Pose& start : {test::facing_down(0.2), test::facing_down(0.3), tilted}) {
+    Planner exact(hand, std::make_shared<BallSkin>(Vec3::Zero(), 0.04), Vec3::Zero(), start);
+    const Status done = exact.plan();
+    EXPECT_GT(exact.history().size(), 20u);
+    EXPECT_GE(exact.stats().palm_contact_iteration, 0);  // the palm lands: its gap was asked to the end
+    for (bool infinite : {false, true}) {
+      Planner capped(hand, std::make_shared<CappedBallSkin>(Vec3::Zero(), 0.04, infinite), Vec3::Zero(), start);
+      EXPECT_EQ(capped.plan(), done);
+      ASSERT_EQ(exact.history().size(), capped.history().size()) << (infinite ? "+inf" : "next above the cap");
+      for (std::size_t i = 0; i < exact.history().size(); ++i) {
+        const Configuration &x = exact.history()[i], &y = capped.history()[i];
+        EXPECT_TRUE(x.palm.matrix() == y.palm.matrix()) << "configuration " << i;
+        EXPECT_TRUE(x.angles == y.angles) << "configuration " << i;
+        EXPECT_TRUE(x.tip_state == y.tip_state) << "configuration " << i;
+      }
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 6);
 }

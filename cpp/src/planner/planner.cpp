@@ -51,6 +51,9 @@ constexpr double kMaxJointSteps = 4.0 * (1.0 - 1e-6);
 constexpr double kMaxClingSteps = 8.0;
 /// Hug rule: a joint closing until contact flexes at most to this angle (rad).
 constexpr double kMaxCloseFlexion = kPi / 2.0;
+/// Lasting gap bounds (the FROZEN fingers', the palm's) ask their gaps up to this many steps s:
+/// a bound beyond what is needed lasts several palm steps.
+constexpr double kGapFarSteps = 4.0;
 
 
 [[noreturn]] void invalid(const std::string& what) { throw std::invalid_argument(what); }
@@ -174,6 +177,7 @@ void Planner::plan_phase1(const Pose& start) {
   cycle_repeats_.assign(hand_.fingers(), 0);
   stalled_.assign(hand_.fingers(), 0);
   frozen_lb_.assign(2 * static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1), -kInf);
+  palm_lb_ = -kInf;
   closing_.assign(hand_.fingers(), 0);
   angle_memo_.assign(hand_.fingers(), AngleMemo());
   closed_.assign(hand_.fingers(), 0);
@@ -275,7 +279,7 @@ double Planner::frozen_gap(int m, int n, double need, bool contact) {
   const std::size_t parts = static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1);
   double& lb = frozen_lb_[(contact ? parts : 0) + static_cast<std::size_t>(m) * (hand_.links() + 1) + n];
   if (lb > need) return lb;
-  const double far = 4.0 * params_.step;  // beyond need, a bound that lasts several palm steps
+  const double far = kGapFarSteps * params_.step;
   const Chain& c = chains_[m];
   const Vec2 &a = n < hand_.links() ? c[n] : c[0], &b = n < hand_.links() ? c[n + 1] : c[0];
   if (contact) {
@@ -559,8 +563,9 @@ bool Planner::approach() {
   // The exact free distance of the palm and the extended fingers (each gap bounds how far that
   // part can translate before it touches O). Each gap is asked only up to the smallest so far:
   // beyond that cap a gap is reported as some value at least the cap, which leaves the minimum
-  // as it is.
+  // as it is. The palm's exact gap is also its lasting bound (phase2_iteration).
   double free = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), kInf);
+  palm_lb_ = free;
   for (int m = 0; m < M; ++m) {
     const Chain& c = chains_[m];
     for (int n = 0; n < N; ++n) free = std::min(free, link_gap(m, c[n], c[n + 1], free));
@@ -579,6 +584,7 @@ bool Planner::approach() {
     history_.push_back(make_configuration(2));
   }
   for (double& lb : frozen_lb_) lb -= total + 1e-12;
+  palm_lb_ -= total + 1e-12;
   stats_.approach_configurations += pieces;
   return true;
 }
@@ -619,7 +625,17 @@ void Planner::phase2_iteration() {
   }
   double palm_gap = kInf;
   if (!palm_touched_) {
-    palm_gap = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), s + delta);
+    // Only a gap up to s + delta decides anything below (contact, and the palm step's bound):
+    // while the palm's lower bound is above that, it stands for the gap. Else the gap is asked up
+    // to a wider cap (as frozen_gap's), so that the bound lasts a few palm steps.
+    const double need = s + delta;
+    if (palm_lb_ > need) {
+      palm_gap = palm_lb_;
+    } else {
+      const double far = std::max(need, kGapFarSteps * s);
+      palm_gap = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), far);
+      palm_lb_ = std::min(palm_gap, far);  // beyond the cap only known to be at least the cap
+    }
     if (palm_gap <= delta) {
       palm_touched_ = true;
       felt_ = true;
@@ -901,6 +917,7 @@ void Planner::phase2_iteration() {
   std::swap(states_, next_states);
   eta_ += sigma;
   for (double& lb : frozen_lb_) lb -= sigma + 1e-12;  // a picometre for rounding
+  palm_lb_ -= sigma + 1e-12;
   const bool all_done = std::all_of(states_.begin(), states_.end(), [](TipState t) { return t == TipState::kDone; });
   Configuration c = make_configuration(2);
   const Configuration& last = history_.back();

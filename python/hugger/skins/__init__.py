@@ -7,7 +7,7 @@ A skin answers two primitive queries, in metres, in the world frame:
 - ``palm(pose, radius, thickness, cap) -> float``: the gap between the palm disk and the object.
 
 Gaps are signed (negative when the part penetrates the object) and must be exact whenever they
-are at most ``cap``; above ``cap`` any value >= ``cap`` (``inf`` included) may be returned.
+are at most ``cap``; above ``cap`` any value above ``cap`` (``inf`` included) may be returned.
 
 Skins here:
 

@@ -208,6 +208,8 @@ class Planner {
   /// move rigidly with the palm: each palm step sigma lowers them by sigma), then as many of
   /// their contact gaps. -inf: unknown.
   std::vector<double> frozen_lb_;
+  /// A lower bound of the palm's gap, lowered by each palm step as frozen_lb_ (-inf: unknown).
+  double palm_lb_ = -kInf;
   double eta_ = 0.0;
   /// How far the palm may advance along p before anything is felt: until its front plane reaches
   /// T. T lies inside O, so the palm touches O first; a skin whose object is elsewhere (a

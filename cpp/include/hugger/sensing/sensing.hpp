@@ -16,7 +16,7 @@ namespace hugger {
 
 /// What a piece of skin senses: the gap to the object and where. Signed: gap < 0 when the part
 /// penetrates O or lies inside it (FCL's convention). Exact when gap <= the query's `cap`;
-/// otherwise any value >= cap may be returned.
+/// otherwise any value above cap may be returned (the planner decides "within cap" by gap <= cap).
 struct Touch {
   double gap = kInf;               ///< metres between the part's surface and O
   Vec3 on_hand = Vec3::Zero();     ///< nearest point of the part's axis (capsules) or centre
