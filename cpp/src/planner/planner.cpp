@@ -560,15 +560,19 @@ bool Planner::approach() {
   const double s = params_.step, level = 0.5 * params_.contact_tolerance;
   Pose palm = palm2_;
   palm.translation() += eta_ * palm2_.linear().col(2);
-  // The exact free distance of the palm and the extended fingers (each gap bounds how far that
+  // The exact free distance of the extended fingers and the palm (each gap bounds how far that
   // part can translate before it touches O). Each gap is asked only up to the smallest so far:
-  // beyond that cap a gap is reported as some value at least the cap, which leaves the minimum
-  // as it is. The palm's exact gap is also its lasting bound (phase2_iteration).
-  double free = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), kInf);
-  palm_lb_ = free;
+  // beyond that cap a gap is reported as some value above the cap, which leaves the minimum as it
+  // is. The palm last, as its query in space is the costliest: not at all while its lasting
+  // bound shows it farther than the fingers, else exactly (the bound then lasts).
+  double free = kInf;
   for (int m = 0; m < M; ++m) {
     const Chain& c = chains_[m];
     for (int n = 0; n < N; ++n) free = std::min(free, link_gap(m, c[n], c[n + 1], free));
+  }
+  if (!(palm_lb_ > free)) {
+    palm_lb_ = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), kInf);
+    free = std::min(free, palm_lb_);
   }
   // Never past T (eta_target_): with nothing sensed ahead, the hand advances to T in one iteration.
   const double total = std::min(free - level, eta_target_ - eta_);
