@@ -447,14 +447,14 @@ TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
         const Vec2 b = a + len * Vec2(std::cos(ang), std::sin(ang));
         for (const Sensing* sense : {static_cast<const Sensing*>(&s.skin), static_cast<const Sensing*>(&s.mesh)}) {
           const double g = sense->link(pl, a, b, r).gap;
-          const bool free = sense->link_free(pl, a, b, r, -kInf);
+          const bool found_free = sense->link_free(pl, a, b, r, -kInf);
           for (double below : {0.01 * s.size, 0.1 * s.size, g, std::nextafter(g, kInf), std::nextafter(g, 0.0)}) {
             if (!(below > 0.0) || !std::isfinite(below)) continue;
             const bool want = sense->link(pl, a, b, r, below).gap < below;
             EXPECT_EQ(sense->link_gap_below(pl, a, b, r, below), want)
                 << "plane " << k << " query " << q << " below " << below;
             ++checked;
-            if (free) {
+            if (found_free) {
               EXPECT_EQ(sense->link_gap_below(pl, a, b, r, below, true), want)
                   << "plane " << k << " query " << q << " below " << below << " (a outside)";
               ++told_outside;

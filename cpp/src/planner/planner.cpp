@@ -290,12 +290,15 @@ double Planner::frozen_gap(int m, int n, double need, bool contact) {
   // Ask with a wider cap than needed.
   const double cap = std::max(need, far);
   const double g = link_gap(m, a, b, cap);
-  lb = std::min(g, cap);  // beyond the cap the answer is only known to be at least the cap
+  lb = std::min(g, cap);  // beyond the cap the answer is only known to be above it
   return lb;
 }
 
-SnakeRequest Planner::snake_request(int m, double front) const {
+SnakeRequest Planner::snake_request(int m, double front, bool stop_folding) const {
   SnakeRequest req;
+  // A chain that folds onto itself, refused by the caller anyway: Tail2Head stops at the link
+  // that does (fingers_clear's self-test).
+  if (stop_folding) req.self_separation = finger_separation();
   req.plane = planes_[m];
   req.lengths = hand_.link_lengths().row(m).data();
   req.radius = hand_.link_radius();
@@ -472,15 +475,13 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
   if (!(budget > 0.0)) return false;
   const double max_turn = budget / dist, inc = 0.25 * s / dist;
   const Vec2 root = root2d(m, new_eta);
+  const SnakeRequest req = snake_request(m, new_eta, true);  // a folding chain is refused below
   for (double phi = inc; phi <= max_turn + 1e-12; phi += inc) {
     if (a[0] - phi < lowest - kLimitSlack) return false;
     std::vector<double> b = a;
     b[0] -= phi;
     Chain c = hand_.forward_planar(m, root, b.data());
     std::array<char, kMaxLinks> turned;
-    // A chain that folds onto itself is refused below: Tail2Head stops at the link that does.
-    SnakeRequest req = snake_request(m, new_eta);
-    req.self_separation = finger_separation();
     if (!tail_to_head(*sensing_, req, root, c, turned.data())) continue;
     // The cheap test first: a chain that hits a finger needs no motion check.
     if (!fingers_clear(m, c, others) || !motion_ok(m, old, c, turned.data())) continue;
@@ -502,9 +503,7 @@ bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others
   b[0] += inc;
   Chain c = hand_.forward_planar(m, chain[0], b.data());
   std::array<char, kMaxLinks> turned;
-  SnakeRequest req = snake_request(m, chain[0].y());
-  req.self_separation = finger_separation();  // as in open_step
-  if (!tail_to_head(*sensing_, req, chain[0], c, turned.data())) return false;
+  if (!tail_to_head(*sensing_, snake_request(m, chain[0].y(), true), chain[0], c, turned.data())) return false;
   if (largest_move(chain, c) < params_.epsilon) return false;
   // A step the motion rules or the other fingers would refuse ends the closing here, so that the
   // ordinary rules move the finger in this same iteration.
@@ -564,15 +563,18 @@ bool Planner::approach() {
   // part can translate before it touches O). Each gap is asked only up to the smallest so far:
   // beyond that cap a gap is reported as some value above the cap, which leaves the minimum as it
   // is. The palm last, as its query in space is the costliest: not at all while its lasting
-  // bound shows it farther than the fingers, else exactly (the bound then lasts).
+  // bound shows it farther than the fingers, else exactly. Its bound is held to kGapFarSteps
+  // steps, as the FROZEN fingers' are: a skin's object may move between iterations (closed loop),
+  // and a bound that lasts longer assumes more.
   double free = kInf;
   for (int m = 0; m < M; ++m) {
     const Chain& c = chains_[m];
     for (int n = 0; n < N; ++n) free = std::min(free, link_gap(m, c[n], c[n + 1], free));
   }
   if (!(palm_lb_ > free)) {
-    palm_lb_ = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), kInf);
-    free = std::min(free, palm_lb_);
+    const double palm_gap = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), kInf);
+    free = std::min(free, palm_gap);
+    palm_lb_ = std::min(palm_gap, kGapFarSteps * s);
   }
   // Never past T (eta_target_): with nothing sensed ahead, the hand advances to T in one iteration.
   const double total = std::min(free - level, eta_target_ - eta_);
@@ -638,7 +640,7 @@ void Planner::phase2_iteration() {
     } else {
       const double far = std::max(need, kGapFarSteps * s);
       palm_gap = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), far);
-      palm_lb_ = std::min(palm_gap, far);  // beyond the cap only known to be at least the cap
+      palm_lb_ = std::min(palm_gap, far);  // beyond the cap only known to be above it
     }
     if (palm_gap <= delta) {
       palm_touched_ = true;

@@ -22,9 +22,10 @@ bool link_clear_of_chain(const Vec2* chain, int b, double separation) {
   const Vec2 lo_b = chain[b].cwiseMin(chain[b + 1]), hi_b = chain[b].cwiseMax(chain[b + 1]);
   for (int a = 0; a + 2 <= b; ++a) {
     // Two links whose boxes are `separation` apart are at least that far apart: most pairs are
-    // settled by their boxes, cheaper than the distance.
+    // settled by their boxes, cheaper than the distance. A relative margin far above rounding
+    // leaves the pairs at a tie to the distance, so that the answer is the distance's.
     const Vec2 lo_a = chain[a].cwiseMin(chain[a + 1]), hi_a = chain[a].cwiseMax(chain[a + 1]);
-    if ((lo_b - hi_a).cwiseMax(lo_a - hi_b).cwiseMax(0.0).squaredNorm() >= sep2) continue;
+    if ((lo_b - hi_a).cwiseMax(lo_a - hi_b).cwiseMax(0.0).squaredNorm() >= sep2 * (1.0 + 1e-9)) continue;
     if (segment_segment_squared_2d(chain[a], chain[a + 1], chain[b], chain[b + 1]) < sep2) return false;
   }
   return true;

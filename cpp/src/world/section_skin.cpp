@@ -1625,14 +1625,9 @@ bool finite_plane(const FingerPlane& plane, double radius) {
 }  // namespace
 
 const PlaneRegion* SectionSkin::find(const FingerPlane& plane, double radius) const {
-  // A finger's queries come in runs (its propagations, its motion check): the entry found last
-  // is asked first, by its bits (equal bits are equal planes; a zero of the other sign only
-  // sends the query on). Threads that share the skin may overwrite it: each load is checked.
-  if (const Entry* e = last_.load(std::memory_order_acquire);
-      e != nullptr && e->radius == radius && same_bits(e->plane, plane))
-    return &e->region;
-  // The fingers' queries interleave: the table of hashes answers most of the others with one
-  // comparison (a miss or a collision falls back to the scan).
+  // (region() has asked the entry found last.) The fingers' queries interleave: the table of
+  // hashes answers most of the others with one comparison (a miss or a collision falls back to
+  // the scan); the entry found becomes the one found last.
   auto found = [&](const Entry* e) {
     last_.store(e, std::memory_order_release);
     return &e->region;
@@ -1668,8 +1663,10 @@ const PlaneRegion* SectionSkin::insert(std::unique_ptr<Entry> entry) const {
 }
 
 const PlaneRegion* SectionSkin::region(const FingerPlane& plane, double radius) const {
-  // The entry found last answers most queries (a finger's come in runs): that test inline, the
-  // rest of find() and the build out of line.
+  // A finger's queries come in runs (its propagations, its motion check): the entry found last
+  // answers most, by its bits (equal bits are equal planes; a zero of the other sign only sends
+  // the query on). Threads that share the skin may overwrite it: each load is checked. That
+  // test inline; find() and the build out of line.
   if (const Entry* e = last_.load(std::memory_order_acquire);
       e != nullptr && e->radius == radius && same_bits(e->plane, plane))
     return &e->region;

@@ -124,7 +124,10 @@ class Planner {
   Configuration make_configuration(int phase) const;
   void phase2_iteration();
   bool chain_free(int m, const Chain& chain) const;
-  SnakeRequest snake_request(int m, double front) const;
+  /// Finger m's propagation settings with the palm's front at `front`; `stop_folding`: Tail2Head
+  /// stops at a link that comes within finger_separation() of its own chain (the caller refuses
+  /// such a chain).
+  SnakeRequest snake_request(int m, double front, bool stop_folding = false) const;
   /// Clinging's resolution (m of link-end motion): an eighth of the sensing distance.
   double snake_tolerance() const { return params_.contact_tolerance / 8.0; }
   /// Finger m's root in its plane with the palm moved eta along p.

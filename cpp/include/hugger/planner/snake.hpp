@@ -74,7 +74,8 @@ bool head_to_tail(const Sensing& sensing, const SnakeRequest& req, const Vec2& h
 /// Tail2Head (decision 7): tail to `root`, then each joint toward its old position, rotating
 /// about the proximal joint when a link would hit O. With joint limits, a link whose ray
 /// breaks a limit is turned onto it first, and a freeing rotation that ends beyond a limit
-/// fails. Returns false if no free position within the limits exists. `turned` (N entries, or
+/// fails. Returns false if no free position within the limits exists, or (req.self_separation
+/// > 0) at the first link that comes that close to its own chain. `turned` (N entries, or
 /// nullptr; all set when it returns true): 1 where the link was turned free by clinging, so that
 /// it rests on O (its gap at most the tolerance: Sensing::rotate_until_free), else 0.
 bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& root, Chain& chain,
