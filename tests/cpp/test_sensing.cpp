@@ -27,6 +27,22 @@ struct SphereWorld {
   }
 };
 
+/// A chain of N links from (0.5, 0.5) (far from the sphere), lengths 1-2 cm, each joint bent
+/// by up to `bend` rad either way, drawn from `rng`; the lengths into `L`.
+Chain random_chain(std::mt19937& rng, int N, double bend, std::vector<double>& L) {
+  std::uniform_real_distribution<double> U(-1, 1);
+  L.assign(N, 0.0);
+  Chain chain(N + 1);
+  chain[0] = Vec2(0.5, 0.5);
+  double theta = 0;
+  for (int n = 0; n < N; ++n) {
+    L[n] = 0.01 + 0.01 * std::abs(U(rng));
+    theta += bend * U(rng);
+    chain[n + 1] = chain[n] + L[n] * Vec2(-std::sin(theta), std::cos(theta));
+  }
+  return chain;
+}
+
 }  // namespace
 
 TEST(Sensing, FollowBoundaryStepsCounterClockwiseOnTheGrownCircle) {
@@ -109,15 +125,8 @@ TEST(Snake, FollowTheLeaderInFreeSpace) {
   std::uniform_real_distribution<double> U(-1, 1);
   for (int trial = 0; trial < 100; ++trial) {
     const int N = 2 + trial % 7;
-    std::vector<double> L(N);
-    Chain chain(N + 1);
-    chain[0] = Vec2(0.5, 0.5);
-    double theta = 0;
-    for (int n = 0; n < N; ++n) {
-      L[n] = 0.01 + 0.01 * std::abs(U(rng));
-      theta += 0.5 * U(rng);
-      chain[n + 1] = chain[n] + L[n] * Vec2(-std::sin(theta), std::cos(theta));
-    }
+    std::vector<double> L;
+    Chain chain = random_chain(rng, N, 0.5, L);
     SnakeRequest req;
     req.plane = w.plane;
     req.lengths = L.data();
@@ -147,15 +156,8 @@ TEST(Snake, SelfSeparationStopsExactlyTheChainsThatFold) {
   long folded = 0, whole = 0;
   for (int trial = 0; trial < 400; ++trial) {
     const int N = 3 + trial % 6;
-    std::vector<double> L(N);
-    Chain chain(N + 1);
-    chain[0] = Vec2(0.5, 0.5);
-    double theta = 0;
-    for (int n = 0; n < N; ++n) {
-      L[n] = 0.01 + 0.01 * std::abs(U(rng));
-      theta += 2.9 * U(rng);
-      chain[n + 1] = chain[n] + L[n] * Vec2(-std::sin(theta), std::cos(theta));
-    }
+    std::vector<double> L;
+    const Chain chain = random_chain(rng, N, 2.9, L);
     SnakeRequest req;
     req.plane = w.plane;
     req.lengths = L.data();
