@@ -437,7 +437,7 @@ TEST(SectionSkin, HullSettlesOnlyWhatEverySegmentSays) {
 TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
   for (const test::Mesh& m : {test::icosphere(3, Vec3::Constant(0.04)), test::curvy(4)}) {
     Scene s(m, 7);
-    long checked = 0, told_outside = 0;
+    long checked = 0, told_outside = 0;  // the section skin's answers told so, with no piece that close
     for (int k = 0; k < 12; ++k) {
       const FingerPlane pl = test::random_plane(s.rng, s.c);
       const double r = (k % 3) * 0.03 * s.size;
@@ -457,14 +457,16 @@ TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
             if (found_free) {
               EXPECT_EQ(sense->link_gap_below(pl, a, b, r, below, true), want)
                   << "plane " << k << " query " << q << " below " << below << " (a outside)";
-              ++told_outside;
+              // where the section skin skips its inside test: no piece within `below`
+              if (sense == &s.skin && !want) ++told_outside;
             }
           }
         }
       }
     }
     EXPECT_GE(checked, 2000);
-    EXPECT_GE(told_outside, 500);
+    std::printf("  %ld decisions, %ld of the section skin's told a lies outside\n", checked, told_outside);
+    EXPECT_GE(told_outside, 800);
   }
 }
 
