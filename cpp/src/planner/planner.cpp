@@ -275,23 +275,33 @@ double Planner::contact_gap(int m, const Vec2& a, const Vec2& b, double cap) con
   return sensing_->contact_gap(planes_[m], a, b, hand_.link_radius(), params_.contact_tolerance, cap);
 }
 
+template <class Ask>
+double Planner::lasting_gap(double& lb, double need, Ask&& ask) const {
+  if (lb > need) return lb;
+  // Asked with a wider cap than needed, so that the bound lasts several palm steps.
+  const double cap = std::max(need, kGapFarSteps * params_.step);
+  lb = std::min(ask(cap), cap);  // beyond the cap the answer is only known to be above it
+  return lb;
+}
+
+void Planner::lower_lasting_gaps(double moved) {
+  for (double& lb : frozen_lb_) lb -= moved + 1e-12;  // a picometre for rounding
+  palm_lb_ -= moved + 1e-12;
+}
+
 double Planner::frozen_gap(int m, int n, double need, bool contact) {
   const std::size_t parts = static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1);
   double& lb = frozen_lb_[(contact ? parts : 0) + static_cast<std::size_t>(m) * (hand_.links() + 1) + n];
   if (lb > need) return lb;
-  const double far = kGapFarSteps * params_.step;
   const Chain& c = chains_[m];
   const Vec2 &a = n < hand_.links() ? c[n] : c[0], &b = n < hand_.links() ? c[n + 1] : c[0];
   if (contact) {
     // Exact up to `need`, which decides contact.
-    lb = sensing_->contact_gap_bound(planes_[m], a, b, hand_.link_radius(), params_.contact_tolerance, need, far);
+    lb = sensing_->contact_gap_bound(planes_[m], a, b, hand_.link_radius(), params_.contact_tolerance, need,
+                                     kGapFarSteps * params_.step);
     return lb;
   }
-  // Ask with a wider cap than needed.
-  const double cap = std::max(need, far);
-  const double g = link_gap(m, a, b, cap);
-  lb = std::min(g, cap);  // beyond the cap the answer is only known to be above it
-  return lb;
+  return lasting_gap(lb, need, [&](double cap) { return link_gap(m, a, b, cap); });
 }
 
 SnakeRequest Planner::snake_request(int m, double front, bool stop_folding) const {
@@ -589,8 +599,7 @@ bool Planner::approach() {
     eta_ = eta;
     history_.push_back(make_configuration(2));
   }
-  for (double& lb : frozen_lb_) lb -= total + 1e-12;
-  palm_lb_ -= total + 1e-12;
+  lower_lasting_gaps(total);
   stats_.approach_configurations += pieces;
   return true;
 }
@@ -632,16 +641,10 @@ void Planner::phase2_iteration() {
   double palm_gap = kInf;
   if (!palm_touched_) {
     // Only a gap up to s + delta decides anything below (contact, and the palm step's bound):
-    // while the palm's lower bound is above that, it stands for the gap. Else the gap is asked up
-    // to a wider cap (as frozen_gap's), so that the bound lasts a few palm steps.
-    const double need = s + delta;
-    if (palm_lb_ > need) {
-      palm_gap = palm_lb_;
-    } else {
-      const double far = std::max(need, kGapFarSteps * s);
-      palm_gap = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), far);
-      palm_lb_ = std::min(palm_gap, far);  // beyond the cap only known to be above it
-    }
+    // the palm's lasting bound stands for it above that.
+    palm_gap = lasting_gap(palm_lb_, s + delta, [&](double cap) {
+      return sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), cap);
+    });
     if (palm_gap <= delta) {
       palm_touched_ = true;
       felt_ = true;
@@ -922,8 +925,7 @@ void Planner::phase2_iteration() {
   std::swap(chains_, next);  // old (chains_) is the new chains now; next keeps the old ones' room
   std::swap(states_, next_states);
   eta_ += sigma;
-  for (double& lb : frozen_lb_) lb -= sigma + 1e-12;  // a picometre for rounding
-  palm_lb_ -= sigma + 1e-12;
+  lower_lasting_gaps(sigma);
   const bool all_done = std::all_of(states_.begin(), states_.end(), [](TipState t) { return t == TipState::kDone; });
   Configuration c = make_configuration(2);
   const Configuration& last = history_.back();

@@ -1092,9 +1092,9 @@ void PlaneRegion::build_hull() {
     }
   }
   // The edges' pseudo-angles from +x, in [-2, 2]. From the edge after their wrap round (the
-  // largest drop from one edge to the next: nearly 4 there, rounding elsewhere; the smallest angle is no guide, as two nearly collinear
-  // edges may round in the wrong order), the angles made non-decreasing (those roundings) so that
-  // a binary search finds an edge.
+  // largest drop from one edge to the next: nearly 4 there, rounding elsewhere; the smallest
+  // angle is no guide, as two nearly collinear edges may round in the wrong order), the angles
+  // made non-decreasing (those roundings) so that a binary search finds an edge.
   const int k = static_cast<int>(h.size());
   std::vector<double> angle(k, 0.0);
   for (int i = 0; i < k && k > 1; ++i) angle[i] = pseudo_angle(Vec2::UnitX(), h[(i + 1) % k] - h[i]);

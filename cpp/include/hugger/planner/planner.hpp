@@ -187,6 +187,14 @@ class Planner {
   /// its root, as a sphere), exact when at most `need`: from the bound kept since the last query
   /// when that exceeds `need`.
   double frozen_gap(int m, int n, double need, bool contact = false);
+  /// A part's lasting gap bound `lb` (a FROZEN link's, the palm's: parts that move rigidly with
+  /// the palm): `lb` while above `need`, else `ask(cap)` with a cap of kGapFarSteps steps (at
+  /// least `need`), kept as the new bound (capped: above the cap only a value above it is known).
+  template <class Ask>
+  double lasting_gap(double& lb, double need, Ask&& ask) const;
+  /// The palm (and the FROZEN fingers with it) moved `moved` along p: every lasting bound drops
+  /// by as much.
+  void lower_lasting_gaps(double moved);
 
   HandModel hand_;
   std::shared_ptr<const Sensing> sensing_;
