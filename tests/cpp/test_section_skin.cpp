@@ -718,6 +718,120 @@ TEST(SectionSkin, RotateUntilFreeIsTheSmallestFreeingRotation) {
   }
 }
 
+// spans() against every segment's part within the disk, on convex regions (one loop: spans()
+// walks it) and others (the tree): pivots outside R near its boundary and farther, and inside
+// it; lengths from a tenth of the object to past its size; wedges narrow and whole. Every
+// direction in the wedge is blocked by the spans exactly where it is by some segment (away from
+// the run ends, within 1e-10 of which rounding decides), every run end inside the wedge is one
+// of the segments' ends to 1e-12, and a pivot touching a segment is found.
+TEST(SectionSkin, SpansAreTheUnionOfTheSegmentsParts) {
+  auto pieces_of = [](const PlaneRegion& R, const Vec2& pivot, const Vec2& u, double len, bool* touching) {
+    // Each segment's part within the disk, by bisection on the distance along it (independent
+    // of the closed form), as pseudo-angle intervals, split at +-2.
+    std::vector<std::array<double, 2>> out;
+    *touching = false;
+    for (const auto& g : R.segments()) {
+      const Vec2 d = g.b - g.a;
+      const double dd = d.squaredNorm();
+      const double tn = dd > 0.0 ? std::clamp((pivot - g.a).dot(d) / dd, 0.0, 1.0) : 0.0;
+      const double dn = (g.a + tn * d - pivot).norm();
+      if (dn <= 1e-12) *touching = true;
+      if (dn > len) continue;
+      auto edge = [&](double inside_t, double outside_t) {  // the crossing between them
+        if ((g.a + outside_t * d - pivot).norm() <= len) return outside_t;
+        for (int i = 0; i < 100; ++i) {
+          const double mid = 0.5 * (inside_t + outside_t);
+          ((g.a + mid * d - pivot).norm() <= len ? inside_t : outside_t) = mid;
+        }
+        return inside_t;
+      };
+      const double t0 = edge(tn, 0.0), t1 = edge(tn, 1.0);
+      double p0 = PlaneRegion::pseudo_angle(u, g.a + t0 * d - pivot), p1 = PlaneRegion::pseudo_angle(u, g.a + t1 * d - pivot);
+      if (p1 < p0) std::swap(p0, p1);
+      if (p1 - p0 <= 2.0) {
+        out.push_back({p0, p1});
+      } else {
+        out.push_back({p1, 2.0});
+        out.push_back({-2.0, p0});
+      }
+    }
+    return out;
+  };
+  auto covered = [](const std::vector<std::array<double, 2>>& spans, double x) {
+    for (const auto& s : spans)
+      if (s[0] <= x && x <= s[1]) return true;
+    return false;
+  };
+  long checked = 0, convex_queries = 0, tree_queries = 0, touching = 0, directions = 0;
+  for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::cylinder(0.035, 0.05, 48),
+                              test::box(Vec3(0.03, 0.02, 0.05)), test::curvy(4)}) {
+    Scene s(m, 33);
+    for (int k = 0; k < 12; ++k) {
+      const FingerPlane pl = test::random_plane(s.rng, s.c + Vec3(s.u() - 0.5, s.u() - 0.5, s.u() - 0.5) * 0.01);
+      const PlaneRegion* R = s.skin.region(pl, (k % 2) * 0.004);
+      ASSERT_NE(R, nullptr);
+      if (R->segments().empty()) continue;
+      for (int q = 0; q < 150; ++q) {
+        // a pivot off a boundary point along its normal (outside by 1e-13 to 1 size; inside for
+        // one in six), or on a boundary vertex
+        const auto& g = R->segments()[static_cast<std::size_t>(s.u() * R->segments().size())];
+        const double off = std::pow(10.0, -13.0 + 12.0 * s.u()) * s.size * (q % 6 == 5 ? -1.0 : 1.0);
+        const Vec2 pivot = q % 25 == 0 ? g.a : Vec2(g.a + s.u() * (g.b - g.a) + off * g.normal);
+        const double len = (0.1 + 1.2 * s.u()) * s.size, t = s.u() * 2 * kPi;
+        const Vec2 u(std::cos(t), std::sin(t));
+        const double within = q % 3 == 0 ? kPi : (q % 3 == 1 ? 0.5 : 0.05);
+        std::vector<PlaneRegion::Span> got;
+        const bool free_pivot = R->spans(pivot, u, len, within, &got);
+        bool touch = false;
+        const auto want = pieces_of(*R, pivot, u, len, &touch);
+        ++(R->convex() ? convex_queries : tree_queries);
+        ++checked;
+        if (touch) {
+          ++touching;
+          EXPECT_FALSE(free_pivot) << "plane " << k << " query " << q;
+          continue;
+        }
+        ASSERT_TRUE(free_pivot) << "plane " << k << " query " << q;
+        std::vector<std::array<double, 2>> spans;
+        for (const auto& sp : got) {
+          spans.push_back({sp.lo, sp.hi});
+          EXPECT_NEAR(PlaneRegion::pseudo_angle(u, sp.v_lo), sp.lo == -2.0 ? -2.0 : sp.lo, sp.lo == -2.0 ? 4.0 : 0.0);
+          EXPECT_NEAR(PlaneRegion::pseudo_angle(u, sp.v_hi), sp.hi, sp.hi == 2.0 ? 4.0 : 0.0);
+        }
+        const double pm = PlaneRegion::pseudo_angle_of(within);
+        std::vector<double> ends;
+        for (const auto& w : want) ends.insert(ends.end(), {w[0], w[1]});
+        auto near_end = [&](double x) {
+          for (double e : ends)
+            if (std::abs(x - e) < 1e-10) return true;
+          return false;
+        };
+        std::vector<double> probes;
+        for (int i = 0; i < 32; ++i) probes.push_back((2.0 * s.u() - 1.0) * pm);
+        for (double e : ends)
+          if (std::abs(e) < pm + 1e-9) probes.insert(probes.end(), {e - 1e-9, e + 1e-9});
+        for (double x : probes) {
+          if (x < -pm || x > pm || near_end(x)) continue;
+          ASSERT_EQ(covered(spans, x), covered(want, x)) << "plane " << k << " query " << q << " direction " << x;
+          ++directions;
+        }
+        for (const auto& sp : spans)
+          for (double e : sp) {
+            if (e <= -pm || e >= pm) continue;
+            double best = kInf;
+            for (double w : ends) best = std::min(best, std::abs(w - e));
+            EXPECT_LE(best, 1e-12) << "plane " << k << " query " << q;
+          }
+      }
+    }
+  }
+  std::printf("  %ld queries (%ld on convex loops, %ld on the tree), %ld touching, %ld directions\n", checked,
+              convex_queries, tree_queries, touching, directions);
+  EXPECT_GE(convex_queries, 2000);
+  EXPECT_GE(tree_queries, 1000);
+  EXPECT_GE(touching, 50);
+}
+
 // PlaneRegion::depth_within (the exact swept-link test): against the depth sampled densely along
 // the segment (a point's depth in R changes no faster than the point moves), on chords across
 // R's boundary at depths about the allowance, in random planes.

@@ -197,6 +197,48 @@ void PlaneRegion::finish() {
   build_bvh();
   build_cells();
   link_segments();
+  build_loop();
+}
+
+void PlaneRegion::build_loop() {
+  loop_.clear();
+  loop_tail_.clear();
+  loop_angle_.clear();
+  const int n = static_cast<int>(segments_.size());
+  if (n < 3) return;
+  // One loop through every segment,
+  std::vector<int> loop;
+  loop.reserve(n);
+  int i = 0;
+  do {
+    loop.push_back(i);
+    i = next_[i];
+  } while (i > 0 && static_cast<int>(loop.size()) < n);
+  if (i != 0 || static_cast<int>(loop.size()) != n) return;
+  std::vector<Vec2> tail(n);
+  Vec2 centre = Vec2::Zero();
+  for (int k = 0; k < n; ++k) {
+    tail[k] = tail_of(segments_[loop[k]]);
+    centre += tail[k];
+  }
+  centre /= static_cast<double>(n);
+  // turning left at every vertex (up to a billionth of a radian: rounding) ...
+  for (int k = 0; k < n; ++k) {
+    const Vec2 e0 = tail[(k + 1) % n] - tail[k], e1 = tail[(k + 2) % n] - tail[(k + 1) % n];
+    if (cross2(e0, e1) < -1e-9 * e0.norm() * e1.norm()) return;
+  }
+  // ... and once round the centre: the tails' angles about it increase from the smallest.
+  std::vector<double> angle(n);
+  for (int k = 0; k < n; ++k) angle[k] = pseudo_angle(Vec2::UnitX(), tail[k] - centre);
+  const int start = static_cast<int>(std::min_element(angle.begin(), angle.end()) - angle.begin());
+  for (int k = 1; k < n; ++k)
+    if (!(angle[(start + k) % n] > angle[(start + k - 1) % n])) return;
+  for (int k = 0; k < n; ++k) {
+    loop_.push_back(loop[(start + k) % n]);
+    loop_tail_.push_back(tail[(start + k) % n]);
+    loop_angle_.push_back(angle[(start + k) % n]);
+  }
+  loop_centre_ = centre;
 }
 
 void PlaneRegion::link_segments() {
@@ -1322,6 +1364,33 @@ bool capsule_interval(const Vec2& a, const Vec2& d, const Vec2& p, const Vec2& q
   return *t0 <= *t1;
 }
 
+/// The part of segment [sa, sb] within the disk of squared radius l2 about the pivot, for
+/// PlaneRegion::spans: its ends minus the pivot (ends inside the disk kept exactly) in q0, q1.
+enum class DiskPart : std::uint8_t { kNone, kPiece, kTouching };
+inline DiskPart disk_part(const Vec2& sa, const Vec2& sb, const Vec2& pivot, double l2, Vec2* q0, Vec2* q1) {
+  const Vec2 w0 = sa - pivot, w1 = sb - pivot, d = sb - sa;
+  const double a = d.squaredNorm(), b = w0.dot(d), c0 = w0.squaredNorm() - l2, c1 = w1.squaredNorm() - l2;
+  // Touching the pivot: only where the segment's line passes that close (no division else).
+  const double cr = cross2(w0, d);
+  if (cr * cr <= kTouch * kTouch * a) {
+    const double t_near = a > 0.0 ? std::clamp(-b / a, 0.0, 1.0) : 0.0;
+    if ((w0 + t_near * d).squaredNorm() <= kTouch * kTouch) return DiskPart::kTouching;
+  }
+  // The part within the disk: a t^2 + 2 b t + c0 <= 0 on [0, 1].
+  double t0 = 0.0, t1 = 1.0;
+  if (c0 > 0.0 || c1 > 0.0) {
+    const double disc = b * b - a * c0;
+    if (!(a > 0.0) || disc < 0.0) return DiskPart::kNone;
+    const double sq = std::sqrt(disc);
+    if (c0 > 0.0) t0 = (-b - sq) / a;
+    if (c1 > 0.0) t1 = (-b + sq) / a;
+    if (t0 < 0.0 || t1 > 1.0 || t0 > t1) return DiskPart::kNone;  // the segment's line meets the disk off it
+  }
+  *q0 = t0 == 0.0 ? w0 : Vec2(w0 + t0 * d);
+  *q1 = t1 == 1.0 ? w1 : Vec2(w0 + t1 * d);
+  return DiskPart::kPiece;
+}
+
 }  // namespace
 
 bool PlaneRegion::clear(const Vec2& a, const Vec2& b, bool a_outside) const {
@@ -1371,6 +1440,8 @@ bool PlaneRegion::depth_within(const Vec2& a, const Vec2& b, double allow) const
 bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double within,
                         std::vector<Span>* out) const {
   if (nodes_.empty()) return true;
+  bool touching_loop = false;
+  if (!loop_.empty() && convex_spans(pivot, u, length, within, &touching_loop, out)) return !touching_loop;
   const double slack = 1e-12 * (extent_ + pivot.cwiseAbs().maxCoeff());
   const double reach = length + slack, l2 = length * length;
   const Vec2 behind = -length * u;  // the point at pseudo-angle +-2, for spans cut there
@@ -1432,28 +1503,101 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
   // Stops (true) at a segment touching the pivot.
   const bool touching = visit_segments(skip, [&](int i) {
     const Segment& s = segments_[i];
-    const Vec2 w0 = s.a - pivot, w1 = s.b - pivot, d = s.b - s.a;
-    const double a = d.squaredNorm(), b = w0.dot(d), c0 = w0.squaredNorm() - l2, c1 = w1.squaredNorm() - l2;
-    // Touching the pivot: only where the segment's line passes that close (no division else).
-    const double cr = cross2(w0, d);
-    if (cr * cr <= kTouch * kTouch * a) {
-      const double t_near = a > 0.0 ? std::clamp(-b / a, 0.0, 1.0) : 0.0;
-      if ((w0 + t_near * d).squaredNorm() <= kTouch * kTouch) return true;
-    }
-    // The part within the disk: a t^2 + 2 b t + c0 <= 0 on [0, 1] (ends inside kept exactly).
-    double t0 = 0.0, t1 = 1.0;
-    if (c0 > 0.0 || c1 > 0.0) {
-      const double disc = b * b - a * c0;
-      if (!(a > 0.0) || disc < 0.0) return false;
-      const double sq = std::sqrt(disc);
-      if (c0 > 0.0) t0 = (-b - sq) / a;
-      if (c1 > 0.0) t1 = (-b + sq) / a;
-      if (t0 < 0.0 || t1 > 1.0 || t0 > t1) return false;  // the segment's line meets the disk off it
-    }
-    add(t0 == 0.0 ? w0 : Vec2(w0 + t0 * d), t1 == 1.0 ? w1 : Vec2(w0 + t1 * d));
-    return false;
+    Vec2 q0, q1;
+    const DiskPart part = disk_part(s.a, s.b, pivot, l2, &q0, &q1);
+    if (part == DiskPart::kPiece) add(q0, q1);
+    return part == DiskPart::kTouching;
   });
   return !touching;
+}
+
+bool PlaneRegion::convex_spans(const Vec2& pivot, const Vec2& u, double length, double within, bool* touching,
+                               std::vector<Span>* out) const {
+  const int n = static_cast<int>(loop_.size());
+  const Vec2* T = loop_tail_.data();
+  const double l2 = length * length;
+  auto prev = [n](int i) { return i == 0 ? n - 1 : i - 1; };
+  auto next = [n](int i) { return i + 1 == n ? 0 : i + 1; };
+  // Segment i of the loop runs from T[i] to T[next(i)] with R on its left: it faces the pivot
+  // (shows it its outer side) where the pivot lies to its right. The segments facing the pivot
+  // are one run of the loop, along which the distance to the pivot falls and then rises, and
+  // the direction from the pivot turns clockwise.
+  auto faces = [&](int i) { return cross2(T[next(i)] - T[i], pivot - T[i]) < 0.0; };
+  auto d2 = [&](int i) { return (T[i] - pivot).squaredNorm(); };
+  // The segment that the ray from the centre through the pivot crosses (the tails' angles about
+  // the centre increase along the loop) faces the pivot, unless the pivot lies in R.
+  const double angle = pseudo_angle(Vec2::UnitX(), pivot - loop_centre_);
+  if (!(std::abs(angle) <= 2.0)) return false;
+  int j = static_cast<int>(std::upper_bound(loop_angle_.begin(), loop_angle_.end(), angle) - loop_angle_.begin()) - 1;
+  if (j < 0) j = n - 1;
+  if (!faces(j)) return false;
+  // The nearest tail of the facing run: walked to from j's ends, the distance falling.
+  int m = j;
+  double dm = d2(j);
+  if (d2(next(j)) < dm) {
+    m = next(j);
+    dm = d2(m);
+    for (int k = 0; k < n && faces(m); ++k) {
+      const double dk = d2(next(m));
+      if (!(dk < dm)) break;
+      m = next(m);
+      dm = dk;
+    }
+  } else {
+    for (int k = 0; k < n && faces(prev(m)); ++k) {
+      const double dk = d2(prev(m));
+      if (!(dk < dm)) break;
+      m = prev(m);
+      dm = dk;
+    }
+  }
+  // The run's points within the disk are one stretch about the nearest point (on the segments
+  // on either side of T[m]). Its ends: walked from m while the next tail lies within the disk
+  // and its segment faces the pivot; the last tail inside (hi: clockwise along the loop, where
+  // the direction turns counter-clockwise; lo: the other way), and the segments about it.
+  int hi = m, lo = m;
+  if (dm <= l2) {
+    for (int k = 0; k < n && faces(prev(hi)) && d2(prev(hi)) <= l2; ++k) hi = prev(hi);
+    for (int k = 0; k < n && faces(lo) && d2(next(lo)) <= l2; ++k) lo = next(lo);
+  }
+  // The spans' ends from those segments' parts within the disk (the same formula as the tree's
+  // visit), as the most counter-clockwise and the most clockwise of their ends.
+  Vec2 v_lo, v_hi;
+  bool any = false;
+  *touching = false;
+  for (const int i : {prev(prev(hi)), prev(hi), hi, prev(m), m, prev(lo), lo, next(lo)}) {
+    const Segment& s = segments_[loop_[i]];
+    Vec2 q[2];
+    const DiskPart part = disk_part(s.a, s.b, pivot, l2, &q[0], &q[1]);
+    if (part == DiskPart::kTouching) {
+      *touching = true;
+      return true;
+    }
+    if (part == DiskPart::kNone) continue;
+    for (const Vec2& x : q) {
+      if (!any) {
+        v_lo = v_hi = x;
+        any = true;
+      } else if (cross2(v_hi, x) > 0.0) {
+        v_hi = x;
+      } else if (cross2(v_lo, x) < 0.0) {
+        v_lo = x;
+      }
+    }
+  }
+  if (!any) return true;
+  // As the tree's visit gives them: one span, or two where it crosses +-2; none wholly outside
+  // the wedge.
+  const double p_lo = pseudo_angle(u, v_lo), p_hi = pseudo_angle(u, v_hi);
+  const double pm = pseudo_angle_of(within);
+  if (p_lo <= p_hi) {
+    if (p_hi >= -pm && p_lo <= pm) out->push_back({p_lo, p_hi, v_lo, v_hi});
+  } else {
+    const Vec2 behind = -length * u;
+    if (p_lo <= pm) out->push_back({p_lo, 2.0, v_lo, behind});
+    if (p_hi >= -pm) out->push_back({-2.0, p_hi, behind, v_hi});
+  }
+  return true;
 }
 
 void PlaneRegion::mark_crossings() {

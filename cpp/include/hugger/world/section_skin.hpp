@@ -147,6 +147,8 @@ class PlaneRegion {
   double radius() const { return radius_; }
   const std::vector<Segment>& segments() const { return segments_; }
   const std::vector<Piece>& pieces() const { return pieces_; }
+  /// True where the boundary is one convex loop (spans() then walks it instead of the tree).
+  bool convex() const { return !loop_.empty(); }
   /// Segments dropped at build time as lying inside R.
   long dropped() const { return dropped_; }
   /// Number of 3D inside tests asked so far (side tests that were unsafe).
@@ -208,6 +210,14 @@ class PlaneRegion {
   void build_cells();
   /// next_: each segment's successor along the boundary (R on the left), or -1 at a junction.
   void link_segments();
+  /// loop_ and its companions, where the boundary is one convex loop (else they stay empty).
+  void build_loop();
+  /// spans() where R is one convex loop: the pieces within `length` of the pivot are one run of
+  /// the loop facing it, and the span of their union is settled by the few segments at its two
+  /// ends (found by walking the loop), each by the same formula as in the tree's visit. False
+  /// where the pivot is not outside R: the tree decides.
+  bool convex_spans(const Vec2& pivot, const Vec2& u, double length, double within, bool* touching,
+                    std::vector<Span>* out) const;
   /// Adds the arcs of x(t) = centre + U cos t + V sin t over the allowed intervals of `allowed`
   /// ([0, 2 pi), sorted, disjoint) as tangent polygons; `out3(t)`: the in-plane outward direction.
   template <class Outward>
@@ -228,6 +238,14 @@ class PlaneRegion {
   /// to the next vertex, non-decreasing.
   std::vector<Vec2> hull_;
   std::vector<double> hull_angle_;
+  /// Where the boundary is one loop that turns left at every vertex (a convex R): its segments
+  /// in order along it (R on the left: counter-clockwise), loop_tail_[i] the tail of segment
+  /// loop_[i] (its head is the next tail), and loop_angle_[i] the pseudo-angle of loop_tail_[i]
+  /// about loop_centre_ (the tails' mean, inside R), increasing from i = 0.
+  std::vector<int> loop_;
+  std::vector<Vec2> loop_tail_;
+  std::vector<double> loop_angle_;
+  Vec2 loop_centre_ = Vec2::Zero();
   /// A crossing of a segment by a piece of another feature, while building: where, and on which
   /// side of the crossing segment (its inner side: towards its feature) the segment goes on.
   struct Cut {
