@@ -1560,12 +1560,18 @@ bool PlaneRegion::convex_spans(const Vec2& pivot, const Vec2& u, double length, 
     for (int k = 0; k < n && faces(prev(hi)) && d2(prev(hi)) <= l2; ++k) hi = prev(hi);
     for (int k = 0; k < n && faces(lo) && d2(next(lo)) <= l2; ++k) lo = next(lo);
   }
-  // The spans' ends from those segments' parts within the disk (the same formula as the tree's
-  // visit), as the most counter-clockwise and the most clockwise of their ends.
+  // The spans' ends from the parts within the disk (the same formula as the tree's visit) of
+  // the segments ending the stretch, prev(hi) and lo (past the stretch, the part from the
+  // crossing; at the facing run's end, the segment that ends it, whose part within the disk ends
+  // there), and of the two about T[m], which hold the point nearest the pivot (touching it or
+  // not): the most counter-clockwise and the most clockwise of their ends.
   Vec2 v_lo, v_hi;
   bool any = false;
   *touching = false;
-  for (const int i : {prev(prev(hi)), prev(hi), hi, prev(m), m, prev(lo), lo, next(lo)}) {
+  const int edges[4] = {prev(m), m, prev(hi), lo};
+  for (int e = 0; e < 4; ++e) {
+    const int i = edges[e];
+    if (e >= 2 && (i == prev(m) || i == m)) continue;  // asked already
     const Segment& s = segments_[loop_[i]];
     Vec2 q[2];
     const DiskPart part = disk_part(s.a, s.b, pivot, l2, &q[0], &q[1]);
