@@ -832,6 +832,48 @@ TEST(SectionSkin, SpansAreTheUnionOfTheSegmentsParts) {
   EXPECT_GE(touching, 50);
 }
 
+// inside() at points midway between two parallel sides of R (a box's section: the nearest
+// pieces tie on opposite sides, where their normals cancel) and just off the middle: the exact
+// 3D test's answer.
+TEST(SectionSkin, InsideMidwayBetweenParallelSides) {
+  // The box turned (about a slanted axis): its opposite faces' normals, and so the sides', are
+  // then opposite only to rounding, not to the bit.
+  test::Mesh m = test::box(Vec3(0.03, 0.02, 0.05));
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.7, Vec3(1.0, 2.0, 3.0).normalized()).toRotationMatrix();
+  for (Eigen::Index i = 0; i < m.vertices.rows(); ++i) m.vertices.row(i) = (turn * m.vertices.row(i).transpose()).transpose();
+  Scene s(m, 43);
+  long checked = 0;
+  for (int k = 0; k < 16; ++k) {
+    // planes through the box's centre holding its z axis, turned about it (sections are
+    // rectangles), with their in-plane axes turned too (the rectangle's sides slant in plane
+    // coordinates, so that long sides' boxes cover the cells between them)
+    const double t = 2 * kPi * s.u(), beta = (k % 4 == 0) ? 0.0 : 2 * kPi * s.u();
+    const Vec3 h = turn * Vec3(std::cos(t), std::sin(t), 0.0), z = turn * Vec3::UnitZ();
+    FingerPlane pl;
+    pl.origin = s.c;
+    pl.u = std::cos(beta) * h + std::sin(beta) * z;
+    pl.p = -std::sin(beta) * h + std::cos(beta) * z;
+    const PlaneRegion* R = s.skin.region(pl, (k % 2) * 0.003);
+    ASSERT_NE(R, nullptr);
+    ASSERT_FALSE(R->segments().empty());
+    const double width = std::abs(0.03 * std::cos(t)) + std::abs(0.02 * std::sin(t));  // half the width along h
+    auto at = [&](double along_h, double along_z) {  // the plane coordinates of c + along_h h + along_z z
+      const Vec3 x = along_h * h + along_z * z;
+      return Vec2(x.dot(pl.u), x.dot(pl.p));
+    };
+    for (int q = 0; q < 50; ++q) {
+      // midway between the two sides along z, then between the two across it, at exactly the
+      // middle or up to 1e-7 m off it, anywhere along them
+      const double off = q % 2 ? 0.0 : (s.u() - 0.5) * 2e-7;
+      for (const Vec2& x : {at(off, (2.0 * s.u() - 1.0) * 0.045), at((2.0 * s.u() - 1.0) * 0.9 * width, off)}) {
+        EXPECT_EQ(R->inside(x), R->inside_3d(x)) << "plane " << k << " point " << q;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GE(checked, 800);
+}
+
 // PlaneRegion::depth_within (the exact swept-link test): against the depth sampled densely along
 // the segment (a point's depth in R changes no faster than the point moves), on chords across
 // R's boundary at depths about the allowance, in random planes.

@@ -1685,6 +1685,9 @@ bool PlaneRegion::inside_from(const Near& near, const Vec2& x) const {
   if (!std::isfinite(near.distance)) return inside_3d(x);
   // A loose end (an end point no other segment shares: rounding, or a gap): no safe side.
   if (near.at_end && near.ties < 2) return inside_3d(near.on_query);
+  // Nearest pieces on opposite sides (a point midway between two of them): their normals cancel,
+  // and a side test with their sum means nothing.
+  if (!(near.normal_sum.norm() > 1e-6 * near.ties)) return inside_3d(near.on_query);
   const double s = (near.on_query - near.on_region).dot(near.normal_sum);
   if (!(std::abs(s) > 1e-9 * near.distance * near.normal_sum.norm())) return inside_3d(near.on_query);
   return s < 0.0;
