@@ -832,6 +832,72 @@ TEST(SectionSkin, SpansAreTheUnionOfTheSegmentsParts) {
   EXPECT_GE(touching, 50);
 }
 
+// clear() against every segment and a parity test of them, on convex regions (one loop:
+// clear() asks the loop, PlaneRegion::convex_clear) and others (the tree): segments along the
+// boundary a hair to millimetres off it either side, chords across R and segments wholly inside
+// it, lines along R's edges (a box's faces) and random ones. Where the segment passes within a
+// nanometre of the boundary without touching it (within rounding of the threshold) no answer is
+// asserted; elsewhere clear() is: no segment within touching distance, and a outside the
+// boundary (R as its segments bound it, which lies within flatten outside the exact R).
+TEST(SectionSkin, ClearMatchesEverySegment) {
+  long checked = 0, convex_checked = 0, blocked = 0;
+  for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::cylinder(0.035, 0.05, 48),
+                              test::box(Vec3(0.03, 0.02, 0.05)), test::curvy(4)}) {
+    Scene s(m, 41);
+    for (int k = 0; k < 12; ++k) {
+      const FingerPlane pl = test::random_plane(s.rng, s.c + Vec3(s.u() - 0.5, s.u() - 0.5, s.u() - 0.5) * 0.01);
+      const PlaneRegion* R = s.skin.region(pl, (k % 3) * 0.002);
+      ASSERT_NE(R, nullptr);
+      const auto& segs = R->segments();
+      if (segs.empty()) continue;
+      for (int q = 0; q < 300; ++q) {
+        const auto& g = segs[static_cast<std::size_t>(s.u() * segs.size())];
+        const Vec2 at = g.a + s.u() * (g.b - g.a);
+        Vec2 a, b;
+        if (q % 3 == 0) {  // along the segment, off it by 10^-13 to 10^-2.5 m, either side
+          const double off = std::pow(10.0, -13.0 + 10.5 * s.u()) * (q % 2 ? -1.0 : 1.0);
+          const Vec2 along = rotate_planar((g.b - g.a).normalized(), (s.u() - 0.5) * 0.02);
+          a = at + off * g.normal - s.u() * 0.02 * along;
+          b = a + (0.005 + 0.02 * s.u()) * along;
+        } else if (q % 6 == 1) {  // ending 10^-13 to 10^-6 m short of the boundary point, heading into R
+          const Vec2 in = rotate_planar(-g.normal, (s.u() - 0.5) * 2.0);
+          b = at - std::pow(10.0, -13.0 + 7.0 * s.u()) * in;
+          a = b - (0.002 + 0.03 * s.u()) * in;
+        } else if (q % 3 == 1) {  // from near the boundary point, in a random direction
+          const double t = 2 * kPi * s.u();
+          a = at + std::pow(10.0, -9.0 + 6.5 * s.u()) * (q % 2 ? -1.0 : 1.0) * g.normal;
+          b = a + (0.002 + 0.05 * s.u()) * Vec2(std::cos(t), std::sin(t));
+        } else {  // between two boundary points (a chord), shortened or lengthened
+          const auto& h = segs[static_cast<std::size_t>(s.u() * segs.size())];
+          const Vec2 other = h.a + s.u() * (h.b - h.a), mid = 0.5 * (at + other);
+          const double f = 0.2 + 1.2 * s.u();
+          a = mid + f * (at - mid);
+          b = mid + f * (other - mid);
+        }
+        double best = kInf;
+        for (const auto& e : segs) best = std::min(best, segments_apart(a, b, e.a, e.b));
+        if (best > 1e-12 && best < 2e-9) continue;  // within rounding of the threshold
+        // a in R: inside the boundary segments (crossings of a ray to +x, counted by parity)
+        bool in = false;
+        for (const auto& e : segs)
+          if ((e.a.y() > a.y()) != (e.b.y() > a.y()) &&
+              a.x() < e.a.x() + (a.y() - e.a.y()) / (e.b.y() - e.a.y()) * (e.b.x() - e.a.x()))
+            in = !in;
+        const bool want = best > 1e-12 && !in;
+        ASSERT_EQ(R->clear(a, b, false), want) << "plane " << k << " query " << q << " best " << best;
+        ++checked;
+        convex_checked += R->convex();
+        blocked += !want;
+      }
+    }
+  }
+  std::printf("  %ld decisions (%ld on convex loops), %ld not clear\n", checked, convex_checked, blocked);
+  EXPECT_GE(checked, 10000);
+  EXPECT_GE(convex_checked, 5000);
+  EXPECT_GE(blocked, 3000);
+  EXPECT_GE(checked - blocked, 2000);
+}
+
 // inside() at points midway between two parallel sides of R (a box's section: the nearest
 // pieces tie on opposite sides, where their normals cancel) and just off the middle: the exact
 // 3D test's answer.

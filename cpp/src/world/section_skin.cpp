@@ -31,6 +31,9 @@ constexpr double kSpanJoin = 1e-9;
 /// A link found free in closed form with at least this clearance (metres) at the blocked run's
 /// end needs no check: far above the rounding of the spans.
 constexpr double kCertain = 1e-9;
+/// How far apart (m) a segment and a convex R must be for convex_clear to call the segment
+/// clear without the tree: far above kTouch and the rounding of its heights.
+constexpr double kSureApart = 1e-9;
 
 inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 /// v turned a quarter to the left.
@@ -239,6 +242,23 @@ void PlaneRegion::build_loop() {
     loop_angle_.push_back(angle[(start + k) % n]);
   }
   loop_centre_ = centre;
+  // The edges' directions turn counter-clockwise along the loop, wrapping round once: from the
+  // edge after the wrap (the largest drop), made non-decreasing against rounding.
+  std::vector<double> edge(n);
+  for (int k = 0; k < n; ++k) edge[k] = pseudo_angle(Vec2::UnitX(), loop_tail_[(k + 1) % n] - loop_tail_[k]);
+  double drop = -kInf;
+  for (int k = 0; k < n; ++k) {
+    const double d = edge[(k + n - 1) % n] - edge[k];
+    if (d > drop) {
+      drop = d;
+      loop_edge_first_ = k;
+    }
+  }
+  loop_edge_angle_.clear();
+  for (int k = 0; k < n; ++k) {
+    const double e = edge[(loop_edge_first_ + k) % n];
+    loop_edge_angle_.push_back(k == 0 ? e : std::max(e, loop_edge_angle_.back()));
+  }
 }
 
 void PlaneRegion::link_segments() {
@@ -1393,7 +1413,67 @@ inline DiskPart disk_part(const Vec2& sa, const Vec2& sb, const Vec2& pivot, dou
 
 }  // namespace
 
+int PlaneRegion::loop_extreme(const Vec2& edge) const {
+  // As hull_apart's search: the tail of the first edge turned at least as far as `edge`.
+  const double t = pseudo_angle(Vec2::UnitX(), edge);
+  const double* a = loop_edge_angle_.data();
+  std::size_t lo = 0, n = loop_edge_angle_.size();
+  while (n > 1) {
+    const std::size_t half = n / 2;
+    lo = a[lo + half - 1] < t ? lo + half : lo;
+    n -= half;
+  }
+  lo += a[lo] < t;
+  const int k = static_cast<int>(loop_.size());
+  return (loop_edge_first_ + static_cast<int>(lo == loop_edge_angle_.size() ? 0 : lo)) % k;
+}
+
+int PlaneRegion::convex_clear(const Vec2& a, const Vec2& b) const {
+  const Query q(a, b);
+  if (!q.line) return -1;
+  if (node_farther(nodes_[0], q, kTouch)) return 1;  // apart from the boundary's box
+  const int n = static_cast<int>(loop_.size());
+  const Vec2* T = loop_tail_.data();
+  auto h = [&](int i) { return q.n.dot(T[i] - a); };  // height above the segment's line
+  const int top = loop_extreme(-q.u), bottom = loop_extreme(q.u);
+  const double h_top = h(top), h_bottom = h(bottom);
+  if (h_top < -kSureApart || h_bottom > kSureApart) return 1;  // the line passes R
+  if (!(h_top > kSureApart && h_bottom < -kSureApart)) return -1;
+  // The line crosses R: once on the chain from bottom to top (counter-clockwise; the height
+  // rises along it) and once on the way back (it falls). On each, the first tail past the line
+  // ends the edge crossed, found by halving.
+  struct Crossing {
+    double t;  ///< along the segment from a
+    int edge;  ///< the loop's edge crossed
+  };
+  auto crossing = [&](int from, int to, bool rising) {
+    int lo = 0, hi = to - from < 0 ? to - from + n : to - from;  // tail from + lo is before the line, from + hi past it
+    while (hi - lo > 1) {
+      const int mid = lo + (hi - lo) / 2;
+      const double hm = h(from + mid >= n ? from + mid - n : from + mid);
+      ((rising ? hm >= 0.0 : hm < 0.0) ? hi : lo) = mid;
+    }
+    const int i0 = from + lo >= n ? from + lo - n : from + lo, i1 = i0 + 1 == n ? 0 : i0 + 1;
+    const double h0 = h(i0), h1 = h(i1);
+    const Vec2 x = T[i0] + (h0 / (h0 - h1)) * (T[i1] - T[i0]);
+    return Crossing{q.u.dot(x - a), i0};
+  };
+  Crossing in = crossing(bottom, top, true), out = crossing(top, bottom, false);
+  if (in.t > out.t) std::swap(in, out);
+  if (in.t <= q.len && out.t >= 0.0) return 0;  // the chord through R overlaps the segment
+  // The segment lies beyond the edge where the chord leaves R (or before the one where it
+  // enters), whose line bounds R: by its end nearer that edge's line.
+  const bool beyond = out.t < 0.0;
+  const Crossing& c = beyond ? out : in;
+  const Segment& s = segments_[loop_[c.edge]];
+  return s.normal.dot((beyond ? a : b) - T[c.edge]) > kSureApart ? 1 : -1;
+}
+
 bool PlaneRegion::clear(const Vec2& a, const Vec2& b, bool a_outside) const {
+  if (!loop_.empty()) {
+    const int sure = convex_clear(a, b);
+    if (sure >= 0) return sure == 1;
+  }
   // A segment apart from the boundary's box or hull lies outside it: outside R.
   switch (reach(a, b, kTouch)) {
     case Reach::kWithin: return false;

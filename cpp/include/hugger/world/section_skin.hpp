@@ -218,6 +218,14 @@ class PlaneRegion {
   /// where the pivot is not outside R: the tree decides.
   bool convex_spans(const Vec2& pivot, const Vec2& u, double length, double within, bool* touching,
                     std::vector<Span>* out) const;
+  /// clear() where R is one convex loop: 1 (clear) or 0 (not) where the loop settles it surely,
+  /// -1 where the segment passes within kSureApart of R without meeting it (the tree decides).
+  /// The segment meets R (not clear) where its line's chord through R overlaps it; it misses R
+  /// where its line passes R or a supporting line of R (that of the edge where the chord leaves
+  /// or enters) separates them, by more than kSureApart.
+  int convex_clear(const Vec2& a, const Vec2& b) const;
+  /// The loop's tail farthest along the direction `edge` turned a right angle clockwise.
+  int loop_extreme(const Vec2& edge) const;
   /// Adds the arcs of x(t) = centre + U cos t + V sin t over the allowed intervals of `allowed`
   /// ([0, 2 pi), sorted, disjoint) as tangent polygons; `out3(t)`: the in-plane outward direction.
   template <class Outward>
@@ -246,6 +254,10 @@ class PlaneRegion {
   std::vector<Vec2> loop_tail_;
   std::vector<double> loop_angle_;
   Vec2 loop_centre_ = Vec2::Zero();
+  /// The loop's edges' pseudo-angles (from +x), from edge loop_edge_first_ on, non-decreasing
+  /// (as hull_angle_), for loop_extreme.
+  int loop_edge_first_ = 0;
+  std::vector<double> loop_edge_angle_;
   /// A crossing of a segment by a piece of another feature, while building: where, and on which
   /// side of the crossing segment (its inner side: towards its feature) the segment goes on.
   struct Cut {
