@@ -832,6 +832,35 @@ TEST(SectionSkin, SpansAreTheUnionOfTheSegmentsParts) {
   EXPECT_GE(touching, 50);
 }
 
+// AngleIndex (the hull's and a convex loop's searches by direction) against std::lower_bound,
+// on sorted angles in [-2, 2] with runs of equal ones, few and many, and queries at the angles,
+// next to them, between them, at +-2 and beyond.
+TEST(SectionSkin, AngleIndexFindsTheFirstAngleAtOrPast) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(-2.0, 2.0);
+  long checked = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    std::vector<double> a(1 + trial % 60);
+    for (double& x : a) x = U(rng);
+    if (trial % 3 == 0)  // runs of equal angles (collinear edges)
+      for (std::size_t i = 1; i < a.size(); i += 2) a[i] = a[i - 1];
+    if (trial % 5 == 0) a.front() = -2.0, a.back() = 2.0;
+    std::sort(a.begin(), a.end());
+    PlaneRegion::AngleIndex index;
+    index.build(a);
+    std::vector<double> ts = {-2.0, 2.0, -2.5, 2.5, std::nextafter(-2.0, 0.0), std::nextafter(2.0, 0.0)};
+    for (double x : a) ts.insert(ts.end(), {x, std::nextafter(x, -3.0), std::nextafter(x, 3.0)});
+    for (int i = 0; i < 20; ++i) ts.push_back(U(rng));
+    for (double t : ts) {
+      const auto it = std::lower_bound(a.begin(), a.end(), t);
+      const int want = it == a.end() ? 0 : static_cast<int>(it - a.begin());
+      ASSERT_EQ(index.first_at_least(t), want) << "trial " << trial << " t " << t;
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 30000);
+}
+
 // clear() against every segment and a parity test of them, on convex regions (one loop:
 // clear() asks the loop, PlaneRegion::convex_clear) and others (the tree): segments along the
 // boundary a hair to millimetres off it either side, chords across R and segments wholly inside

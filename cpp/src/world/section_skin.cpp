@@ -254,11 +254,12 @@ void PlaneRegion::build_loop() {
       loop_edge_first_ = k;
     }
   }
-  loop_edge_angle_.clear();
+  std::vector<double> sorted;
   for (int k = 0; k < n; ++k) {
     const double e = edge[(loop_edge_first_ + k) % n];
-    loop_edge_angle_.push_back(k == 0 ? e : std::max(e, loop_edge_angle_.back()));
+    sorted.push_back(k == 0 ? e : std::max(e, sorted.back()));
   }
+  loop_edges_.build(std::move(sorted));
 }
 
 void PlaneRegion::link_segments() {
@@ -1170,10 +1171,24 @@ void PlaneRegion::build_hull() {
     }
   }
   hull_.clear();
-  hull_angle_.clear();
+  std::vector<double> sorted;
   for (int i = 0; i < k; ++i) {
     hull_.push_back(h[(start + i) % k]);
-    hull_angle_.push_back(i == 0 ? angle[start] : std::max(angle[(start + i) % k], hull_angle_.back()));
+    sorted.push_back(i == 0 ? angle[start] : std::max(angle[(start + i) % k], sorted.back()));
+  }
+  hull_index_.build(std::move(sorted));
+}
+
+void PlaneRegion::AngleIndex::build(std::vector<double> angles) {
+  angle = std::move(angles);
+  const int n = static_cast<int>(angle.size()), parts = std::max(1, 2 * n);
+  scale = parts / 4.0;
+  part.assign(parts + 1, n);
+  // Each part's entry starts a part early: t's part, computed with rounding, may start past t.
+  for (int b = 0, i = 0; b <= parts; ++b) {
+    const double start = -2.0 + (b - 1) / scale;
+    while (i < n && angle[i] < start) ++i;
+    part[b] = i;
   }
 }
 
@@ -1216,19 +1231,9 @@ bool PlaneRegion::hull_apart(const Q& q, double limit) const {
   if (!q.line || hull_.empty()) return false;
   // The hull's vertex farthest along a direction v starts its first edge turned a right angle
   // counter-clockwise from v, or past it (v = n: the edge along -u; v = -n: along u).
-  // A binary search without branches on the data (the comparisons pick indices): the
-  // directions asked are all round, which a predictor cannot learn.
+  // Found by the angles' index (AngleIndex::first_at_least).
   auto extreme = [&](const Vec2& edge) -> const Vec2& {
-    const double t = pseudo_angle(Vec2::UnitX(), edge);
-    const double* a = hull_angle_.data();
-    std::size_t lo = 0, n = hull_angle_.size();
-    while (n > 1) {
-      const std::size_t half = n / 2;
-      lo = a[lo + half - 1] < t ? lo + half : lo;
-      n -= half;
-    }
-    lo += a[lo] < t;  // the first angle at or past t; past the last, the first vertex
-    return hull_[lo == hull_angle_.size() ? 0 : lo];
+    return hull_[hull_index_.first_at_least(pseudo_angle(Vec2::UnitX(), edge))];
   };
   return q.n.dot(extreme(-q.u) - q.a) < -limit || q.n.dot(extreme(q.u) - q.a) > limit;
 }
@@ -1415,17 +1420,9 @@ inline DiskPart disk_part(const Vec2& sa, const Vec2& sb, const Vec2& pivot, dou
 
 int PlaneRegion::loop_extreme(const Vec2& edge) const {
   // As hull_apart's search: the tail of the first edge turned at least as far as `edge`.
-  const double t = pseudo_angle(Vec2::UnitX(), edge);
-  const double* a = loop_edge_angle_.data();
-  std::size_t lo = 0, n = loop_edge_angle_.size();
-  while (n > 1) {
-    const std::size_t half = n / 2;
-    lo = a[lo + half - 1] < t ? lo + half : lo;
-    n -= half;
-  }
-  lo += a[lo] < t;
-  const int k = static_cast<int>(loop_.size());
-  return (loop_edge_first_ + static_cast<int>(lo == loop_edge_angle_.size() ? 0 : lo)) % k;
+  const int i = loop_edge_first_ + loop_edges_.first_at_least(pseudo_angle(Vec2::UnitX(), edge));
+  const int n = static_cast<int>(loop_.size());
+  return i >= n ? i - n : i;
 }
 
 int PlaneRegion::convex_clear(const Vec2& a, const Vec2& b) const {

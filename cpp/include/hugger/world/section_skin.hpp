@@ -124,6 +124,24 @@ class PlaneRegion {
     if (x >= 0.0) return r;
     return y >= 0.0 ? 2.0 - r : -2.0 - r;
   }
+  /// Non-decreasing pseudo-angles in [-2, 2] (a convex chain's edge directions, from the edge
+  /// after they wrap round), with where each of 2n equal parts of [-2, 2] starts among them: the
+  /// first angle at or past t is then a lookup and a step or two, where a binary search took
+  /// log n steps (its answer, to the index).
+  struct AngleIndex {
+    std::vector<double> angle;
+    std::vector<int> part;  ///< part[b]: the first i with angle[i] at or past the start of part b - 1
+    double scale = 0.0;     ///< parts per unit of pseudo-angle
+    void build(std::vector<double> angles);
+    /// The first i with angle[i] >= t; 0 where none is (the chain goes on round to the first).
+    int first_at_least(double t) const {
+      const int n = static_cast<int>(angle.size()), parts = static_cast<int>(part.size()) - 1;
+      const double x = (t + 2.0) * scale;
+      int i = part[x > 0.0 ? (x < parts ? static_cast<int>(x) : parts) : 0];
+      while (i < n && angle[i] < t) ++i;
+      return i == n ? 0 : i;
+    }
+  };
   /// True when x lies in R (closed). From its cell's label where no segment touches the cell,
   /// else from the side of the nearest piece; where that is unsafe (a loose end, a side test too
   /// close to call) from one 3D query.
@@ -173,7 +191,7 @@ class PlaneRegion {
   bool visit_segments(Skip&& skip, Visit&& visit) const;
   void build_pieces();
   void build_bvh();
-  /// The convex hull of the segments' end points (hull_, hull_angle_).
+  /// The convex hull of the segments' end points (hull_, hull_index_).
   void build_hull();
   /// True when the whole boundary lies farther than `limit` (> 0, with the rounding margin) from
   /// the line of query `q` (a segment query), all of it on one side: then no segment comes within
@@ -242,10 +260,10 @@ class PlaneRegion {
   std::vector<Node> nodes_;
   std::vector<int> order_;                       ///< while building the BVH
   /// The boundary's convex hull, counter-clockwise from the edge after its edges' pseudo-angles
-  /// wrap round; hull_angle_[i]: the pseudo-angle (pseudo_angle from +x) of the edge from hull_[i]
-  /// to the next vertex, non-decreasing.
+  /// wrap round; hull_index_.angle[i]: the pseudo-angle (pseudo_angle from +x) of the edge from
+  /// hull_[i] to the next vertex.
   std::vector<Vec2> hull_;
-  std::vector<double> hull_angle_;
+  AngleIndex hull_index_;
   /// Where the boundary is one loop that turns left at every vertex (a convex R): its segments
   /// in order along it (R on the left: counter-clockwise), loop_tail_[i] the tail of segment
   /// loop_[i] (its head is the next tail), and loop_angle_[i] the pseudo-angle of loop_tail_[i]
@@ -254,10 +272,10 @@ class PlaneRegion {
   std::vector<Vec2> loop_tail_;
   std::vector<double> loop_angle_;
   Vec2 loop_centre_ = Vec2::Zero();
-  /// The loop's edges' pseudo-angles (from +x), from edge loop_edge_first_ on, non-decreasing
-  /// (as hull_angle_), for loop_extreme.
+  /// The loop's edges' pseudo-angles (from +x), from edge loop_edge_first_ on (as the hull's),
+  /// for loop_extreme.
   int loop_edge_first_ = 0;
-  std::vector<double> loop_edge_angle_;
+  AngleIndex loop_edges_;
   /// A crossing of a segment by a piece of another feature, while building: where, and on which
   /// side of the crossing segment (its inner side: towards its feature) the segment goes on.
   struct Cut {
