@@ -1235,7 +1235,7 @@ bool PlaneRegion::hull_apart(const Q& q, double limit) const {
   auto extreme = [&](const Vec2& edge) -> const Vec2& {
     return hull_[hull_index_.first_at_least(pseudo_angle(Vec2::UnitX(), edge))];
   };
-  return q.n.dot(extreme(-q.u) - q.a) < -limit || q.n.dot(extreme(q.u) - q.a) > limit;
+  return q.n.dot(extreme(q.u) - q.a) > limit || q.n.dot(extreme(-q.u) - q.a) < -limit;
 }
 
 template <class Skip, class Visit>
@@ -1432,9 +1432,14 @@ int PlaneRegion::convex_clear(const Vec2& a, const Vec2& b) const {
   const int n = static_cast<int>(loop_.size());
   const Vec2* T = loop_tail_.data();
   auto h = [&](int i) { return q.n.dot(T[i] - a); };  // height above the segment's line
-  const int top = loop_extreme(-q.u), bottom = loop_extreme(q.u);
-  const double h_top = h(top), h_bottom = h(bottom);
-  if (h_top < -kSureApart || h_bottom > kSureApart) return 1;  // the line passes R
+  // The line passes R where R's lowest point lies above it or its highest below (each asked
+  // only where the other does not settle it).
+  const int bottom = loop_extreme(q.u);
+  const double h_bottom = h(bottom);
+  if (h_bottom > kSureApart) return 1;
+  const int top = loop_extreme(-q.u);
+  const double h_top = h(top);
+  if (h_top < -kSureApart) return 1;
   if (!(h_top > kSureApart && h_bottom < -kSureApart)) return -1;
   // The line crosses R: once on the chain from bottom to top (counter-clockwise; the height
   // rises along it) and once on the way back (it falls). On each, the first tail past the line
