@@ -1326,6 +1326,10 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
 }
 
 bool PlaneRegion::any_within(const Vec2& a, const Vec2& b, double distance) const {
+  if (!loop_.empty()) {
+    const int sure = convex_within(a, b, distance);
+    if (sure >= 0) return sure == 1;
+  }
   return reach(a, b, distance) == Reach::kWithin;
 }
 
@@ -1425,30 +1429,15 @@ int PlaneRegion::loop_extreme(const Vec2& edge) const {
   return i >= n ? i - n : i;
 }
 
-int PlaneRegion::convex_clear(const Vec2& a, const Vec2& b) const {
-  const Query q(a, b);
-  if (!q.line) return -1;
-  if (node_farther(nodes_[0], q, kTouch)) return 1;  // apart from the boundary's box
-  const int n = static_cast<int>(loop_.size());
-  const Vec2* T = loop_tail_.data();
-  auto h = [&](int i) { return q.n.dot(T[i] - a); };  // height above the segment's line
-  // The line passes R where R's lowest point lies above it or its highest below (each asked
-  // only where the other does not settle it).
-  const int bottom = loop_extreme(q.u);
-  const double h_bottom = h(bottom);
-  if (h_bottom > kSureApart) return 1;
-  const int top = loop_extreme(-q.u);
-  const double h_top = h(top);
-  if (h_top < -kSureApart) return 1;
-  if (!(h_top > kSureApart && h_bottom < -kSureApart)) return -1;
+template <class Q>
+PlaneRegion::Chord PlaneRegion::convex_chord(const Q& q, int bottom, int top) const {
   // The line crosses R: once on the chain from bottom to top (counter-clockwise; the height
   // rises along it) and once on the way back (it falls). On each, the first tail past the line
   // ends the edge crossed, found by halving.
-  struct Crossing {
-    double t;  ///< along the segment from a
-    int edge;  ///< the loop's edge crossed
-  };
-  auto crossing = [&](int from, int to, bool rising) {
+  const int n = static_cast<int>(loop_.size());
+  const Vec2* T = loop_tail_.data();
+  auto h = [&](int i) { return q.n.dot(T[i] - q.a); };
+  auto crossing = [&](int from, int to, bool rising, double* t, int* edge) {
     int lo = 0, hi = to - from < 0 ? to - from + n : to - from;  // tail from + lo is before the line, from + hi past it
     while (hi - lo > 1) {
       const int mid = lo + (hi - lo) / 2;
@@ -1458,17 +1447,77 @@ int PlaneRegion::convex_clear(const Vec2& a, const Vec2& b) const {
     const int i0 = from + lo >= n ? from + lo - n : from + lo, i1 = i0 + 1 == n ? 0 : i0 + 1;
     const double h0 = h(i0), h1 = h(i1);
     const Vec2 x = T[i0] + (h0 / (h0 - h1)) * (T[i1] - T[i0]);
-    return Crossing{q.u.dot(x - a), i0};
+    *t = q.u.dot(x - q.a);
+    *edge = i0;
   };
-  Crossing in = crossing(bottom, top, true), out = crossing(top, bottom, false);
-  if (in.t > out.t) std::swap(in, out);
-  if (in.t <= q.len && out.t >= 0.0) return 0;  // the chord through R overlaps the segment
+  Chord c;
+  crossing(bottom, top, true, &c.t_in, &c.e_in);
+  crossing(top, bottom, false, &c.t_out, &c.e_out);
+  if (c.t_in > c.t_out) {
+    std::swap(c.t_in, c.t_out);
+    std::swap(c.e_in, c.e_out);
+  }
+  return c;
+}
+
+double PlaneRegion::beyond_edge(int edge, const Vec2& x) const {
+  return segments_[loop_[edge]].normal.dot(x - loop_tail_[edge]);
+}
+
+int PlaneRegion::convex_clear(const Vec2& a, const Vec2& b) const {
+  const Query q(a, b);
+  if (!q.line) return -1;
+  if (node_farther(nodes_[0], q, kTouch)) return 1;  // apart from the boundary's box
+  auto h = [&](int i) { return q.n.dot(loop_tail_[i] - a); };  // height above the segment's line
+  // The line passes R where R's lowest point lies above it or its highest below (each asked
+  // only where the other does not settle it).
+  const int bottom = loop_extreme(q.u);
+  const double h_bottom = h(bottom);
+  if (h_bottom > kSureApart) return 1;
+  const int top = loop_extreme(-q.u);
+  const double h_top = h(top);
+  if (h_top < -kSureApart) return 1;
+  if (!(h_top > kSureApart && h_bottom < -kSureApart)) return -1;
+  const Chord c = convex_chord(q, bottom, top);
+  if (c.t_in <= q.len && c.t_out >= 0.0) return 0;  // the chord through R overlaps the segment
   // The segment lies beyond the edge where the chord leaves R (or before the one where it
   // enters), whose line bounds R: by its end nearer that edge's line.
-  const bool beyond = out.t < 0.0;
-  const Crossing& c = beyond ? out : in;
-  const Segment& s = segments_[loop_[c.edge]];
-  return s.normal.dot((beyond ? a : b) - T[c.edge]) > kSureApart ? 1 : -1;
+  const bool beyond = c.t_out < 0.0;
+  return beyond_edge(beyond ? c.e_out : c.e_in, beyond ? a : b) > kSureApart ? 1 : -1;
+}
+
+int PlaneRegion::convex_within(const Vec2& a, const Vec2& b, double distance) const {
+  const Query q(a, b);
+  if (!q.line) return -1;
+  if (node_farther(nodes_[0], q, distance)) return 0;  // as reach: the boundary's box is farther
+  const double far = distance + kSureApart, near = distance - kSureApart;
+  auto h = [&](int i) { return q.n.dot(loop_tail_[i] - a); };
+  // A boundary point within `near` of the segment: a witness that some piece is within distance.
+  auto witness = [&](const Vec2& x) {
+    const double t = q.u.dot(x - a);
+    const Vec2 p = t <= 0.0 ? a : (t >= q.len ? b : Vec2(a + t * q.u));
+    return (x - p).squaredNorm() < near * near;
+  };
+  const int bottom = loop_extreme(q.u);
+  const double h_bottom = h(bottom);
+  if (h_bottom > far) return 0;  // all of R farther above the line
+  if (h_bottom > kSureApart) return near > 0.0 && witness(loop_tail_[bottom]) ? 1 : -1;  // R above, its lowest point near
+  const int top = loop_extreme(-q.u);
+  const double h_top = h(top);
+  if (h_top < -far) return 0;
+  if (h_top < -kSureApart) return near > 0.0 && witness(loop_tail_[top]) ? 1 : -1;
+  if (!(h_top > kSureApart && h_bottom < -kSureApart)) return -1;
+  const Chord c = convex_chord(q, bottom, top);
+  // A chord end on the segment is a boundary point on it; the segment within the chord lies in
+  // R, where only the distance to the boundary tells (the tree).
+  if ((c.t_in >= 0.0 && c.t_in <= q.len) || (c.t_out >= 0.0 && c.t_out <= q.len)) return 1;
+  if (c.t_in < 0.0 && c.t_out > q.len) return -1;
+  // The chord misses the segment: the edge's line there separates them by at least its
+  // distance, and the chord's end is a boundary point on the segment's line.
+  const bool beyond = c.t_out < 0.0;
+  if (beyond_edge(beyond ? c.e_out : c.e_in, beyond ? a : b) > far) return 0;
+  const double gap = beyond ? -c.t_out : c.t_in - q.len;
+  return gap < near ? 1 : -1;
 }
 
 bool PlaneRegion::clear(const Vec2& a, const Vec2& b, bool a_outside) const {

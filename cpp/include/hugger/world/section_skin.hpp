@@ -242,6 +242,24 @@ class PlaneRegion {
   /// where its line passes R or a supporting line of R (that of the edge where the chord leaves
   /// or enters) separates them, by more than kSureApart.
   int convex_clear(const Vec2& a, const Vec2& b) const;
+  /// any_within() where R is one convex loop: 1 where a boundary point (the lowest or highest
+  /// tail across the segment's line, or an end of the line's chord through R) lies within
+  /// `distance` less kSureApart of the segment, 0 where R's box, R itself (across the line) or
+  /// the supporting line where the chord ends lies farther than `distance` plus kSureApart;
+  /// -1 otherwise (the tree decides: a segment within R, or a near call).
+  int convex_within(const Vec2& a, const Vec2& b, double distance) const;
+  /// Where the line of a query crosses a convex R (convex_chord): along the query from its start,
+  /// where the line enters and leaves R, and the loop's edges crossed there.
+  struct Chord {
+    double t_in = 0.0, t_out = 0.0;
+    int e_in = 0, e_out = 0;
+  };
+  /// The chord of query q's line, which crosses R: its lowest tail `bottom` below the line and
+  /// its highest `top` above.
+  template <class Q>
+  Chord convex_chord(const Q& q, int bottom, int top) const;
+  /// How far x lies beyond the line of the loop's edge `edge` (outward).
+  double beyond_edge(int edge, const Vec2& x) const;
   /// The loop's tail farthest along the direction `edge` turned a right angle clockwise.
   int loop_extreme(const Vec2& edge) const;
   /// Adds the arcs of x(t) = centre + U cos t + V sin t over the allowed intervals of `allowed`
