@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <random>
@@ -861,6 +863,28 @@ TEST(SectionSkin, AngleIndexFindsTheFirstAngleAtOrPast) {
     }
   }
   EXPECT_GE(checked, 30000);
+}
+
+// pseudo_angle_of keeps its last answer: asked again, and asked in turn for angles of other bits
+// (+0 after -0, a neighbour, beyond pi), it answers as the formula does, to the bit.
+TEST(SectionSkin, PseudoAngleOfAnswersToTheBit) {
+  auto formula = [](double angle) {
+    return std::abs(angle) >= kPi ? (angle < 0.0 ? -2.0 : 2.0)
+                                  : PlaneRegion::pseudo_angle(Vec2::UnitX(), Vec2(std::cos(angle), std::sin(angle)));
+  };
+  auto bits = [](double x) {
+    std::uint64_t b;
+    std::memcpy(&b, &x, sizeof b);
+    return b;
+  };
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> U(-4.0, 4.0);
+  std::vector<double> asked = {0.0, -0.0, 0.0, -0.0, -0.0, 0.3, 0.3, std::nextafter(0.3, 1.0), 0.3, kPi, -kPi, 1e-300};
+  for (int i = 0; i < 200; ++i) {
+    const double x = U(rng);
+    asked.insert(asked.end(), {x, x, -x, x});
+  }
+  for (double x : asked) EXPECT_EQ(bits(PlaneRegion::pseudo_angle_of(x)), bits(formula(x))) << x;
 }
 
 // clear() against every segment and a parity test of them, on convex regions (one loop:

@@ -25,6 +25,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <atomic>
 #include <memory>
 #include <mutex>
@@ -111,8 +113,17 @@ class PlaneRegion {
   bool spans(const Vec2& pivot, const Vec2& u, double length, double within, std::vector<Span>* out) const;
   /// The pseudo-angle of the direction at `angle` radians from u (|angle| <= pi; +-2 beyond).
   static double pseudo_angle_of(double angle) {
-    return std::abs(angle) >= kPi ? (angle < 0.0 ? -2.0 : 2.0)
+    // The angles asked are few (a rotation's search ranges): the last answer is kept per thread,
+    // for the angle of the same bits (-0 is not +0).
+    thread_local std::uint64_t last_bits = 0;
+    thread_local double last = 0.0;
+    std::uint64_t bits;
+    std::memcpy(&bits, &angle, sizeof bits);
+    if (bits == last_bits) return last;
+    last = std::abs(angle) >= kPi ? (angle < 0.0 ? -2.0 : 2.0)
                                   : pseudo_angle(Vec2::UnitX(), Vec2(std::cos(angle), std::sin(angle)));
+    last_bits = bits;
+    return last;
   }
   /// The pseudo-angle of v (non-zero) relative to the unit direction u (see Span).
   static double pseudo_angle(const Vec2& u, const Vec2& v) {
