@@ -893,9 +893,10 @@ TEST(SectionSkin, PseudoAngleOfAnswersToTheBit) {
 // it, lines along R's edges (a box's faces) and random ones. Where the segment passes within a
 // nanometre of the boundary without touching it (within rounding of the threshold) no answer is
 // asserted; elsewhere clear() is: no segment within touching distance, and a outside the
-// boundary (R as its segments bound it, which lies within flatten outside the exact R).
+// boundary (R as its segments bound it, which lies within flatten outside the exact R). And
+// inside(a), for a more than a nanometre off the boundary, is that parity test's answer.
 TEST(SectionSkin, ClearMatchesEverySegment) {
-  long checked = 0, convex_checked = 0, blocked = 0;
+  long checked = 0, convex_checked = 0, blocked = 0, inside_checked = 0;
   for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::cylinder(0.035, 0.05, 48),
                               test::box(Vec3(0.03, 0.02, 0.05)), test::curvy(4)}) {
     Scene s(m, 41);
@@ -939,6 +940,12 @@ TEST(SectionSkin, ClearMatchesEverySegment) {
               a.x() < e.a.x() + (a.y() - e.a.y()) / (e.b.y() - e.a.y()) * (e.b.x() - e.a.x()))
             in = !in;
         const bool want = best > 1e-12 && !in;
+        double a_off = kInf;  // a's distance to the boundary
+        for (const auto& e : segs) a_off = std::min(a_off, segments_apart(a, a, e.a, e.b));
+        if (a_off > 2e-9) {
+          ASSERT_EQ(R->inside(a), in) << "plane " << k << " query " << q << " a " << a_off << " off the boundary";
+          ++inside_checked;
+        }
         ASSERT_EQ(R->clear(a, b, false), want) << "plane " << k << " query " << q << " best " << best;
         ++checked;
         convex_checked += R->convex();
@@ -946,7 +953,9 @@ TEST(SectionSkin, ClearMatchesEverySegment) {
       }
     }
   }
-  std::printf("  %ld decisions (%ld on convex loops), %ld not clear\n", checked, convex_checked, blocked);
+  std::printf("  %ld decisions (%ld on convex loops), %ld not clear; %ld inside tests\n", checked, convex_checked,
+              blocked, inside_checked);
+  EXPECT_GE(inside_checked, 8000);
   EXPECT_GE(checked, 10000);
   EXPECT_GE(convex_checked, 5000);
   EXPECT_GE(blocked, 3000);

@@ -1834,7 +1834,24 @@ bool PlaneRegion::inside(const Vec2& x) const {
     const signed char label = cells_[static_cast<std::size_t>(g.y()) * cells_n_[0] + static_cast<std::size_t>(g.x())];
     if (label >= 0) return label == 1;
   }
+  if (!loop_.empty()) {
+    const int sure = convex_inside(x);
+    if (sure >= 0) return sure == 1;
+  }
   return inside_from(nearest(x, x, kInf), x);
+}
+
+int PlaneRegion::convex_inside(const Vec2& x) const {
+  // The loop's edge whose wedge about the centre holds x (the tails' angles about it increase):
+  // x lies in R where it lies on the inner side of that edge's line (in the triangle of the
+  // wedge), outside R where on the outer side (the line bounds R).
+  const double angle = pseudo_angle(Vec2::UnitX(), x - loop_centre_);
+  if (!(std::abs(angle) <= 2.0)) return -1;  // x at the centre
+  const int n = static_cast<int>(loop_.size());
+  int j = static_cast<int>(std::upper_bound(loop_angle_.begin(), loop_angle_.end(), angle) - loop_angle_.begin()) - 1;
+  if (j < 0) j = n - 1;
+  const double out = beyond_edge(j, x);
+  return out > kSureApart ? 0 : (out < -kSureApart ? 1 : -1);
 }
 
 // --- SectionSkin --------------------------------------------------------------------------

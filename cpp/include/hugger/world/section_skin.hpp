@@ -271,6 +271,9 @@ class PlaneRegion {
   Chord convex_chord(const Q& q, int bottom, int top) const;
   /// How far x lies beyond the line of the loop's edge `edge` (outward).
   double beyond_edge(int edge, const Vec2& x) const;
+  /// inside() where R is one convex loop: 1 or 0 where x lies farther than kSureApart inside or
+  /// outside the line of the edge whose wedge about the loop's centre holds it; -1 nearer.
+  int convex_inside(const Vec2& x) const;
   /// The loop's tail farthest along the direction `edge` turned a right angle clockwise.
   int loop_extreme(const Vec2& edge) const;
   /// Adds the arcs of x(t) = centre + U cos t + V sin t over the allowed intervals of `allowed`
