@@ -206,7 +206,6 @@ void PlaneRegion::finish() {
 void PlaneRegion::build_loop() {
   loop_.clear();
   loop_tail_.clear();
-  loop_angle_.clear();
   const int n = static_cast<int>(segments_.size());
   if (n < 3) return;
   // One loop through every segment,
@@ -236,11 +235,13 @@ void PlaneRegion::build_loop() {
   const int start = static_cast<int>(std::min_element(angle.begin(), angle.end()) - angle.begin());
   for (int k = 1; k < n; ++k)
     if (!(angle[(start + k) % n] > angle[(start + k - 1) % n])) return;
+  std::vector<double> polar;
   for (int k = 0; k < n; ++k) {
     loop_.push_back(loop[(start + k) % n]);
     loop_tail_.push_back(tail[(start + k) % n]);
-    loop_angle_.push_back(angle[(start + k) % n]);
+    polar.push_back(angle[(start + k) % n]);
   }
+  loop_polar_.build(std::move(polar));
   loop_centre_ = centre;
   // The edges' directions turn counter-clockwise along the loop, wrapping round once: from the
   // edge after the wrap (the largest drop), made non-decreasing against rounding.
@@ -1657,11 +1658,8 @@ bool PlaneRegion::convex_spans(const Vec2& pivot, const Vec2& u, double length, 
   auto d2 = [&](int i) { return (T[i] - pivot).squaredNorm(); };
   // The segment that the ray from the centre through the pivot crosses (the tails' angles about
   // the centre increase along the loop) faces the pivot, unless the pivot lies in R.
-  const double angle = pseudo_angle(Vec2::UnitX(), pivot - loop_centre_);
-  if (!(std::abs(angle) <= 2.0)) return false;
-  int j = static_cast<int>(std::upper_bound(loop_angle_.begin(), loop_angle_.end(), angle) - loop_angle_.begin()) - 1;
-  if (j < 0) j = n - 1;
-  if (!faces(j)) return false;
+  const int j = loop_wedge(pivot);
+  if (j < 0 || !faces(j)) return false;
   // The nearest tail of the facing run: walked to from j's ends, the distance falling.
   int m = j;
   double dm = d2(j);
@@ -1845,13 +1843,18 @@ int PlaneRegion::convex_inside(const Vec2& x) const {
   // The loop's edge whose wedge about the centre holds x (the tails' angles about it increase):
   // x lies in R where it lies on the inner side of that edge's line (in the triangle of the
   // wedge), outside R where on the outer side (the line bounds R).
-  const double angle = pseudo_angle(Vec2::UnitX(), x - loop_centre_);
-  if (!(std::abs(angle) <= 2.0)) return -1;  // x at the centre
-  const int n = static_cast<int>(loop_.size());
-  int j = static_cast<int>(std::upper_bound(loop_angle_.begin(), loop_angle_.end(), angle) - loop_angle_.begin()) - 1;
-  if (j < 0) j = n - 1;
+  const int j = loop_wedge(x);
+  if (j < 0) return -1;  // x at the centre
   const double out = beyond_edge(j, x);
   return out > kSureApart ? 0 : (out < -kSureApart ? 1 : -1);
+}
+
+int PlaneRegion::loop_wedge(const Vec2& x) const {
+  const double angle = pseudo_angle(Vec2::UnitX(), x - loop_centre_);
+  if (!(std::abs(angle) <= 2.0)) return -1;
+  // The last tail at or before the angle (before the first: the last, the loop wraps round).
+  const int i = loop_polar_.first_at_least(angle), n = static_cast<int>(loop_.size());
+  return loop_polar_.angle[i] == angle ? i : (i == 0 ? n - 1 : i - 1);
 }
 
 // --- SectionSkin --------------------------------------------------------------------------

@@ -274,6 +274,9 @@ class PlaneRegion {
   /// inside() where R is one convex loop: 1 or 0 where x lies farther than kSureApart inside or
   /// outside the line of the edge whose wedge about the loop's centre holds it; -1 nearer.
   int convex_inside(const Vec2& x) const;
+  /// The loop's edge whose wedge about the loop's centre holds x (the last tail at or before x's
+  /// angle about it); -1 for x at the centre.
+  int loop_wedge(const Vec2& x) const;
   /// The loop's tail farthest along the direction `edge` turned a right angle clockwise.
   int loop_extreme(const Vec2& edge) const;
   /// Adds the arcs of x(t) = centre + U cos t + V sin t over the allowed intervals of `allowed`
@@ -298,11 +301,11 @@ class PlaneRegion {
   AngleIndex hull_index_;
   /// Where the boundary is one loop that turns left at every vertex (a convex R): its segments
   /// in order along it (R on the left: counter-clockwise), loop_tail_[i] the tail of segment
-  /// loop_[i] (its head is the next tail), and loop_angle_[i] the pseudo-angle of loop_tail_[i]
-  /// about loop_centre_ (the tails' mean, inside R), increasing from i = 0.
+  /// loop_[i] (its head is the next tail), and loop_polar_.angle[i] the pseudo-angle of
+  /// loop_tail_[i] about loop_centre_ (the tails' mean, inside R), increasing from i = 0.
   std::vector<int> loop_;
   std::vector<Vec2> loop_tail_;
-  std::vector<double> loop_angle_;
+  AngleIndex loop_polar_;
   Vec2 loop_centre_ = Vec2::Zero();
   /// The loop's edges' pseudo-angles (from +x), from edge loop_edge_first_ on (as the hull's),
   /// for loop_extreme.
