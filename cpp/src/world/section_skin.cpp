@@ -1479,6 +1479,15 @@ int PlaneRegion::convex_clear(const Vec2& a, const Vec2& b) const {
   const double h_top = h(top);
   if (h_top < -kSureApart) return 1;
   if (!(h_top > kSureApart && h_bottom < -kSureApart)) return -1;
+  // The line crosses R. The edge of b's wedge about the loop's centre settles many segments
+  // without the chord (links turned onto R mostly have their end b nearest it): b inside that
+  // edge's line lies in R; a and b both beyond it (the line bounds R) are separated from R.
+  const int jb = loop_wedge(b);
+  if (jb >= 0) {
+    const double b_out = beyond_edge(jb, b);
+    if (b_out < -kSureApart) return 0;
+    if (b_out > kSureApart && beyond_edge(jb, a) > kSureApart) return 1;
+  }
   const Chord c = convex_chord(q, bottom, top);
   if (c.t_in <= q.len && c.t_out >= 0.0) return 0;  // the chord through R overlaps the segment
   // The segment lies beyond the edge where the chord leaves R (or before the one where it
