@@ -180,6 +180,7 @@ void Planner::plan_phase1(const Pose& start) {
   palm_lb_ = -kInf;
   closing_.assign(hand_.fingers(), 0);
   angle_memo_.assign(hand_.fingers(), AngleMemo());
+  world_memo_.assign(hand_.fingers(), WorldChain());
   closed_.assign(hand_.fingers(), 0);
   opened_.assign(hand_.fingers(), 0);
   reclosing_.assign(hand_.fingers(), 0);
@@ -212,6 +213,20 @@ const double* Planner::chain_angles(int m, const Chain& chain) const {
   memo.chain[k] = chain;
   memo.last = k;
   return memo.angles[k].data();
+}
+
+const Planner::WorldChain& Planner::chain_in_world(int k, const Chain& chain) const {
+  WorldChain& w = world_memo_[static_cast<std::size_t>(k)];
+  // Bits, not values, as chain_angles.
+  if (w.chain.size() == chain.size() && !chain.empty() &&
+      std::memcmp(w.chain.data(), chain.data(), chain.size() * sizeof(Vec2)) == 0)
+    return w;
+  w.chain.clear();  // matches no chain until the joints are in
+  w.joints.resize(chain.size());
+  w.box = Aabb();
+  for (std::size_t n = 0; n < chain.size(); ++n) w.box.grow(w.joints[n] = planes_[k].to_world(chain[n]));
+  w.chain = chain;
+  return w;
 }
 
 std::vector<double> Planner::joint_angles(int m, const Chain& chain) const {
@@ -335,25 +350,21 @@ bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>&
   const int N = hand_.links();
   const double sep = finger_separation();
   const double sep2 = sep * sep;
-  // On the stack, as in motion_ok.
-  auto to_world = [&](int k, const Chain& c, std::array<Vec3, kMaxLinks + 1>& out, Aabb& box) {
-    box = Aabb();
-    for (int n = 0; n <= N; ++n) box.grow(out[n] = planes_[k].to_world(c[n]));
-  };
   // The finger against itself within its plane (an isometric copy of the world's), then the
-  // others in the world.
+  // others in the world (on the stack, as in motion_ok; the others' chains remembered).
   for (int b = 2; b < N; ++b)
     if (!link_clear_of_chain(chain.data(), b, sep)) return false;
-  std::array<Vec3, kMaxLinks + 1> mine, theirs;
-  Aabb my_box, their_box;
-  to_world(m, chain, mine, my_box);
+  std::array<Vec3, kMaxLinks + 1> mine;
+  Aabb my_box;
+  for (int n = 0; n <= N; ++n) my_box.grow(mine[n] = planes_[m].to_world(chain[n]));
   for (int k = 0; k < hand_.fingers(); ++k) {
     if (k == m) continue;
-    to_world(k, others[k], theirs, their_box);
-    if (my_box.squared_distance(their_box) >= sep2) continue;  // the fingers' boxes are apart
+    const WorldChain& theirs = chain_in_world(k, others[k]);
+    if (my_box.squared_distance(theirs.box) >= sep2) continue;  // the fingers' boxes are apart
     for (int a = 0; a < N; ++a)
       for (int b = 0; b < N; ++b)
-        if (segment_segment_squared(mine[a], mine[a + 1], theirs[b], theirs[b + 1]) < sep2) return false;
+        if (segment_segment_squared(mine[a], mine[a + 1], theirs.joints[b], theirs.joints[b + 1]) < sep2)
+          return false;
   }
   return true;
 }

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "hugger/geometry/bvh.hpp"
 #include "hugger/hand/hand_model.hpp"
 #include "hugger/planner/snake.hpp"
 #include "hugger/sensing/sensing.hpp"
@@ -171,6 +172,15 @@ class Planner {
   /// configuration ask about the same chains in turn. Valid until the next call for finger m.
   const double* chain_angles(int m, const Chain& chain) const;
   std::vector<double> joint_angles(int m, const Chain& chain) const;  ///< chain_angles, copied
+  /// Finger k's `chain` in the world (its plane's to_world of each joint, bit for bit) and their
+  /// box, remembered for the chain asked last: fingers_clear asks about the other fingers'
+  /// chains, which mostly stay as they were. Valid until the next call for finger k.
+  struct WorldChain {
+    Chain chain;
+    std::vector<Vec3> joints;
+    Aabb box;
+  };
+  const WorldChain& chain_in_world(int k, const Chain& chain) const;
   double link_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
   /// Remembers CONTACT finger m's chain of this iteration, the palm still, and returns for how
   /// many iterations running the finger has come back to within epsilon (every joint) of one of
@@ -240,6 +250,7 @@ class Planner {
     int last = 0;  ///< the slot used last; a new chain takes the other
   };
   mutable std::vector<AngleMemo> angle_memo_;
+  mutable std::vector<WorldChain> world_memo_;  ///< chain_in_world's memory, per finger
   /// phase2_iteration's new chains and states, kept between iterations for their room.
   struct Scratch {
     std::vector<Chain> cand, next;
