@@ -1546,6 +1546,7 @@ bool PlaneRegion::clear(const Vec2& a, const Vec2& b, bool a_outside) const {
 
 bool PlaneRegion::depth_within(const Vec2& a, const Vec2& b, double allow) const {
   if (nodes_.empty()) return true;  // no boundary: R is empty
+  if (!loop_.empty() && convex_shallow(a, b, allow)) return true;
   const Query q(a, b);
   const Vec2 d = b - a;
   const bool point = !(d.squaredNorm() > 0.0);
@@ -1856,6 +1857,19 @@ int PlaneRegion::convex_inside(const Vec2& x) const {
   if (j < 0) return -1;  // x at the centre
   const double out = beyond_edge(j, x);
   return out > kSureApart ? 0 : (out < -kSureApart ? 1 : -1);
+}
+
+bool PlaneRegion::convex_shallow(const Vec2& a, const Vec2& b, double allow) const {
+  // A point of R lies no deeper than its distance to the line of any edge (the line bounds R),
+  // and that distance along the segment is largest at an end. The edges tried: those of the
+  // wedges of b and a (the middle's too cost more than they settled).
+  const double limit = allow - kSureApart;
+  if (!(limit > 0.0)) return false;
+  for (const Vec2& x : {b, a}) {
+    const int j = loop_wedge(x);
+    if (j >= 0 && -beyond_edge(j, a) < limit && -beyond_edge(j, b) < limit) return true;
+  }
+  return false;
 }
 
 int PlaneRegion::loop_wedge(const Vec2& x) const {

@@ -277,6 +277,11 @@ class PlaneRegion {
   /// The loop's edge whose wedge about the loop's centre holds x (the last tail at or before x's
   /// angle about it); -1 for x at the centre.
   int loop_wedge(const Vec2& x) const;
+  /// depth_within()'s shortcut where R is one convex loop: true where the line of one edge (of
+  /// the wedge of b or of a) lies within `allow` less kSureApart of both ends on R's side, so
+  /// that no point of the segment lies deeper in R than that; false where neither does
+  /// (depth_within then decides).
+  bool convex_shallow(const Vec2& a, const Vec2& b, double allow) const;
   /// The loop's tail farthest along the direction `edge` turned a right angle clockwise.
   int loop_extreme(const Vec2& edge) const;
   /// Adds the arcs of x(t) = centre + U cos t + V sin t over the allowed intervals of `allowed`
