@@ -722,6 +722,23 @@ TEST(SectionSkin, RotateUntilFreeIsTheSmallestFreeingRotation) {
   }
 }
 
+// The regions the convex-loop tests ask about: 12 random planes near the centre of an ellipsoid,
+// a 48-sided cylinder and a box (convex loops) and of curvy (the tree), for links of
+// radius(k); f(scene, k, region) for each region with a boundary.
+template <class Radius, class F>
+void for_each_test_region(unsigned seed, Radius&& radius, F&& f) {
+  for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::cylinder(0.035, 0.05, 48),
+                              test::box(Vec3(0.03, 0.02, 0.05)), test::curvy(4)}) {
+    Scene s(m, seed);
+    for (int k = 0; k < 12; ++k) {
+      const FingerPlane pl = test::random_plane(s.rng, s.c + Vec3(s.u() - 0.5, s.u() - 0.5, s.u() - 0.5) * 0.01);
+      const PlaneRegion* R = s.skin.region(pl, radius(k));
+      ASSERT_NE(R, nullptr);
+      if (!R->segments().empty()) f(s, k, *R);
+    }
+  }
+}
+
 // spans() against every segment's part within the disk, on convex regions (one loop: spans()
 // walks it) and others (the tree): pivots outside R near its boundary and farther, and inside
 // it; lengths from a tenth of the object to past its size; wedges narrow and whole. Every
@@ -767,68 +784,61 @@ TEST(SectionSkin, SpansAreTheUnionOfTheSegmentsParts) {
     return false;
   };
   long checked = 0, convex_queries = 0, tree_queries = 0, touching = 0, directions = 0;
-  for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::cylinder(0.035, 0.05, 48),
-                              test::box(Vec3(0.03, 0.02, 0.05)), test::curvy(4)}) {
-    Scene s(m, 33);
-    for (int k = 0; k < 12; ++k) {
-      const FingerPlane pl = test::random_plane(s.rng, s.c + Vec3(s.u() - 0.5, s.u() - 0.5, s.u() - 0.5) * 0.01);
-      const PlaneRegion* R = s.skin.region(pl, (k % 2) * 0.004);
-      ASSERT_NE(R, nullptr);
-      if (R->segments().empty()) continue;
-      for (int q = 0; q < 150; ++q) {
-        // a pivot off a boundary point along its normal (outside by 1e-13 to 1 size; inside for
-        // one in six), or on a boundary vertex
-        const auto& g = R->segments()[static_cast<std::size_t>(s.u() * R->segments().size())];
-        const double off = std::pow(10.0, -13.0 + 12.0 * s.u()) * s.size * (q % 6 == 5 ? -1.0 : 1.0);
-        const Vec2 pivot = q % 25 == 0 ? g.a : Vec2(g.a + s.u() * (g.b - g.a) + off * g.normal);
-        const double len = (0.1 + 1.2 * s.u()) * s.size, t = s.u() * 2 * kPi;
-        const Vec2 u(std::cos(t), std::sin(t));
-        const double within = q % 3 == 0 ? kPi : (q % 3 == 1 ? 0.5 : 0.05);
-        std::vector<PlaneRegion::Span> got;
-        const bool free_pivot = R->spans(pivot, u, len, within, &got);
-        bool touch = false;
-        const auto want = pieces_of(*R, pivot, u, len, &touch);
-        ++(R->convex() ? convex_queries : tree_queries);
-        ++checked;
-        if (touch) {
-          ++touching;
-          EXPECT_FALSE(free_pivot) << "plane " << k << " query " << q;
-          continue;
-        }
-        ASSERT_TRUE(free_pivot) << "plane " << k << " query " << q;
-        std::vector<std::array<double, 2>> spans;
-        for (const auto& sp : got) {
-          spans.push_back({sp.lo, sp.hi});
-          EXPECT_NEAR(PlaneRegion::pseudo_angle(u, sp.v_lo), sp.lo == -2.0 ? -2.0 : sp.lo, sp.lo == -2.0 ? 4.0 : 0.0);
-          EXPECT_NEAR(PlaneRegion::pseudo_angle(u, sp.v_hi), sp.hi, sp.hi == 2.0 ? 4.0 : 0.0);
-        }
-        const double pm = PlaneRegion::pseudo_angle_of(within);
-        std::vector<double> ends;
-        for (const auto& w : want) ends.insert(ends.end(), {w[0], w[1]});
-        auto near_end = [&](double x) {
-          for (double e : ends)
-            if (std::abs(x - e) < 1e-10) return true;
-          return false;
-        };
-        std::vector<double> probes;
-        for (int i = 0; i < 32; ++i) probes.push_back((2.0 * s.u() - 1.0) * pm);
-        for (double e : ends)
-          if (std::abs(e) < pm + 1e-9) probes.insert(probes.end(), {e - 1e-9, e + 1e-9});
-        for (double x : probes) {
-          if (x < -pm || x > pm || near_end(x)) continue;
-          ASSERT_EQ(covered(spans, x), covered(want, x)) << "plane " << k << " query " << q << " direction " << x;
-          ++directions;
-        }
-        for (const auto& sp : spans)
-          for (double e : sp) {
-            if (e <= -pm || e >= pm) continue;
-            double best = kInf;
-            for (double w : ends) best = std::min(best, std::abs(w - e));
-            EXPECT_LE(best, 1e-12) << "plane " << k << " query " << q;
-          }
+  for_each_test_region(33, [](int k) { return (k % 2) * 0.004; }, [&](Scene& s, int k, const PlaneRegion& region) {
+    const PlaneRegion* R = &region;
+    for (int q = 0; q < 150; ++q) {
+      // a pivot off a boundary point along its normal (outside by 1e-13 to 1 size; inside for
+      // one in six), or on a boundary vertex
+      const auto& g = R->segments()[static_cast<std::size_t>(s.u() * R->segments().size())];
+      const double off = std::pow(10.0, -13.0 + 12.0 * s.u()) * s.size * (q % 6 == 5 ? -1.0 : 1.0);
+      const Vec2 pivot = q % 25 == 0 ? g.a : Vec2(g.a + s.u() * (g.b - g.a) + off * g.normal);
+      const double len = (0.1 + 1.2 * s.u()) * s.size, t = s.u() * 2 * kPi;
+      const Vec2 u(std::cos(t), std::sin(t));
+      const double within = q % 3 == 0 ? kPi : (q % 3 == 1 ? 0.5 : 0.05);
+      std::vector<PlaneRegion::Span> got;
+      const bool free_pivot = R->spans(pivot, u, len, within, &got);
+      bool touch = false;
+      const auto want = pieces_of(*R, pivot, u, len, &touch);
+      ++(R->convex() ? convex_queries : tree_queries);
+      ++checked;
+      if (touch) {
+        ++touching;
+        EXPECT_FALSE(free_pivot) << "plane " << k << " query " << q;
+        continue;
       }
+      ASSERT_TRUE(free_pivot) << "plane " << k << " query " << q;
+      std::vector<std::array<double, 2>> spans;
+      for (const auto& sp : got) {
+        spans.push_back({sp.lo, sp.hi});
+        EXPECT_NEAR(PlaneRegion::pseudo_angle(u, sp.v_lo), sp.lo == -2.0 ? -2.0 : sp.lo, sp.lo == -2.0 ? 4.0 : 0.0);
+        EXPECT_NEAR(PlaneRegion::pseudo_angle(u, sp.v_hi), sp.hi, sp.hi == 2.0 ? 4.0 : 0.0);
+      }
+      const double pm = PlaneRegion::pseudo_angle_of(within);
+      std::vector<double> ends;
+      for (const auto& w : want) ends.insert(ends.end(), {w[0], w[1]});
+      auto near_end = [&](double x) {
+        for (double e : ends)
+          if (std::abs(x - e) < 1e-10) return true;
+        return false;
+      };
+      std::vector<double> probes;
+      for (int i = 0; i < 32; ++i) probes.push_back((2.0 * s.u() - 1.0) * pm);
+      for (double e : ends)
+        if (std::abs(e) < pm + 1e-9) probes.insert(probes.end(), {e - 1e-9, e + 1e-9});
+      for (double x : probes) {
+        if (x < -pm || x > pm || near_end(x)) continue;
+        ASSERT_EQ(covered(spans, x), covered(want, x)) << "plane " << k << " query " << q << " direction " << x;
+        ++directions;
+      }
+      for (const auto& sp : spans)
+        for (double e : sp) {
+          if (e <= -pm || e >= pm) continue;
+          double best = kInf;
+          for (double w : ends) best = std::min(best, std::abs(w - e));
+          EXPECT_LE(best, 1e-12) << "plane " << k << " query " << q;
+        }
     }
-  }
+  });
   std::printf("  %ld queries (%ld on convex loops, %ld on the tree), %ld touching, %ld directions\n", checked,
               convex_queries, tree_queries, touching, directions);
   EXPECT_GE(convex_queries, 2000);
@@ -897,62 +907,55 @@ TEST(SectionSkin, PseudoAngleOfAnswersToTheBit) {
 // inside(a), for a more than a nanometre off the boundary, is that parity test's answer.
 TEST(SectionSkin, ClearMatchesEverySegment) {
   long checked = 0, convex_checked = 0, blocked = 0, inside_checked = 0;
-  for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::cylinder(0.035, 0.05, 48),
-                              test::box(Vec3(0.03, 0.02, 0.05)), test::curvy(4)}) {
-    Scene s(m, 41);
-    for (int k = 0; k < 12; ++k) {
-      const FingerPlane pl = test::random_plane(s.rng, s.c + Vec3(s.u() - 0.5, s.u() - 0.5, s.u() - 0.5) * 0.01);
-      const PlaneRegion* R = s.skin.region(pl, (k % 3) * 0.002);
-      ASSERT_NE(R, nullptr);
-      const auto& segs = R->segments();
-      if (segs.empty()) continue;
-      for (int q = 0; q < 300; ++q) {
-        const auto& g = segs[static_cast<std::size_t>(s.u() * segs.size())];
-        const Vec2 at = g.a + s.u() * (g.b - g.a);
-        Vec2 a, b;
-        if (q % 3 == 0) {  // along the segment, off it by 10^-13 to 10^-2.5 m, either side
-          const double off = std::pow(10.0, -13.0 + 10.5 * s.u()) * (q % 2 ? -1.0 : 1.0);
-          const Vec2 along = rotate_planar((g.b - g.a).normalized(), (s.u() - 0.5) * 0.02);
-          a = at + off * g.normal - s.u() * 0.02 * along;
-          b = a + (0.005 + 0.02 * s.u()) * along;
-        } else if (q % 6 == 1) {  // ending 10^-13 to 10^-6 m short of the boundary point, heading into R
-          const Vec2 in = rotate_planar(-g.normal, (s.u() - 0.5) * 2.0);
-          b = at - std::pow(10.0, -13.0 + 7.0 * s.u()) * in;
-          a = b - (0.002 + 0.03 * s.u()) * in;
-        } else if (q % 3 == 1) {  // from near the boundary point, in a random direction
-          const double t = 2 * kPi * s.u();
-          a = at + std::pow(10.0, -9.0 + 6.5 * s.u()) * (q % 2 ? -1.0 : 1.0) * g.normal;
-          b = a + (0.002 + 0.05 * s.u()) * Vec2(std::cos(t), std::sin(t));
-        } else {  // between two boundary points (a chord), shortened or lengthened
-          const auto& h = segs[static_cast<std::size_t>(s.u() * segs.size())];
-          const Vec2 other = h.a + s.u() * (h.b - h.a), mid = 0.5 * (at + other);
-          const double f = 0.2 + 1.2 * s.u();
-          a = mid + f * (at - mid);
-          b = mid + f * (other - mid);
-        }
-        double best = kInf;
-        for (const auto& e : segs) best = std::min(best, segments_apart(a, b, e.a, e.b));
-        if (best > 1e-12 && best < 2e-9) continue;  // within rounding of the threshold
-        // a in R: inside the boundary segments (crossings of a ray to +x, counted by parity)
-        bool in = false;
-        for (const auto& e : segs)
-          if ((e.a.y() > a.y()) != (e.b.y() > a.y()) &&
-              a.x() < e.a.x() + (a.y() - e.a.y()) / (e.b.y() - e.a.y()) * (e.b.x() - e.a.x()))
-            in = !in;
-        const bool want = best > 1e-12 && !in;
-        double a_off = kInf;  // a's distance to the boundary
-        for (const auto& e : segs) a_off = std::min(a_off, segments_apart(a, a, e.a, e.b));
-        if (a_off > 2e-9) {
-          ASSERT_EQ(R->inside(a), in) << "plane " << k << " query " << q << " a " << a_off << " off the boundary";
-          ++inside_checked;
-        }
-        ASSERT_EQ(R->clear(a, b, false), want) << "plane " << k << " query " << q << " best " << best;
-        ++checked;
-        convex_checked += R->convex();
-        blocked += !want;
+  for_each_test_region(41, [](int k) { return (k % 3) * 0.002; }, [&](Scene& s, int k, const PlaneRegion& region) {
+    const PlaneRegion* R = &region;
+    const auto& segs = R->segments();
+    for (int q = 0; q < 300; ++q) {
+      const auto& g = segs[static_cast<std::size_t>(s.u() * segs.size())];
+      const Vec2 at = g.a + s.u() * (g.b - g.a);
+      Vec2 a, b;
+      if (q % 3 == 0) {  // along the segment, off it by 10^-13 to 10^-2.5 m, either side
+        const double off = std::pow(10.0, -13.0 + 10.5 * s.u()) * (q % 2 ? -1.0 : 1.0);
+        const Vec2 along = rotate_planar((g.b - g.a).normalized(), (s.u() - 0.5) * 0.02);
+        a = at + off * g.normal - s.u() * 0.02 * along;
+        b = a + (0.005 + 0.02 * s.u()) * along;
+      } else if (q % 6 == 1) {  // ending 10^-13 to 10^-6 m short of the boundary point, heading into R
+        const Vec2 in = rotate_planar(-g.normal, (s.u() - 0.5) * 2.0);
+        b = at - std::pow(10.0, -13.0 + 7.0 * s.u()) * in;
+        a = b - (0.002 + 0.03 * s.u()) * in;
+      } else if (q % 3 == 1) {  // from near the boundary point, in a random direction
+        const double t = 2 * kPi * s.u();
+        a = at + std::pow(10.0, -9.0 + 6.5 * s.u()) * (q % 2 ? -1.0 : 1.0) * g.normal;
+        b = a + (0.002 + 0.05 * s.u()) * Vec2(std::cos(t), std::sin(t));
+      } else {  // between two boundary points (a chord), shortened or lengthened
+        const auto& h = segs[static_cast<std::size_t>(s.u() * segs.size())];
+        const Vec2 other = h.a + s.u() * (h.b - h.a), mid = 0.5 * (at + other);
+        const double f = 0.2 + 1.2 * s.u();
+        a = mid + f * (at - mid);
+        b = mid + f * (other - mid);
       }
+      double best = kInf;
+      for (const auto& e : segs) best = std::min(best, segments_apart(a, b, e.a, e.b));
+      if (best > 1e-12 && best < 2e-9) continue;  // within rounding of the threshold
+      // a in R: inside the boundary segments (crossings of a ray to +x, counted by parity)
+      bool in = false;
+      for (const auto& e : segs)
+        if ((e.a.y() > a.y()) != (e.b.y() > a.y()) &&
+            a.x() < e.a.x() + (a.y() - e.a.y()) / (e.b.y() - e.a.y()) * (e.b.x() - e.a.x()))
+          in = !in;
+      const bool want = best > 1e-12 && !in;
+      double a_off = kInf;  // a's distance to the boundary
+      for (const auto& e : segs) a_off = std::min(a_off, segments_apart(a, a, e.a, e.b));
+      if (a_off > 2e-9) {
+        ASSERT_EQ(R->inside(a), in) << "plane " << k << " query " << q << " a " << a_off << " off the boundary";
+        ++inside_checked;
+      }
+      ASSERT_EQ(R->clear(a, b, false), want) << "plane " << k << " query " << q << " best " << best;
+      ++checked;
+      convex_checked += R->convex();
+      blocked += !want;
     }
-  }
+  });
   std::printf("  %ld decisions (%ld on convex loops), %ld not clear; %ld inside tests\n", checked, convex_checked,
               blocked, inside_checked);
   EXPECT_GE(inside_checked, 8000);

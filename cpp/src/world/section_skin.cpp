@@ -203,6 +203,36 @@ void PlaneRegion::finish() {
   build_loop();
 }
 
+namespace {
+
+/// The pseudo-angles (from +x) of the edges of the closed polygon v (edge i from v[i] to
+/// v[i + 1]; convex, counter-clockwise) into `index`, from the edge after they wrap round, made
+/// non-decreasing (the roundings of nearly collinear edges) so that a search finds an edge;
+/// returns that first edge. The wrap is the largest drop from one edge to the next: nearly 4
+/// there, rounding elsewhere (the smallest angle is no guide, as two nearly collinear edges may
+/// round in the wrong order).
+int index_edge_angles(const std::vector<Vec2>& v, PlaneRegion::AngleIndex* index) {
+  const int k = static_cast<int>(v.size());
+  std::vector<double> angle(k, 0.0);
+  for (int i = 0; i < k && k > 1; ++i) angle[i] = PlaneRegion::pseudo_angle(Vec2::UnitX(), v[(i + 1) % k] - v[i]);
+  int start = 0;
+  double drop = -kInf;
+  for (int i = 0; i < k; ++i) {
+    const double d = angle[(i + k - 1) % k] - angle[i];
+    if (d > drop) {
+      drop = d;
+      start = i;
+    }
+  }
+  std::vector<double> sorted;
+  for (int i = 0; i < k; ++i)
+    sorted.push_back(i == 0 ? angle[start] : std::max(angle[(start + i) % k], sorted.back()));
+  index->build(std::move(sorted));
+  return start;
+}
+
+}  // namespace
+
 void PlaneRegion::build_loop() {
   loop_.clear();
   loop_tail_.clear();
@@ -243,24 +273,8 @@ void PlaneRegion::build_loop() {
   }
   loop_polar_.build(std::move(polar));
   loop_centre_ = centre;
-  // The edges' directions turn counter-clockwise along the loop, wrapping round once: from the
-  // edge after the wrap (the largest drop), made non-decreasing against rounding.
-  std::vector<double> edge(n);
-  for (int k = 0; k < n; ++k) edge[k] = pseudo_angle(Vec2::UnitX(), loop_tail_[(k + 1) % n] - loop_tail_[k]);
-  double drop = -kInf;
-  for (int k = 0; k < n; ++k) {
-    const double d = edge[(k + n - 1) % n] - edge[k];
-    if (d > drop) {
-      drop = d;
-      loop_edge_first_ = k;
-    }
-  }
-  std::vector<double> sorted;
-  for (int k = 0; k < n; ++k) {
-    const double e = edge[(loop_edge_first_ + k) % n];
-    sorted.push_back(k == 0 ? e : std::max(e, sorted.back()));
-  }
-  loop_edges_.build(std::move(sorted));
+  // The edges' directions turn counter-clockwise along the loop, wrapping round once.
+  loop_edge_first_ = index_edge_angles(loop_tail_, &loop_edges_);
 }
 
 void PlaneRegion::link_segments() {
@@ -1155,29 +1169,11 @@ void PlaneRegion::build_hull() {
       h.pop_back();  // the first point of the other pass
     }
   }
-  // The edges' pseudo-angles from +x, in [-2, 2]. From the edge after their wrap round (the
-  // largest drop from one edge to the next: nearly 4 there, rounding elsewhere; the smallest
-  // angle is no guide, as two nearly collinear edges may round in the wrong order), the angles
-  // made non-decreasing (those roundings) so that a binary search finds an edge.
+  // The edges' angles, indexed from the edge after their wrap round.
   const int k = static_cast<int>(h.size());
-  std::vector<double> angle(k, 0.0);
-  for (int i = 0; i < k && k > 1; ++i) angle[i] = pseudo_angle(Vec2::UnitX(), h[(i + 1) % k] - h[i]);
-  int start = 0;
-  double drop = -kInf;
-  for (int i = 0; i < k; ++i) {
-    const double d = angle[(i + k - 1) % k] - angle[i];
-    if (d > drop) {
-      drop = d;
-      start = i;
-    }
-  }
+  const int start = index_edge_angles(h, &hull_index_);
   hull_.clear();
-  std::vector<double> sorted;
-  for (int i = 0; i < k; ++i) {
-    hull_.push_back(h[(start + i) % k]);
-    sorted.push_back(i == 0 ? angle[start] : std::max(angle[(start + i) % k], sorted.back()));
-  }
-  hull_index_.build(std::move(sorted));
+  for (int i = 0; i < k; ++i) hull_.push_back(h[(start + i) % k]);
 }
 
 void PlaneRegion::AngleIndex::build(std::vector<double> angles) {
