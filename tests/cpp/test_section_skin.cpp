@@ -999,12 +999,92 @@ TEST(SectionSkin, InsideMidwayBetweenParallelSides) {
       // middle or up to 1e-7 m off it, anywhere along them
       const double off = q % 2 ? 0.0 : (s.u() - 0.5) * 2e-7;
       for (const Vec2& x : {at(off, (2.0 * s.u() - 1.0) * 0.045), at((2.0 * s.u() - 1.0) * 0.9 * width, off)}) {
+        // inside() (on these convex regions its loop answers first) and the nearest piece's
+        // side test itself
         EXPECT_EQ(R->inside(x), R->inside_3d(x)) << "plane " << k << " point " << q;
+        EXPECT_EQ(R->inside_from(R->nearest(x, x), x), R->inside_3d(x)) << "plane " << k << " point " << q;
         ++checked;
       }
     }
   }
   EXPECT_GE(checked, 800);
+}
+
+// Regions whose loops turn right by a rounding where an edge runs along -x (vertical planes
+// through a 600-sided cylinder: a top side split by a collinear vertex an ulp lower): the edges'
+// angles then cross the wrap twice, and a search by direction found the wrong extremes (a segment
+// crossing the top side was called clear). And a pivot whose link reaches a loop vertex exactly:
+// the stretch's end segment has no part within the disk, and the span lost its end (the link
+// turned into R). Both found in review; clear() and any_within() are checked against every
+// segment on p = z planes as well.
+TEST(SectionSkin, ConvexShortcutsOnRoundingTurnsAndVerticesOnTheCircle) {
+  const test::Mesh m = test::cylinder(0.035, 0.05, 600);
+  const auto object = std::make_shared<Object>(m.vertices, m.faces);
+  {
+    SectionSkin skin(object, 2e-7);
+    FingerPlane pl;
+    pl.origin = Vec3(0.0046703851087754062, 0.0068471528134885027, -0.0064341936655412839);
+    pl.u = Vec3(-0.31131682680437966, -0.95030617873843792, 0);
+    pl.p = Vec3(0, 0, 1);
+    const PlaneRegion* R = skin.region(pl, 0.0);
+    const Vec2 a(0.0071780162569404504, 0.056494332520531987), b(0.034182365498839004, 0.01409289983481544);
+    ASSERT_FALSE(R->inside(a));
+    ASSERT_TRUE(R->inside(b));
+    EXPECT_FALSE(R->clear(a, b, false));
+    EXPECT_TRUE(R->any_within(a, b, 1e-3));
+  }
+  {
+    SectionSkin skin(object, 2e-7);
+    FingerPlane pl;
+    pl.origin = Vec3::Zero();
+    pl.u = Vec3(1, 0, 0);
+    pl.p = Vec3(0, 0.6, 0.8);
+    const PlaneRegion* R = skin.region(pl, 0.0);
+    const Vec2 pivot(0, 0.070000000000000007), end(6.8698568884673227e-05, 0.056219429022451271);
+    RotateRequest rr = test::rotate_request(pl, pivot, end, 0.0, -kInf, 1.0);
+    rr.pivot_outside = true;
+    const RotateResult r = skin.rotate_until_free(rr);
+    ASSERT_TRUE(r.ok);
+    EXPECT_GT(R->nearest(pivot, r.end).distance, 0.0);
+    EXPECT_TRUE(R->clear(pivot, r.end, true));
+  }
+  // p = z planes (and tilted a hair) through the 600-sided cylinder and a box: clear() and
+  // any_within() against every segment, away from the thresholds' rounding.
+  long checked = 0;
+  for (const test::Mesh& mm : {m, test::box(Vec3(0.03, 0.02, 0.05))}) {
+    Scene s(mm, 51);
+    for (int k = 0; k < 16; ++k) {
+      FingerPlane pl;
+      const double t = 2 * kPi * s.u();
+      pl.origin = s.c + Vec3(s.u() - 0.5, s.u() - 0.5, 0.0) * 0.02;
+      pl.u = Vec3(std::cos(t), std::sin(t), 0.0);
+      pl.p = k % 2 ? Vec3::UnitZ() : Vec3(1e-9 * s.u(), 0.0, 1.0).normalized();
+      pl.p = (pl.p - pl.p.dot(pl.u) * pl.u).normalized();
+      const PlaneRegion* R = s.skin.region(pl, (k % 3) * 0.002);
+      ASSERT_NE(R, nullptr);
+      const auto& segs = R->segments();
+      if (segs.empty()) continue;
+      for (int q = 0; q < 200; ++q) {
+        const auto& g = segs[static_cast<std::size_t>(s.u() * segs.size())];
+        const Vec2 a = g.a + s.u() * (g.b - g.a) + (s.u() - 0.3) * 0.01 * g.normal;
+        const double dir = 2 * kPi * s.u();
+        const Vec2 b = a + (0.002 + 0.05 * s.u()) * Vec2(std::cos(dir), std::sin(dir));
+        double best = kInf;
+        for (const auto& e : segs) best = std::min(best, segments_apart(a, b, e.a, e.b));
+        if (best > 1e-12 && best < 2e-9) continue;
+        bool in = false;
+        for (const auto& e : segs)
+          if ((e.a.y() > a.y()) != (e.b.y() > a.y()) &&
+              a.x() < e.a.x() + (a.y() - e.a.y()) / (e.b.y() - e.a.y()) * (e.b.x() - e.a.x()))
+            in = !in;
+        ASSERT_EQ(R->clear(a, b, false), best > 1e-12 && !in) << "plane " << k << " query " << q;
+        for (double d : {1e-6, 1e-3})
+          if (std::abs(best - d) > 2e-9) ASSERT_EQ(R->any_within(a, b, d), best <= d) << "plane " << k << " query " << q;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GE(checked, 5000);
 }
 
 // PlaneRegion::depth_within (the exact swept-link test): against the depth sampled densely along

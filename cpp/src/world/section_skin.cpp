@@ -31,8 +31,9 @@ constexpr double kSpanJoin = 1e-9;
 /// A link found free in closed form with at least this clearance (metres) at the blocked run's
 /// end needs no check: far above the rounding of the spans.
 constexpr double kCertain = 1e-9;
-/// How far apart (m) a segment and a convex R must be for convex_clear to call the segment
-/// clear without the tree: far above kTouch and the rounding of its heights.
+/// The margin (m) by which a convex region's shortcuts (convex_clear, convex_within,
+/// convex_inside, convex_shallow) must find their answer, else they leave it to the tree: far
+/// above kTouch and the rounding of their heights.
 constexpr double kSureApart = 1e-9;
 
 inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
@@ -208,10 +209,12 @@ namespace {
 /// The pseudo-angles (from +x) of the edges of the closed polygon v (edge i from v[i] to
 /// v[i + 1]; convex, counter-clockwise) into `index`, from the edge after they wrap round, made
 /// non-decreasing (the roundings of nearly collinear edges) so that a search finds an edge;
-/// returns that first edge. The wrap is the largest drop from one edge to the next: nearly 4
-/// there, rounding elsewhere (the smallest angle is no guide, as two nearly collinear edges may
-/// round in the wrong order).
-int index_edge_angles(const std::vector<Vec2>& v, PlaneRegion::AngleIndex* index) {
+/// returns that first edge. The wrap is the largest drop from one edge to the next: 4 less the
+/// turn there, rounding elsewhere (the smallest angle is no guide, as two nearly collinear edges
+/// may round in the wrong order). `fall` (if given): the most an angle lay below one before it
+/// from there, which the index hides; more than rounding where the polygon turns back across
+/// the wrap (a right turn at an edge along -x: two drops of about 4).
+int index_edge_angles(const std::vector<Vec2>& v, PlaneRegion::AngleIndex* index, double* fall = nullptr) {
   const int k = static_cast<int>(v.size());
   std::vector<double> angle(k, 0.0);
   for (int i = 0; i < k && k > 1; ++i) angle[i] = PlaneRegion::pseudo_angle(Vec2::UnitX(), v[(i + 1) % k] - v[i]);
@@ -225,8 +228,12 @@ int index_edge_angles(const std::vector<Vec2>& v, PlaneRegion::AngleIndex* index
     }
   }
   std::vector<double> sorted;
-  for (int i = 0; i < k; ++i)
-    sorted.push_back(i == 0 ? angle[start] : std::max(angle[(start + i) % k], sorted.back()));
+  if (fall != nullptr) *fall = 0.0;
+  for (int i = 0; i < k; ++i) {
+    const double a = angle[(start + i) % k];
+    if (i > 0 && fall != nullptr) *fall = std::max(*fall, sorted.back() - a);
+    sorted.push_back(i == 0 ? a : std::max(a, sorted.back()));
+  }
   index->build(std::move(sorted));
   return start;
 }
@@ -273,8 +280,14 @@ void PlaneRegion::build_loop() {
   }
   loop_polar_.build(std::move(polar));
   loop_centre_ = centre;
-  // The edges' directions turn counter-clockwise along the loop, wrapping round once.
-  loop_edge_first_ = index_edge_angles(loop_tail_, &loop_edges_);
+  // The edges' directions turn counter-clockwise along the loop, wrapping round once: where a
+  // right turn within rounding takes an edge back across the wrap, they do not (not kept).
+  double fall = 0.0;
+  loop_edge_first_ = index_edge_angles(loop_tail_, &loop_edges_, &fall);
+  if (fall > 1e-9) {
+    loop_.clear();
+    loop_tail_.clear();
+  }
 }
 
 void PlaneRegion::link_segments() {
@@ -1461,7 +1474,7 @@ double PlaneRegion::beyond_edge(int edge, const Vec2& x) const {
   return segments_[loop_[edge]].normal.dot(x - loop_tail_[edge]);
 }
 
-int PlaneRegion::convex_clear(const Vec2& a, const Vec2& b) const {
+int PlaneRegion::convex_clear(const Vec2& a, const Vec2& b, bool a_outside) const {
   const Query q(a, b);
   if (!q.line) return -1;
   if (node_farther(nodes_[0], q, kTouch)) return 1;  // apart from the boundary's box
@@ -1485,7 +1498,9 @@ int PlaneRegion::convex_clear(const Vec2& a, const Vec2& b) const {
     if (b_out > kSureApart && beyond_edge(jb, a) > kSureApart) return 1;
   }
   const Chord c = convex_chord(q, bottom, top);
-  if (c.t_in <= q.len && c.t_out >= 0.0) return 0;  // the chord through R overlaps the segment
+  // The chord through R overlaps the segment: it meets R. (Where it holds the whole segment,
+  // the tree answers by a_outside, as told: there it decides.)
+  if (c.t_in <= q.len && c.t_out >= 0.0) return a_outside && c.t_in < 0.0 && c.t_out > q.len ? -1 : 0;
   // The segment lies beyond the edge where the chord leaves R (or before the one where it
   // enters), whose line bounds R: by its end nearer that edge's line.
   const bool beyond = c.t_out < 0.0;
@@ -1528,7 +1543,7 @@ int PlaneRegion::convex_within(const Vec2& a, const Vec2& b, double distance) co
 
 bool PlaneRegion::clear(const Vec2& a, const Vec2& b, bool a_outside) const {
   if (!loop_.empty()) {
-    const int sure = convex_clear(a, b);
+    const int sure = convex_clear(a, b, a_outside);
     if (sure >= 0) return sure == 1;
   }
   // A segment apart from the boundary's box or hull lies outside it: outside R.
@@ -1699,37 +1714,41 @@ bool PlaneRegion::convex_spans(const Vec2& pivot, const Vec2& u, double length, 
   // the segments ending the stretch, prev(hi) and lo (past the stretch, the part from the
   // crossing; at the facing run's end, the segment that ends it, whose part within the disk ends
   // there), and of the two about T[m], which hold the point nearest the pivot (touching it or
-  // not): the most counter-clockwise and the most clockwise of their ends.
-  Vec2 v_lo, v_hi;
-  bool any = false;
+  // not): the most counter-clockwise and the most clockwise of their ends. An end segment with
+  // no part within the disk (its tail on the circle, to rounding) leaves that tail to the
+  // segment on its other side, hi or prev(lo), asked then.
+  Vec2 ends[12];
+  int count = 0;
   *touching = false;
-  const int edges[4] = {prev(m), m, prev(hi), lo};
-  for (int e = 0; e < 4; ++e) {
+  int edges[6] = {prev(m), m, prev(hi), lo, -1, -1};
+  for (int e = 0; e < 6; ++e) {
     const int i = edges[e];
-    if (e >= 2 && (i == prev(m) || i == m)) continue;  // asked already
+    if (i < 0) continue;
+    bool asked = false;
+    for (int f = 0; f < e; ++f) asked = asked || edges[f] == i;
+    if (asked) continue;
     const Segment& s = segments_[loop_[i]];
-    Vec2 q[2];
-    const DiskPart part = disk_part(s.a, s.b, pivot, l2, &q[0], &q[1]);
+    const DiskPart part = disk_part(s.a, s.b, pivot, l2, &ends[count], &ends[count + 1]);
     if (part == DiskPart::kTouching) {
       *touching = true;
       return true;
     }
-    if (part == DiskPart::kNone) continue;
-    for (const Vec2& x : q) {
-      if (!any) {
-        v_lo = v_hi = x;
-        any = true;
-      } else if (cross2(v_hi, x) > 0.0) {
-        v_hi = x;
-      } else if (cross2(v_lo, x) < 0.0) {
-        v_lo = x;
-      }
-    }
+    if (part == DiskPart::kPiece) count += 2;
+    else if (e == 2) edges[4] = hi;
+    else if (e == 3) edges[5] = prev(lo);
   }
-  if (!any) return true;
+  if (count == 0) return true;
+  // (Two ends on one ray from the pivot, to rounding, may be told apart otherwise than the
+  // tree's pseudo-angles do: the span's end is then the other point of that ray, an ulp of angle
+  // apart. Comparing every end's pseudo-angle cost 2% of a convex plan's Phase 2.)
+  Vec2 v_lo = ends[0], v_hi = ends[0];
+  for (int k = 1; k < count; ++k) {
+    if (cross2(v_hi, ends[k]) > 0.0) v_hi = ends[k];
+    else if (cross2(v_lo, ends[k]) < 0.0) v_lo = ends[k];
+  }
+  const double p_lo = pseudo_angle(u, v_lo), p_hi = pseudo_angle(u, v_hi);
   // As the tree's visit gives them: one span, or two where it crosses +-2; none wholly outside
   // the wedge.
-  const double p_lo = pseudo_angle(u, v_lo), p_hi = pseudo_angle(u, v_hi);
   const double pm = pseudo_angle_of(within);
   if (p_lo <= p_hi) {
     if (p_hi >= -pm && p_lo <= pm) out->push_back({p_lo, p_hi, v_lo, v_hi});

@@ -176,7 +176,8 @@ class PlaneRegion {
   double radius() const { return radius_; }
   const std::vector<Segment>& segments() const { return segments_; }
   const std::vector<Piece>& pieces() const { return pieces_; }
-  /// True where the boundary is one convex loop (spans() then walks it instead of the tree).
+  /// True where the boundary is one convex loop: spans(), clear(), any_within(), inside() and
+  /// depth_within() then ask the loop first, and the tree where it does not settle them.
   bool convex() const { return !loop_.empty(); }
   /// Segments dropped at build time as lying inside R.
   long dropped() const { return dropped_; }
@@ -248,11 +249,12 @@ class PlaneRegion {
   bool convex_spans(const Vec2& pivot, const Vec2& u, double length, double within, bool* touching,
                     std::vector<Span>* out) const;
   /// clear() where R is one convex loop: 1 (clear) or 0 (not) where the loop settles it surely,
-  /// -1 where the segment passes within kSureApart of R without meeting it (the tree decides).
-  /// The segment meets R (not clear) where its line's chord through R overlaps it; it misses R
-  /// where its line passes R or a supporting line of R (that of the edge where the chord leaves
-  /// or enters) separates them, by more than kSureApart.
-  int convex_clear(const Vec2& a, const Vec2& b) const;
+  /// -1 where the segment passes within kSureApart of R without meeting it, or lies wholly in R
+  /// with a_outside told (the tree decides both). The segment meets R (not clear) where b lies
+  /// inside the line of its wedge's edge, or the line's chord through R overlaps it; it misses
+  /// R where its line passes R, or a supporting line of R (of b's wedge edge, or of the edge
+  /// where the chord leaves or enters) separates them, by more than kSureApart.
+  int convex_clear(const Vec2& a, const Vec2& b, bool a_outside) const;
   /// any_within() where R is one convex loop: 1 where a boundary point (the lowest or highest
   /// tail across the segment's line, or an end of the line's chord through R) lies within
   /// `distance` less kSureApart of the segment, 0 where R's box, R itself (across the line) or
