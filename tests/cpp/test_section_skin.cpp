@@ -309,6 +309,24 @@ double segments_apart(const Vec2& p, const Vec2& q, const Vec2& s, const Vec2& t
   return std::min({to_segment(p, s, t), to_segment(q, s, t), to_segment(s, p, q), to_segment(t, p, q)});
 }
 
+/// The least segments_apart from [a, b] to R's boundary segments.
+double boundary_apart(const std::vector<PlaneRegion::Segment>& segs, const Vec2& a, const Vec2& b) {
+  double best = kInf;
+  for (const auto& e : segs) best = std::min(best, segments_apart(a, b, e.a, e.b));
+  return best;
+}
+
+/// x inside the boundary segments: crossings of a ray to +x, counted by parity (R as its
+/// segments bound it).
+bool inside_by_parity(const std::vector<PlaneRegion::Segment>& segs, const Vec2& x) {
+  bool in = false;
+  for (const auto& e : segs)
+    if ((e.a.y() > x.y()) != (e.b.y() > x.y()) &&
+        x.x() < e.a.x() + (x.y() - e.a.y()) / (e.b.y() - e.a.y()) * (e.b.x() - e.a.x()))
+      in = !in;
+  return in;
+}
+
 }  // namespace
 
 // any_within (the clearance tests' question) against every segment of R's boundary, on links
@@ -341,8 +359,7 @@ TEST(SectionSkin, AnyWithinMatchesEverySegment) {
           a = Vec2(s.u() - 0.5, s.u() - 0.5) * 1.4 * s.size;
           b = a + s.u() * 0.4 * s.size * Vec2(std::cos(s.u() * 2 * kPi), std::sin(s.u() * 2 * kPi));
         }
-        double best = kInf;
-        for (const auto& g : segs) best = std::min(best, segments_apart(a, b, g.a, g.b));
+        const double best = boundary_apart(segs, a, b);
         // and half a nanometre either side of the distance itself, where a shortcut with a
         // margin must leave the answer to the exact test
         for (double d : {1e-12, 1e-9, 1e-6, 1e-4, 3e-3, best - 5e-10, best + 5e-10}) {
@@ -411,8 +428,7 @@ TEST(SectionSkin, HullSettlesOnlyWhatEverySegmentSays) {
         for (double f : {0.02, 0.3, 0.5, 0.7, 0.98, -1e-9, -1e-6, 1.0 + 1e-9, 1.0 + 1e-6}) {
           const double off = f < 0.0 ? lo + f : (f > 1.0 ? hi + (f - 1.0) : lo + f * (hi - lo));
           const Vec2 a = off * n + (s.u() - 0.5) * 0.1 * u, b = a + 0.05 * u;
-          double best = kInf;
-          for (const auto& g : segs) best = std::min(best, segments_apart(a, b, g.a, g.b));
+          const double best = boundary_apart(segs, a, b);
           if (std::abs(best - 1e-6) > 1e-12) {
             ASSERT_EQ(R->any_within(a, b, 1e-6), best <= 1e-6) << "plane " << k << " offset " << f << " best " << best;
             ++checked;
@@ -934,18 +950,11 @@ TEST(SectionSkin, ClearMatchesEverySegment) {
         a = mid + f * (at - mid);
         b = mid + f * (other - mid);
       }
-      double best = kInf;
-      for (const auto& e : segs) best = std::min(best, segments_apart(a, b, e.a, e.b));
+      const double best = boundary_apart(segs, a, b);
       if (best > 1e-12 && best < 2e-9) continue;  // within rounding of the threshold
-      // a in R: inside the boundary segments (crossings of a ray to +x, counted by parity)
-      bool in = false;
-      for (const auto& e : segs)
-        if ((e.a.y() > a.y()) != (e.b.y() > a.y()) &&
-            a.x() < e.a.x() + (a.y() - e.a.y()) / (e.b.y() - e.a.y()) * (e.b.x() - e.a.x()))
-          in = !in;
+      const bool in = inside_by_parity(segs, a);  // a in R
       const bool want = best > 1e-12 && !in;
-      double a_off = kInf;  // a's distance to the boundary
-      for (const auto& e : segs) a_off = std::min(a_off, segments_apart(a, a, e.a, e.b));
+      const double a_off = boundary_apart(segs, a, a);  // a's distance to the boundary
       if (a_off > 2e-9) {
         ASSERT_EQ(R->inside(a), in) << "plane " << k << " query " << q << " a " << a_off << " off the boundary";
         ++inside_checked;
@@ -1069,15 +1078,9 @@ TEST(SectionSkin, ConvexShortcutsOnRoundingTurnsAndVerticesOnTheCircle) {
         const Vec2 a = g.a + s.u() * (g.b - g.a) + (s.u() - 0.3) * 0.01 * g.normal;
         const double dir = 2 * kPi * s.u();
         const Vec2 b = a + (0.002 + 0.05 * s.u()) * Vec2(std::cos(dir), std::sin(dir));
-        double best = kInf;
-        for (const auto& e : segs) best = std::min(best, segments_apart(a, b, e.a, e.b));
+        const double best = boundary_apart(segs, a, b);
         if (best > 1e-12 && best < 2e-9) continue;
-        bool in = false;
-        for (const auto& e : segs)
-          if ((e.a.y() > a.y()) != (e.b.y() > a.y()) &&
-              a.x() < e.a.x() + (a.y() - e.a.y()) / (e.b.y() - e.a.y()) * (e.b.x() - e.a.x()))
-            in = !in;
-        ASSERT_EQ(R->clear(a, b, false), best > 1e-12 && !in) << "plane " << k << " query " << q;
+        ASSERT_EQ(R->clear(a, b, false), best > 1e-12 && !inside_by_parity(segs, a)) << "plane " << k << " query " << q;
         for (double d : {1e-6, 1e-3})
           if (std::abs(best - d) > 2e-9) ASSERT_EQ(R->any_within(a, b, d), best <= d) << "plane " << k << " query " << q;
         ++checked;

@@ -193,13 +193,21 @@ Vec2 Planner::root2d(int m, double eta) const {
   return Vec2(hand_.root2d(m).x(), eta);  // the root on the palm's front face, moved eta along p
 }
 
+namespace {
+
+/// The same chain to the bit (the memories' test: chains that differ only in a zero's sign can
+/// give different angles and points).
+bool same_chain_bits(const Chain& x, const Chain& y) {
+  return x.size() == y.size() && (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(Vec2)) == 0);
+}
+
+}  // namespace
+
 const double* Planner::chain_angles(int m, const Chain& chain) const {
   AngleMemo& memo = angle_memo_[static_cast<std::size_t>(m)];
-  const std::size_t bytes = chain.size() * sizeof(Vec2);
   for (int k : {memo.last, 1 - memo.last}) {
     const Chain& c = memo.chain[k];
-    // Bits, not values: chains that differ only in a zero's sign have different angles.
-    if (c.size() == chain.size() && (bytes == 0 || std::memcmp(c.data(), chain.data(), bytes) == 0)) {
+    if (same_chain_bits(c, chain)) {
       memo.last = k;
       return memo.angles[k].data();
     }
@@ -217,10 +225,7 @@ const double* Planner::chain_angles(int m, const Chain& chain) const {
 
 const Planner::WorldChain& Planner::chain_in_world(int k, const Chain& chain) const {
   WorldChain& w = world_memo_[static_cast<std::size_t>(k)];
-  // Bits, not values, as chain_angles.
-  if (w.chain.size() == chain.size() && !chain.empty() &&
-      std::memcmp(w.chain.data(), chain.data(), chain.size() * sizeof(Vec2)) == 0)
-    return w;
+  if (!chain.empty() && same_chain_bits(w.chain, chain)) return w;
   w.chain.clear();  // matches no chain until the joints are in
   w.joints.resize(chain.size());
   w.box = Aabb();

@@ -1681,25 +1681,16 @@ bool PlaneRegion::convex_spans(const Vec2& pivot, const Vec2& u, double length, 
   // the centre increase along the loop) faces the pivot, unless the pivot lies in R.
   const int j = loop_wedge(pivot);
   if (j < 0 || !faces(j)) return false;
-  // The nearest tail of the facing run: walked to from j's ends, the distance falling.
-  int m = j;
-  double dm = d2(j);
-  if (d2(next(j)) < dm) {
-    m = next(j);
-    dm = d2(m);
-    for (int k = 0; k < n && faces(m); ++k) {
-      const double dk = d2(next(m));
-      if (!(dk < dm)) break;
-      m = next(m);
-      dm = dk;
-    }
-  } else {
-    for (int k = 0; k < n && faces(prev(m)); ++k) {
-      const double dk = d2(prev(m));
-      if (!(dk < dm)) break;
-      m = prev(m);
-      dm = dk;
-    }
+  // The nearest tail of the facing run: walked to from the nearer end of j, the distance falling.
+  const bool forward = d2(next(j)) < d2(j);
+  int m = forward ? next(j) : j;
+  double dm = d2(m);
+  for (int k = 0; k < n && faces(forward ? m : prev(m)); ++k) {
+    const int c = forward ? next(m) : prev(m);
+    const double dc = d2(c);
+    if (!(dc < dm)) break;
+    m = c;
+    dm = dc;
   }
   // The run's points within the disk are one stretch about the nearest point (on the segments
   // on either side of T[m]). Its ends: walked from m while the next tail lies within the disk
