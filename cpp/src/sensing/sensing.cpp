@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "hugger/check.hpp"
+#include "hugger/geometry/next.hpp"
 
 namespace hugger {
 
@@ -166,7 +167,7 @@ double Sensing::contact_gap(const FingerPlane& plane, const Vec2& a, const Vec2&
 double Sensing::contact_gap_bound(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
                                   double delta, double need, double far) const {
   // Beyond the cap the answer is only known to be above the cap (so above need).
-  const double cap = std::max(std::nextafter(need, kInf), far);
+  const double cap = std::max(next_up(need), far);
   return std::min(contact_gap(plane, a, b, radius, delta, cap), cap);
 }
 

@@ -13,6 +13,7 @@
 #include "hugger/check.hpp"
 #include "hugger/geometry/frame.hpp"
 #include "hugger/geometry/harmonic.hpp"
+#include "hugger/geometry/next.hpp"
 #include "hugger/geometry/order.hpp"
 
 namespace hugger {
@@ -2109,7 +2110,7 @@ Touch SectionSkin::link(const FingerPlane& plane, const Vec2& a, const Vec2& b, 
     // Nothing within the cap: outside (any value above the cap will do) or deep inside.
     inside = R->inside(a);
     if (!inside) {
-      t.gap = std::nextafter(c, kInf);
+      t.gap = next_up(c);
       t.on_hand = plane.to_world(a);
       t.on_object = t.on_hand;
       return t;
@@ -2134,7 +2135,7 @@ double SectionSkin::gap_in_space(const FingerPlane& plane, const Vec2& a, const 
                                  double cap) const {
   if (!region(plane, radius)) return kInf;  // link() measured in space already
   const double c = std::max(cap, 0.0);
-  if (!gap_in_space_below(plane, a, b, radius, c)) return std::nextafter(c, kInf);
+  if (!gap_in_space_below(plane, a, b, radius, c)) return next_up(c);
   return mesh_.capsule(plane.to_world(a), plane.to_world(b), radius, cap).gap;
 }
 
@@ -2142,7 +2143,7 @@ bool SectionSkin::gap_in_space_below(const FingerPlane& plane, const Vec2& a, co
                                      double level) const {
   // The axis is outside R, so outside O: its gap in space exceeds level exactly when no triangle
   // comes within radius + level of it, a test that stops at the first one.
-  return object_->bvh().any_within(plane.to_world(a), plane.to_world(b), std::nextafter(radius + level, kInf));
+  return object_->bvh().any_within(plane.to_world(a), plane.to_world(b), next_up(radius + level));
 }
 
 double SectionSkin::contact_gap_bound(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
@@ -2152,7 +2153,7 @@ double SectionSkin::contact_gap_bound(const FingerPlane& plane, const Vec2& a, c
   // Beyond need, the exact gap in space beside a large flat face is a search of many triangles;
   // two threshold tests that stop at the first piece that close say whether it is at least far:
   // R's boundary (the in-plane gap), then the triangles (the axis then lies outside R).
-  const double cap = std::nextafter(need, kInf);
+  const double cap = next_up(need);
   const double g = contact_gap(plane, a, b, radius, delta, cap);
   if (g <= need) return g;
   const bool beyond =
@@ -2168,7 +2169,7 @@ bool SectionSkin::link_gap_below(const FingerPlane& plane, const Vec2& a, const 
   // side of the axis (of its end a) decides: outside where the caller knows a to be.
   const PlaneRegion* R = below > 0.0 ? region(plane, radius) : nullptr;
   if (!R) return link(plane, a, b, radius, below).gap < below;
-  return R->any_within(a, b, std::nextafter(below, 0.0)) || (!a_outside && R->inside(a));
+  return R->any_within(a, b, next_toward_zero(below)) || (!a_outside && R->inside(a));
 }
 
 namespace {

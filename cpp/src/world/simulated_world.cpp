@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "hugger/check.hpp"
+#include "hugger/geometry/next.hpp"
 
 namespace hugger {
 
@@ -52,7 +53,7 @@ double SimulatedWorld::palm(const Pose& palm, double radius, double thickness, d
   if (sn.signed_distance <= 0.0) return sn.signed_distance - bound;  // centre inside O
   const double lower = sn.signed_distance - bound;
   // Nothing within cap: the gap exceeds cap, and the smallest double above cap is a lower bound.
-  const double above_cap = std::nextafter(cap, kInf);
+  const double above_cap = next_up(cap);
   if (lower > cap) return std::isfinite(lower) ? lower : above_cap;
   // The palm's world box (a disk of `radius` about n, thickened by `thickness` along n) and its
   // slab along n: together a lower bound of the distance to any box or triangle.
