@@ -490,6 +490,82 @@ TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
   }
 }
 
+// rotate_until_touch asks each gap capped just beyond what the rest of the arc can use. A skin
+// that forwards every query uncapped (link() with no cap: the search as it was) gives the same
+// rotation, bit for bit, on random links swinging near the sphere and curvy, for the section skin
+// and the mesh world; the gap it reports is exact up to 2 level + touch_gap.
+TEST(SectionSkin, RotateUntilTouchIsTheUncappedSearchToTheBit) {
+  // (gap_in_space: the mesh world's exact 3D gap where the skin measures in the plane; only
+  // whether it is at most touch_gap, exact either way, matters to the search.)
+  struct Uncapped final : Sensing {
+    Uncapped(const Sensing& s, const SimulatedWorld* space) : inner(s), in_space(space) {}
+    Touch capsule(const Vec3& a, const Vec3& b, double radius, double) const override {
+      return inner.capsule(a, b, radius, kInf);
+    }
+    double palm(const Pose& palm, double radius, double thickness, double) const override {
+      return inner.palm(palm, radius, thickness, kInf);
+    }
+    Touch link(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius, double) const override {
+      return inner.link(plane, a, b, radius, kInf);
+    }
+    double gap_in_space(const FingerPlane& plane, const Vec2& a, const Vec2& b, double radius,
+                        double cap) const override {
+      return in_space ? in_space->capsule(plane.to_world(a), plane.to_world(b), radius, cap).gap : kInf;
+    }
+    const Sensing& inner;
+    const SimulatedWorld* in_space;
+  };
+  auto bits = [](double x) {
+    std::uint64_t b;
+    std::memcpy(&b, &x, sizeof b);
+    return b;
+  };
+  long asked = 0, touched = 0, capped = 0;
+  for (const test::Mesh& m : {test::icosphere(3, Vec3::Constant(0.04)), test::curvy(4)}) {
+    Scene s(m, 11);
+    for (int k = 0; k < 8; ++k) {
+      const FingerPlane pl = test::random_plane(s.rng, s.c);
+      const double r = (k % 3) * 0.03 * s.size;
+      for (const Sensing* sense : {static_cast<const Sensing*>(&s.skin), static_cast<const Sensing*>(&s.mesh)}) {
+        const Uncapped reference(*sense, sense == &s.skin ? &s.mesh : nullptr);
+        for (int q = 0; q < 40; ++q) {
+          // About the object's centre, the link across the radius (either way round), so that
+          // flexion swings it toward the surface or away from it.
+          const double around = s.u() * 2 * kPi;
+          const Vec2 radial(std::cos(around), std::sin(around));
+          const Vec2 pivot = pl.to_plane(s.c) + ((0.52 + 0.1 * s.u()) * s.size + r) * radial;
+          const double len = (0.2 + 0.2 * s.u()) * s.size;
+          const double ang = around + (s.u() < 0.5 ? 0.5 : -0.5) * kPi + (s.u() - 0.5);
+          RotateRequest req;
+          req.plane = pl;
+          req.pivot = pivot;
+          req.end = pivot + len * Vec2(std::cos(ang), std::sin(ang));
+          req.radius = r;
+          req.max_angle = 0.05 + 0.95 * s.u();
+          req.touch_gap = 1e-3 * s.size;
+          req.level = 0.5 * req.touch_gap;
+          const RotateResult got = sense->rotate_until_touch(req), want = reference.rotate_until_touch(req);
+          ++asked;
+          ASSERT_EQ(got.ok, want.ok) << "plane " << k << " query " << q;
+          ASSERT_EQ(bits(got.angle), bits(want.angle)) << "plane " << k << " query " << q;
+          ASSERT_EQ(bits(got.end.x()), bits(want.end.x())) << "plane " << k << " query " << q;
+          ASSERT_EQ(bits(got.end.y()), bits(want.end.y())) << "plane " << k << " query " << q;
+          touched += got.ok;
+          if (want.gap <= 2.0 * req.level + req.touch_gap) {
+            EXPECT_EQ(bits(got.gap), bits(want.gap)) << "plane " << k << " query " << q;
+          } else {
+            EXPECT_GT(got.gap, 2.0 * req.level + req.touch_gap) << "plane " << k << " query " << q;
+            capped += bits(got.gap) != bits(want.gap);
+          }
+        }
+      }
+    }
+  }
+  std::printf("  %ld rotations, %ld touched, %ld gaps capped\n", asked, touched, capped);
+  EXPECT_GE(touched, 50);  // some links reach the surface ...
+  EXPECT_GE(capped, 50);   // ... and some are asked far from it, where the cap answers
+}
+
 // Contact is decided in space: on random links in random planes (not through the centre, so that
 // O's surface is oblique to them) at sensing distances from 0.1 mm to 2% of the object's size,
 // the section skin's contact_gap is at most delta exactly when the mesh world's 3D gap is (up to

@@ -179,7 +179,10 @@ RotateResult Sensing::rotate_until_touch(const RotateRequest& req) const {
   double angle = 0.0;
   for (int it = 0; it < 200; ++it) {
     const Vec2 end = req.pivot + rotate_planar(arm, angle);
-    const double gap = link(req.plane, req.pivot, end, req.radius, kInf).gap;
+    // A gap beyond the rest of the arc (plus the level) only lets the link turn to its end: it
+    // is asked with a cap twice that, past which its size changes nothing below.
+    const double cap = 2.0 * ((req.max_angle - angle) * len + req.level) + req.touch_gap;
+    const double gap = link(req.plane, req.pivot, end, req.radius, cap).gap;
     if (gap < 0.0) break;  // cannot happen when starting free; keep the last free position
     out.end = end;
     out.angle = angle;

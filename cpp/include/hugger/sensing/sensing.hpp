@@ -77,7 +77,9 @@ struct RotateResult {
   double angle = 0.0;      ///< signed rotation, counter-clockwise positive (= flexion)
   double gap = kInf;       ///< gap of the link at its new position; rotate_until_free: the generic
                            ///< search's is exact up to 4 tolerance (beyond that any larger value);
-                           ///< the section skin does not measure it and reports 0, a lower bound
+                           ///< the section skin does not measure it and reports 0, a lower bound;
+                           ///< rotate_until_touch: exact up to 2 (level + the length the end may
+                           ///< still sweep) + touch_gap (beyond that any larger value)
 };
 
 class Sensing {
