@@ -261,7 +261,7 @@ class PlannerStats:
     @property
     def sigma_retries(self) -> int:
         """
-        Iterations whose palm step had to be taken back
+        Palm steps taken back (each shorter step retried counts)
         """
     @property
     def finger_collisions(self) -> int:

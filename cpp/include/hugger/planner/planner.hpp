@@ -75,7 +75,7 @@ struct PlannerStats {
   long phase2_iterations = 0;
   long first_contact_iteration = -1;  ///< Phase 2 iteration of the first touch (-1: none yet)
   long palm_contact_iteration = -1;   ///< Phase 2 iteration at which the palm touched
-  long sigma_retries = 0;             ///< iterations whose palm step had to be taken back
+  long sigma_retries = 0;             ///< palm steps taken back (each shorter step retried counts)
   long finger_collisions = 0;         ///< fingers stopped by another finger or themselves
   long clinging_failures = 0;         ///< fingers stopped because no free link position was found
   long motion_rejections = 0;         ///< finger moves refused: a joint would move > 4 s, or the swept motion collides
