@@ -493,7 +493,8 @@ TEST(SectionSkin, LinkGapBelowAgreesWithLink) {
 // rotate_until_touch asks each gap capped just beyond what the rest of the arc can use. A skin
 // that forwards every query uncapped (link() with no cap: the search as it was) gives the same
 // rotation, bit for bit, on random links swinging near the sphere and curvy, for the section skin
-// and the mesh world; the gap it reports is exact up to 2 level + touch_gap.
+// and the mesh world, with a level of 0 too and on requests outside the planner's; the gap it
+// reports is exact up to 2 level + touch_gap.
 TEST(SectionSkin, RotateUntilTouchIsTheUncappedSearchToTheBit) {
   // (gap_in_space: the mesh world's exact 3D gap where the skin measures in the plane; only
   // whether it is at most touch_gap, exact either way, matters to the search.)
@@ -543,7 +544,14 @@ TEST(SectionSkin, RotateUntilTouchIsTheUncappedSearchToTheBit) {
           req.radius = r;
           req.max_angle = 0.05 + 0.95 * s.u();
           req.touch_gap = 1e-3 * s.size;
-          req.level = 0.5 * req.touch_gap;
+          req.level = q % 4 == 0 ? 0.0 : 0.5 * req.touch_gap;
+          // Now and then a request outside the planner's: no arc left, a negative or NaN one, a
+          // negative level (each asked with no cap).
+          if (q % 10 == 9) {
+            const double odd[4] = {0.0, -1e-3, std::numeric_limits<double>::quiet_NaN(), req.max_angle};
+            req.max_angle = odd[(q / 10) % 4];
+            if ((q / 10) % 4 == 3) req.level = -1e-3;
+          }
           const RotateResult got = sense->rotate_until_touch(req), want = reference.rotate_until_touch(req);
           ++asked;
           ASSERT_EQ(got.ok, want.ok) << "plane " << k << " query " << q;

@@ -180,8 +180,12 @@ RotateResult Sensing::rotate_until_touch(const RotateRequest& req) const {
   for (int it = 0; it < 200; ++it) {
     const Vec2 end = req.pivot + rotate_planar(arm, angle);
     // A gap beyond the rest of the arc (plus the level) only lets the link turn to its end: it
-    // is asked with a cap twice that, past which its size changes nothing below.
-    const double cap = 2.0 * ((req.max_angle - angle) * len + req.level) + req.touch_gap;
+    // is asked with a cap twice that, past which its size changes nothing below. (A request
+    // outside the planner's, with a negative or NaN arc, level or touch_gap, is asked with no cap.)
+    const double rest = req.max_angle - angle;
+    const double cap = rest >= 0.0 && req.level >= 0.0 && req.touch_gap >= 0.0
+                           ? 2.0 * (rest * len + req.level) + req.touch_gap
+                           : kInf;
     const double gap = link(req.plane, req.pivot, end, req.radius, cap).gap;
     if (gap < 0.0) break;  // cannot happen when starting free; keep the last free position
     out.end = end;
