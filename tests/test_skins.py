@@ -355,6 +355,43 @@ def test_sensor_model_is_a_lower_bound_of_the_true_gap():
     assert model.palm(pose, 0.03, 0.01, np.inf) == 0.005
 
 
+def test_sensor_model_capped_reading_is_the_uncapped_one():
+    # A skin's capped answer is exact up to the cap (beyond it, any value above). Under a skin that
+    # answers just above the cap, a reading at most the cap must be the reading of the true gap
+    # (the same noise draw, uncapped), and a true reading above the cap must read above it.
+    class JustAbove(skins.SphereSkin):
+        def capsule(self, a, b, radius, cap=math.inf):
+            t = super().capsule(a, b, radius, math.inf)
+            return t if t.gap <= cap else skins.Touch(float(np.nextafter(cap, np.inf)), t.on_hand, t.on_object, t.normal)
+
+        def palm(self, pose, radius, thickness, cap=math.inf):
+            g = super().palm(pose, radius, thickness, math.inf)
+            return g if g <= cap else float(np.nextafter(cap, np.inf))
+
+    rng = np.random.default_rng(8)
+    truth = JustAbove(0.04)
+    checked = below = 0
+    for i in range(400):
+        a = rng.uniform(-0.06, 0.06, 3)
+        b = a + rng.normal(scale=0.01, size=3)
+        r, cap = float(rng.uniform(0, 0.005)), float(rng.choice([0.0, 2e-4, 1e-3, 3e-3]))
+        for kw in (dict(gap_noise=2e-4), dict(gap_noise=2e-4, taxel_spacing=0.004), dict(gap_noise=1e-4, range=0.002)):
+            capped = skins.SensorModel(truth, seed=i, **kw).capsule(a, b, r, cap).gap
+            uncapped = skins.SensorModel(truth, seed=i, **kw).capsule(a, b, r, math.inf).gap
+            checked += 1
+            if capped <= cap:
+                below += 1
+                assert capped == uncapped, (i, kw, cap)
+            else:
+                assert uncapped > cap, (i, kw, cap)
+        pose = start()
+        pose[:3, 3] = rng.uniform(-0.1, 0.1, 3)
+        capped = skins.SensorModel(truth, seed=i, gap_noise=2e-4).palm(pose, 0.03, 0.01, cap)
+        uncapped = skins.SensorModel(truth, seed=i, gap_noise=2e-4).palm(pose, 0.03, 0.01, math.inf)
+        assert capped == uncapped if capped <= cap else uncapped > cap
+    assert checked == 1200 and below >= 100  # the cap decided a fair share
+
+
 def test_sensor_model_is_deterministic(hand):
     def run():
         sk = skins.SensorModel(hugger.objects.sphere(0.04), gap_noise=5e-5, normal_noise=0.05, taxel_spacing=0.005, seed=7)

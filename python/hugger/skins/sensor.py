@@ -100,7 +100,9 @@ class SensorModel(Sensing):
 
     def capsule(self, a: np.ndarray, b: np.ndarray, radius: float, cap: float = math.inf) -> Touch:  # type: ignore[override]
         self.queries += 1
-        ask = min(cap, self.range) + 3.0 * self.gap_noise  # what the reading needs to be exact
+        # A reading lies up to 6 sd below the true gap: a true gap beyond this reads above the cap,
+        # so a reading at most the cap is the reading of the true gap (exact up to the cap).
+        ask = min(cap, self.range) + 6.0 * self.gap_noise
         t: Touch | None
         if self.taxel_spacing is None:
             t = self.skin.capsule(a, b, radius, ask)
@@ -123,5 +125,5 @@ class SensorModel(Sensing):
 
     def palm(self, pose: np.ndarray, radius: float, thickness: float, cap: float = math.inf) -> float:  # type: ignore[override]
         self.queries += 1
-        ask = min(cap, self.range) + 3.0 * self.gap_noise
+        ask = min(cap, self.range) + 6.0 * self.gap_noise  # as capsule()
         return self._reading(float(self.skin.palm(pose, radius, thickness, ask)), cap)
