@@ -9,7 +9,8 @@
 
 namespace hugger {
 
-/// std::nextafter(x, +inf), bit for bit: the least double above x (NaN and +inf unchanged).
+/// std::nextafter(x, +inf), bit for bit: the least double above x (NaN and +inf unchanged; a
+/// signalling NaN, which no arithmetic makes, comes back unquieted).
 inline double next_up(double x) {
   if (x != x || x == std::numeric_limits<double>::infinity()) return x;
   if (x == 0.0) return std::numeric_limits<double>::denorm_min();  // from -0 as from +0
