@@ -2,7 +2,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 #include <random>
 
 #include "hugger/geometry/distance.hpp"
@@ -28,11 +27,6 @@ double brute_point_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
 }  // namespace
 
 TEST(Geometry, NextUpAndTowardZeroAreNextafterToTheBit) {
-  auto bits = [](double x) {
-    std::uint64_t b;
-    std::memcpy(&b, &x, sizeof b);
-    return b;
-  };
   const double big = std::numeric_limits<double>::max(), tiny = std::numeric_limits<double>::denorm_min();
   std::vector<double> xs = {0.0, -0.0, tiny, -tiny, 1.0, -1.0, big, -big, kInf, -kInf,
                             std::numeric_limits<double>::min(), -std::numeric_limits<double>::min(),
@@ -42,8 +36,8 @@ TEST(Geometry, NextUpAndTowardZeroAreNextafterToTheBit) {
   std::uniform_int_distribution<int> exps(-1074, 1023);
   for (int i = 0; i < 20000; ++i) xs.push_back(std::ldexp(mant(rng), exps(rng)));
   for (double x : xs) {
-    EXPECT_EQ(bits(next_up(x)), bits(std::nextafter(x, kInf))) << x;
-    EXPECT_EQ(bits(next_toward_zero(x)), bits(std::nextafter(x, 0.0))) << x;
+    EXPECT_EQ(bits_of(next_up(x)), bits_of(std::nextafter(x, kInf))) << x;
+    EXPECT_EQ(bits_of(next_toward_zero(x)), bits_of(std::nextafter(x, 0.0))) << x;
   }
 }
 

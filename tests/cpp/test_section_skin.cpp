@@ -4,9 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <limits>
 #include <random>
@@ -516,11 +514,6 @@ TEST(SectionSkin, RotateUntilTouchIsTheUncappedSearchToTheBit) {
     const Sensing& inner;
     const SimulatedWorld* in_space;
   };
-  auto bits = [](double x) {
-    std::uint64_t b;
-    std::memcpy(&b, &x, sizeof b);
-    return b;
-  };
   long asked = 0, touched = 0, capped = 0;
   for (const test::Mesh& m : {test::icosphere(3, Vec3::Constant(0.04)), test::curvy(4)}) {
     Scene s(m, 11);
@@ -555,15 +548,15 @@ TEST(SectionSkin, RotateUntilTouchIsTheUncappedSearchToTheBit) {
           const RotateResult got = sense->rotate_until_touch(req), want = reference.rotate_until_touch(req);
           ++asked;
           ASSERT_EQ(got.ok, want.ok) << "plane " << k << " query " << q;
-          ASSERT_EQ(bits(got.angle), bits(want.angle)) << "plane " << k << " query " << q;
-          ASSERT_EQ(bits(got.end.x()), bits(want.end.x())) << "plane " << k << " query " << q;
-          ASSERT_EQ(bits(got.end.y()), bits(want.end.y())) << "plane " << k << " query " << q;
+          ASSERT_EQ(bits_of(got.angle), bits_of(want.angle)) << "plane " << k << " query " << q;
+          ASSERT_EQ(bits_of(got.end.x()), bits_of(want.end.x())) << "plane " << k << " query " << q;
+          ASSERT_EQ(bits_of(got.end.y()), bits_of(want.end.y())) << "plane " << k << " query " << q;
           touched += got.ok;
           if (want.gap <= 2.0 * req.level + req.touch_gap) {
-            EXPECT_EQ(bits(got.gap), bits(want.gap)) << "plane " << k << " query " << q;
+            EXPECT_EQ(bits_of(got.gap), bits_of(want.gap)) << "plane " << k << " query " << q;
           } else {
             EXPECT_GT(got.gap, 2.0 * req.level + req.touch_gap) << "plane " << k << " query " << q;
-            capped += bits(got.gap) != bits(want.gap);
+            capped += bits_of(got.gap) != bits_of(want.gap);
           }
         }
       }
@@ -982,11 +975,6 @@ TEST(SectionSkin, PseudoAngleOfAnswersToTheBit) {
     return std::abs(angle) >= kPi ? (angle < 0.0 ? -2.0 : 2.0)
                                   : PlaneRegion::pseudo_angle(Vec2::UnitX(), Vec2(std::cos(angle), std::sin(angle)));
   };
-  auto bits = [](double x) {
-    std::uint64_t b;
-    std::memcpy(&b, &x, sizeof b);
-    return b;
-  };
   std::mt19937 rng(9);
   std::uniform_real_distribution<double> U(-4.0, 4.0);
   std::vector<double> asked = {0.0, -0.0, 0.0, -0.0, -0.0, 0.3, 0.3, std::nextafter(0.3, 1.0), 0.3, kPi, -kPi, 1e-300};
@@ -994,7 +982,7 @@ TEST(SectionSkin, PseudoAngleOfAnswersToTheBit) {
     const double x = U(rng);
     asked.insert(asked.end(), {x, x, -x, x});
   }
-  for (double x : asked) EXPECT_EQ(bits(PlaneRegion::pseudo_angle_of(x)), bits(formula(x))) << x;
+  for (double x : asked) EXPECT_EQ(bits_of(PlaneRegion::pseudo_angle_of(x)), bits_of(formula(x))) << x;
 }
 
 // clear() against every segment and a parity test of them, on convex regions (one loop:

@@ -356,19 +356,19 @@ bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>&
   const double sep = finger_separation();
   const double sep2 = sep * sep;
   // The finger against itself within its plane (an isometric copy of the world's), then the
-  // others in the world (on the stack, as in motion_ok; the others' chains remembered).
+  // others in the world. Its chain in the world is remembered too: accepted, it is the chain the
+  // fingers after it are tested against.
   for (int b = 2; b < N; ++b)
     if (!link_clear_of_chain(chain.data(), b, sep)) return false;
-  std::array<Vec3, kMaxLinks + 1> mine;
-  Aabb my_box;
-  for (int n = 0; n <= N; ++n) my_box.grow(mine[n] = planes_[m].to_world(chain[n]));
+  const WorldChain& mine = chain_in_world(m, chain);
   for (int k = 0; k < hand_.fingers(); ++k) {
     if (k == m) continue;
     const WorldChain& theirs = chain_in_world(k, others[k]);
-    if (my_box.squared_distance(theirs.box) >= sep2) continue;  // the fingers' boxes are apart
+    if (mine.box.squared_distance(theirs.box) >= sep2) continue;  // the fingers' boxes are apart
     for (int a = 0; a < N; ++a)
       for (int b = 0; b < N; ++b)
-        if (segment_segment_squared(mine[a], mine[a + 1], theirs.joints[b], theirs.joints[b + 1]) < sep2)
+        if (segment_segment_squared(mine.joints[a], mine.joints[a + 1], theirs.joints[b], theirs.joints[b + 1]) <
+            sep2)
           return false;
   }
   return true;

@@ -1939,15 +1939,10 @@ bool same_plane(const FingerPlane& x, double rx, const FingerPlane& y, double ry
 /// planes (same_plane) hash alike but for the sign of a zero, which only sends that query to the
 /// scan.
 std::size_t plane_slot(const FingerPlane& plane, double radius, int slot_bits) {
-  auto bits = [](double x) {
-    std::uint64_t b;
-    std::memcpy(&b, &x, sizeof b);
-    return b;
-  };
-  const std::uint64_t h = bits(plane.u.x()) * 0x9E3779B97F4A7C15ull + bits(plane.u.y()) * 0xC2B2AE3D27D4EB4Full +
-                          bits(plane.u.z()) * 0x165667B19E3779F9ull + bits(plane.origin.x()) * 0xD6E8FEB86659FD93ull +
-                          bits(plane.origin.y()) * 0xFF51AFD7ED558CCDull +
-                          bits(plane.origin.z()) * 0xC4CEB9FE1A85EC53ull + bits(radius) * 0x27D4EB2F165667C5ull;
+  const std::uint64_t h = bits_of(plane.u.x()) * 0x9E3779B97F4A7C15ull + bits_of(plane.u.y()) * 0xC2B2AE3D27D4EB4Full +
+                          bits_of(plane.u.z()) * 0x165667B19E3779F9ull + bits_of(plane.origin.x()) * 0xD6E8FEB86659FD93ull +
+                          bits_of(plane.origin.y()) * 0xFF51AFD7ED558CCDull +
+                          bits_of(plane.origin.z()) * 0xC4CEB9FE1A85EC53ull + bits_of(radius) * 0x27D4EB2F165667C5ull;
   return static_cast<std::size_t>(h >> (64 - slot_bits));
 }
 

@@ -80,6 +80,12 @@ class SensorModel(Sensing):
             return 0.0
         return sigma * float(np.clip(self._rng.standard_normal(), -3.0, 3.0))
 
+    def _ask(self, cap: float) -> float:
+        """The cap to ask the skin under the model with, for a reading exact up to ``cap``: a
+        reading lies up to 6 standard deviations below the true gap, so a true gap beyond this
+        reads above ``cap`` (and above the range, which is the most the model reports)."""
+        return min(cap, self.range) + 6.0 * self.gap_noise
+
     def _reading(self, gap: float, cap: float) -> float:
         """A sensed gap: noisy, calibrated to stay at or below the true gap, cut at the range."""
         if self.gap_noise > 0.0 and math.isfinite(gap):
@@ -100,9 +106,7 @@ class SensorModel(Sensing):
 
     def capsule(self, a: np.ndarray, b: np.ndarray, radius: float, cap: float = math.inf) -> Touch:  # type: ignore[override]
         self.queries += 1
-        # A reading lies up to 6 sd below the true gap: a true gap beyond this reads above the cap,
-        # so a reading at most the cap is the reading of the true gap (exact up to the cap).
-        ask = min(cap, self.range) + 6.0 * self.gap_noise
+        ask = self._ask(cap)
         t: Touch | None
         if self.taxel_spacing is None:
             t = self.skin.capsule(a, b, radius, ask)
@@ -125,5 +129,4 @@ class SensorModel(Sensing):
 
     def palm(self, pose: np.ndarray, radius: float, thickness: float, cap: float = math.inf) -> float:  # type: ignore[override]
         self.queries += 1
-        ask = min(cap, self.range) + 6.0 * self.gap_noise  # as capsule()
-        return self._reading(float(self.skin.palm(pose, radius, thickness, ask)), cap)
+        return self._reading(float(self.skin.palm(pose, radius, thickness, self._ask(cap))), cap)

@@ -174,7 +174,9 @@ class Planner {
   std::vector<double> joint_angles(int m, const Chain& chain) const;  ///< chain_angles, copied
   /// Finger k's `chain` in the world (its plane's to_world of each joint, bit for bit) and their
   /// box, remembered for the chain asked last: fingers_clear asks about the other fingers'
-  /// chains, which mostly stay as they were. Valid until the next call for finger k.
+  /// chains, which mostly stay as they were, and about the finger's own candidate, which once
+  /// accepted is what the fingers after it are tested against. Valid until the next call for
+  /// finger k.
   struct WorldChain {
     Chain chain;
     std::vector<Vec3> joints;

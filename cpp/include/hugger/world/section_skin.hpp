@@ -26,13 +26,13 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <atomic>
 #include <memory>
 #include <mutex>
 #include <utility>
 #include <vector>
 
+#include "hugger/geometry/next.hpp"
 #include "hugger/sensing/sensing.hpp"
 #include "hugger/world/object.hpp"
 #include "hugger/world/simulated_world.hpp"
@@ -117,8 +117,7 @@ class PlaneRegion {
     // for the angle of the same bits (-0 is not +0).
     thread_local std::uint64_t last_bits = 0;
     thread_local double last = 0.0;
-    std::uint64_t bits;
-    std::memcpy(&bits, &angle, sizeof bits);
+    const std::uint64_t bits = bits_of(angle);
     if (bits == last_bits) return last;
     last = std::abs(angle) >= kPi ? (angle < 0.0 ? -2.0 : 2.0)
                                   : pseudo_angle(Vec2::UnitX(), Vec2(std::cos(angle), std::sin(angle)));
