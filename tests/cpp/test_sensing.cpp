@@ -146,8 +146,8 @@ TEST(Snake, FollowTheLeaderInFreeSpace) {
 
 // A finger against itself, one link at a time (link_clear_of_chain), against every pair's exact
 // distance; and Tail2Head with a self-separation gives up exactly on the chains that fold onto
-// themselves, placing the others bit for bit as without it. Chains in free space with joints
-// bent up to 2.9 rad, so that many fold.
+// themselves, placing the others bit for bit as without it, and says so (`folded`). Chains in
+// free space with joints bent up to 2.9 rad, so that many fold.
 TEST(Snake, SelfSeparationStopsExactlyTheChainsThatFold) {
   SphereWorld w;
   std::mt19937 rng(21);
@@ -172,9 +172,15 @@ TEST(Snake, SelfSeparationStopsExactlyTheChainsThatFold) {
       EXPECT_EQ(link_clear_of_chain(full.data(), b, sep), apart) << "trial " << trial << " link " << b;
       clear = clear && apart;
     }
+    bool said_folded = clear;  // set to the opposite: the call must write it
+    Chain unsaid = chain;
+    ASSERT_TRUE(tail_to_head(*w.world, req, root, unsaid, nullptr, &said_folded));
+    EXPECT_FALSE(said_folded) << "trial " << trial;  // no self-separation asked: nothing refused
     req.self_separation = sep;
     Chain stopped = chain;
-    EXPECT_EQ(tail_to_head(*w.world, req, root, stopped), clear) << "trial " << trial;
+    said_folded = clear;
+    EXPECT_EQ(tail_to_head(*w.world, req, root, stopped, nullptr, &said_folded), clear) << "trial " << trial;
+    EXPECT_EQ(said_folded, !clear) << "trial " << trial;
     if (clear) {
       EXPECT_TRUE(stopped == full) << "trial " << trial;
       ++whole;

@@ -351,14 +351,14 @@ SnakeRequest Planner::snake_request(int m, double front, bool stop_folding) cons
 
 double Planner::finger_separation() const { return std::max(2.0 * hand_.link_radius(), 1e-7); }
 
-bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others) const {
+bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others, bool self_clear) const {
   const int N = hand_.links();
   const double sep = finger_separation();
   const double sep2 = sep * sep;
   // The finger against itself within its plane (an isometric copy of the world's), then the
   // others in the world. Its chain in the world is remembered too: accepted, it is the chain the
   // fingers after it are tested against.
-  for (int b = 2; b < N; ++b)
+  for (int b = 2; b < N && !self_clear; ++b)
     if (!link_clear_of_chain(chain.data(), b, sep)) return false;
   const WorldChain& mine = chain_in_world(m, chain);
   for (int k = 0; k < hand_.fingers(); ++k) {
@@ -510,7 +510,7 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
     std::array<char, kMaxLinks> turned;
     if (!tail_to_head(*sensing_, req, root, c, turned.data())) continue;
     // The cheap test first: a chain that hits a finger needs no motion check.
-    if (!fingers_clear(m, c, others) || !motion_ok(m, old, c, turned.data())) continue;
+    if (!fingers_clear(m, c, others, true) || !motion_ok(m, old, c, turned.data())) continue;
     out = std::move(c);
     return true;
   }
@@ -533,7 +533,7 @@ bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others
   if (largest_move(chain, c) < params_.epsilon) return false;
   // A step the motion rules or the other fingers would refuse ends the closing here, so that the
   // ordinary rules move the finger in this same iteration.
-  if (!fingers_clear(m, c, others) || !motion_ok(m, chain, c, turned.data())) return false;
+  if (!fingers_clear(m, c, others, true) || !motion_ok(m, chain, c, turned.data())) return false;
   chain = std::move(c);
   return true;
 }
@@ -820,16 +820,20 @@ void Planner::phase2_iteration() {
           bool ok = may_open && prefer_open[m] && open_step(m, old[m], new_eta, out, c);
           bool opened = ok;  // open_step checks the fingers itself
           std::array<char, kMaxLinks> turned;  // Tail2Head's turned links, for the motion check
+          // Hug rule: a chain that would hit another finger or itself while the palm moves is
+          // refused like one whose motion collides (the old chain re-attached is tried next).
+          // Tested first, as the cheaper: a chain refused so needs no motion check. A chain
+          // that folds onto itself is refused as Tail2Head places it (the same chains pass).
+          const bool refuse_folds = hug && !last;
+          const SnakeRequest req = snake_request(m, new_eta, refuse_folds);
           for (int pass = 0; pass < 2 && !ok; ++pass) {
             if (pass == 1 && (sig == 0.0 || cand[m] == old[m])) break;  // the same chain again
             c = pass == 0 ? cand[m] : old[m];
-            ok = tail_to_head(*sensing_, snake_request(m, new_eta), root2d(m, new_eta), c, turned.data());
-            if (!ok) ++stats_.clinging_failures;
-            // Hug rule: a chain that would hit another finger or itself while the palm moves is
-            // refused like one whose motion collides (the old chain re-attached is tried next).
-            // Tested first, as the cheaper: a chain refused so needs no motion check.
-            if (ok && hug && !last) {
-              checked = fingers_clear(m, c, out);
+            bool folded = false;
+            ok = tail_to_head(*sensing_, req, root2d(m, new_eta), c, turned.data(), &folded);
+            if (!ok) ++(folded ? stats_.finger_collisions : stats_.clinging_failures);
+            if (ok && refuse_folds) {
+              checked = fingers_clear(m, c, out, true);
               if (!checked) {
                 ok = false;
                 ++stats_.finger_collisions;

@@ -120,15 +120,21 @@ bool head_to_tail(const Sensing& sensing, const SnakeRequest& req, const Vec2& h
   return true;
 }
 
-bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& root, Chain& chain, char* turned) {
+bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& root, Chain& chain, char* turned,
+                  bool* folded) {
   const int N = static_cast<int>(chain.size()) - 1;
   const auto old = stack_copy(chain);
   chain[0] = root;
+  if (folded != nullptr) *folded = false;
   for (int n = 0; n < N; ++n) {
     if (!place(sensing, req, old.data(), n, n + 1, req.lengths[n], req.start_outside || n > 0, chain,
                turned != nullptr ? turned + n : nullptr))
       return false;
-    if (req.self_separation > 0.0 && !link_clear_of_chain(chain.data(), n, req.self_separation)) return false;
+    // (Links 0 and 1 have no link before them but their neighbours.)
+    if (n >= 2 && req.self_separation > 0.0 && !link_clear_of_chain(chain.data(), n, req.self_separation)) {
+      if (folded != nullptr) *folded = true;
+      return false;
+    }
   }
   return true;
 }

@@ -78,7 +78,8 @@ bool head_to_tail(const Sensing& sensing, const SnakeRequest& req, const Vec2& h
 /// > 0) at the first link that comes that close to its own chain. `turned` (N entries, or
 /// nullptr; all set when it returns true): 1 where the link was turned free by clinging, so that
 /// it rests on O (its gap at most the tolerance: Sensing::rotate_until_free), else 0.
+/// `folded` (or nullptr): set to whether it gave up because the chain folds onto itself.
 bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& root, Chain& chain,
-                  char* turned = nullptr);
+                  char* turned = nullptr, bool* folded = nullptr);
 
 }  // namespace hugger
