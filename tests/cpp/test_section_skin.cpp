@@ -334,7 +334,8 @@ bool inside_by_parity(const std::vector<PlaneRegion::Segment>& segs, const Vec2&
 TEST(SectionSkin, AnyWithinMatchesEverySegment) {
   long checked = 0, hits = 0;
   for (const test::Mesh& m : {test::icosphere(3, Vec3::Constant(0.04)), test::curvy(4),
-                              test::cylinder(0.035, 0.05, 48), test::box(Vec3(0.03, 0.02, 0.05))}) {
+                              test::cylinder(0.035, 0.05, 48), test::box(Vec3(0.03, 0.02, 0.05)), test::curvy(2),
+                              test::icosphere(5, Vec3::Constant(0.04))}) {
     Scene s(m, 11);
     for (int k = 0; k < 8; ++k) {
       const FingerPlane pl = test::random_plane(s.rng, s.c);
@@ -767,7 +768,7 @@ TEST(SectionSkin, FlattensToATenthOfTheContactTolerance) {
 // without a front plane: the result is free, never nearer than the smallest free angle, at most
 // half the tolerance of end motion beyond it, and rests on R (gap at most the tolerance).
 TEST(SectionSkin, RotateUntilFreeIsTheSmallestFreeingRotation) {
-  for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::curvy(4)}) {
+  for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::curvy(4), test::curvy(2)}) {
     const auto object = std::make_shared<Object>(m.vertices, m.faces);
     const SectionSkin skin(object, kFlatten);
     std::mt19937 rng(21);
@@ -820,8 +821,12 @@ TEST(SectionSkin, RotateUntilFreeIsTheSmallestFreeingRotation) {
 // radius(k); f(scene, k, region) for each region with a boundary.
 template <class Radius, class F>
 void for_each_test_region(unsigned seed, Radius&& radius, F&& f) {
+  // (Convex loops: the coarse sphere, the cylinder and the box. One loop but not convex, its
+  // hull's loop with pockets: the fine sphere, where a chain's simplification starts and ends,
+  // and the coarse curvy's dents. Neither: the fine curvy, with its many pockets.)
   for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::cylinder(0.035, 0.05, 48),
-                              test::box(Vec3(0.03, 0.02, 0.05)), test::curvy(4)}) {
+                              test::box(Vec3(0.03, 0.02, 0.05)), test::curvy(4),
+                              test::icosphere(5, Vec3(0.04, 0.03, 0.035)), test::curvy(2)}) {
     Scene s(m, seed);
     for (int k = 0; k < 12; ++k) {
       const FingerPlane pl = test::random_plane(s.rng, s.c + Vec3(s.u() - 0.5, s.u() - 0.5, s.u() - 0.5) * 0.01);
@@ -876,7 +881,7 @@ TEST(SectionSkin, SpansAreTheUnionOfTheSegmentsParts) {
       if (s[0] <= x && x <= s[1]) return true;
     return false;
   };
-  long checked = 0, convex_queries = 0, tree_queries = 0, touching = 0, directions = 0;
+  long checked = 0, convex_queries = 0, pocket_queries = 0, tree_queries = 0, touching = 0, directions = 0;
   for_each_test_region(33, [](int k) { return (k % 2) * 0.004; }, [&](Scene& s, int k, const PlaneRegion& region) {
     const PlaneRegion* R = &region;
     for (int q = 0; q < 150; ++q) {
@@ -892,7 +897,7 @@ TEST(SectionSkin, SpansAreTheUnionOfTheSegmentsParts) {
       const bool free_pivot = R->spans(pivot, u, len, within, &got);
       bool touch = false;
       const auto want = pieces_of(*R, pivot, u, len, &touch);
-      ++(R->convex() ? convex_queries : tree_queries);
+      ++(R->convex() ? convex_queries : (R->pockets() > 0 ? pocket_queries : tree_queries));
       ++checked;
       if (touch) {
         ++touching;
@@ -932,9 +937,10 @@ TEST(SectionSkin, SpansAreTheUnionOfTheSegmentsParts) {
         }
     }
   });
-  std::printf("  %ld queries (%ld on convex loops, %ld on the tree), %ld touching, %ld directions\n", checked,
-              convex_queries, tree_queries, touching, directions);
+  std::printf("  %ld queries (%ld on convex loops, %ld on hulls with pockets, %ld on the tree), %ld touching, %ld directions\n",
+              checked, convex_queries, pocket_queries, tree_queries, touching, directions);
   EXPECT_GE(convex_queries, 2000);
+  EXPECT_GE(pocket_queries, 1500);
   EXPECT_GE(tree_queries, 1000);
   EXPECT_GE(touching, 50);
 }
@@ -994,7 +1000,7 @@ TEST(SectionSkin, PseudoAngleOfAnswersToTheBit) {
 // boundary (R as its segments bound it, which lies within flatten outside the exact R). And
 // inside(a), for a more than a nanometre off the boundary, is that parity test's answer.
 TEST(SectionSkin, ClearMatchesEverySegment) {
-  long checked = 0, convex_checked = 0, blocked = 0, inside_checked = 0;
+  long checked = 0, convex_checked = 0, pocket_checked = 0, blocked = 0, inside_checked = 0;
   for_each_test_region(41, [](int k) { return (k % 3) * 0.002; }, [&](Scene& s, int k, const PlaneRegion& region) {
     const PlaneRegion* R = &region;
     const auto& segs = R->segments();
@@ -1034,11 +1040,13 @@ TEST(SectionSkin, ClearMatchesEverySegment) {
       ASSERT_EQ(R->clear(a, b, false), want) << "plane " << k << " query " << q << " best " << best;
       ++checked;
       convex_checked += R->convex();
+      pocket_checked += R->pockets() > 0;
       blocked += !want;
     }
   });
-  std::printf("  %ld decisions (%ld on convex loops), %ld not clear; %ld inside tests\n", checked, convex_checked,
-              blocked, inside_checked);
+  std::printf("  %ld decisions (%ld on convex loops, %ld on hulls with pockets), %ld not clear; %ld inside tests\n",
+              checked, convex_checked, pocket_checked, blocked, inside_checked);
+  EXPECT_GE(pocket_checked, 3000);
   EXPECT_GE(inside_checked, 8000);
   EXPECT_GE(checked, 10000);
   EXPECT_GE(convex_checked, 5000);
@@ -1166,7 +1174,7 @@ TEST(SectionSkin, ConvexShortcutsOnRoundingTurnsAndVerticesOnTheCircle) {
 // the segment (a point's depth in R changes no faster than the point moves), on chords across
 // R's boundary at depths about the allowance, in random planes.
 TEST(SectionSkin, DepthWithinMatchesDenseSampling) {
-  for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::curvy(4)}) {
+  for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::curvy(4), test::curvy(2)}) {
     const auto object = std::make_shared<Object>(m.vertices, m.faces);
     const SectionSkin skin(object, kFlatten);
     std::mt19937 rng(5);

@@ -36,6 +36,8 @@ constexpr double kCertain = 1e-9;
 /// convex_inside, convex_shallow) must find their answer, else they leave it to the tree: far
 /// above kTouch and the rounding of their heights.
 constexpr double kSureApart = 1e-9;
+/// The most pockets a non-convex loop's hull may have for its shortcuts to be kept (build_loop).
+constexpr int kMaxPockets = 16;
 
 inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 /// v turned a quarter to the left.
@@ -241,9 +243,48 @@ int index_edge_angles(const std::vector<Vec2>& v, PlaneRegion::AngleIndex* index
 
 }  // namespace
 
+namespace {
+
+/// The convex hull of a closed polygon's vertices v (counter-clockwise, simple) as indices into
+/// v, in v's order from the smallest (strict: vertices on a hull edge are left out). False where
+/// the hull's vertices do not come in v's order round it (v is not a simple counter-clockwise
+/// polygon).
+bool hull_of_polygon(const std::vector<Vec2>& v, std::vector<int>* hull) {
+  const int n = static_cast<int>(v.size());
+  std::vector<int> order(n);
+  for (int i = 0; i < n; ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return v[a].x() < v[b].x() || (v[a].x() == v[b].x() && v[a].y() < v[b].y());
+  });
+  // Andrew's monotone chain: the lower hull left to right, then the upper right to left.
+  std::vector<int> h;
+  for (int pass = 0; pass < 2; ++pass) {
+    const std::size_t base = h.size();
+    for (int k = 0; k < n; ++k) {
+      const int i = order[pass == 0 ? k : n - 1 - k];
+      while (h.size() >= base + 2 &&
+             cross2(v[h[h.size() - 1]] - v[h[h.size() - 2]], v[i] - v[h[h.size() - 1]]) <= 0.0)
+        h.pop_back();
+      h.push_back(i);
+    }
+    h.pop_back();  // the first point of the other pass
+  }
+  if (h.size() < 3) return false;
+  const auto first = std::min_element(h.begin(), h.end());
+  std::rotate(h.begin(), first, h.end());
+  for (std::size_t k = 1; k < h.size(); ++k)
+    if (!(h[k] > h[k - 1])) return false;
+  *hull = std::move(h);
+  return true;
+}
+
+}  // namespace
+
 void PlaneRegion::build_loop() {
+  loop_kind_ = LoopKind::kNone;
   loop_.clear();
   loop_tail_.clear();
+  pockets_.clear();
   const int n = static_cast<int>(segments_.size());
   if (n < 3) return;
   // One loop through every segment,
@@ -255,40 +296,89 @@ void PlaneRegion::build_loop() {
     i = next_[i];
   } while (i > 0 && static_cast<int>(loop.size()) < n);
   if (i != 0 || static_cast<int>(loop.size()) != n) return;
-  std::vector<Vec2> tail(n);
+  std::vector<Vec2> all(n);
+  for (int k = 0; k < n; ++k) all[k] = tail_of(segments_[loop[k]]);
+  // turning left at every vertex (up to a billionth of a radian: rounding): a convex R, whose
+  // loop is kept whole. Otherwise the loop of R's convex hull H, whose vertices are some of R's:
+  // between two of them either one segment of R, or a pocket of H outside R (under a lid, the
+  // hull's edge across it), where the shortcuts do not answer (near_pocket).
+  auto turns_right = [](const Vec2& e0, const Vec2& e1) { return cross2(e0, e1) < -1e-9 * e0.norm() * e1.norm(); };
+  bool convex = true;
+  for (int k = 0; k < n && convex; ++k)
+    convex = !turns_right(all[(k + 1) % n] - all[k], all[(k + 2) % n] - all[(k + 1) % n]);
+  std::vector<int> keep;  // indices into `loop` of the hull loop's vertices
+  if (convex) {
+    keep.resize(n);
+    for (int k = 0; k < n; ++k) keep[k] = k;
+  } else if (!hull_of_polygon(all, &keep)) {
+    return;
+  }
+  const int m = static_cast<int>(keep.size());
+  std::vector<Vec2> tail(m);
+  std::vector<LoopEdge> edge(m);
+  std::vector<Pocket> pockets;
+  for (int k = 0; k < m; ++k) {
+    const int from = keep[k], to = k + 1 < m ? keep[k + 1] : keep[0] + n;
+    tail[k] = all[from];
+    if (to == from + 1) {
+      const Segment& g = segments_[loop[from]];
+      edge[k] = {g.a, g.b, g.normal};
+      continue;
+    }
+    const Vec2 d = all[to % n] - all[from];  // a lid; R lies on its left
+    edge[k] = {all[from], all[to % n], Vec2(d.y(), -d.x()).normalized()};
+    Pocket p{all[from], all[from]};
+    for (int j = from + 1; j <= to; ++j) {
+      p.lo = p.lo.cwiseMin(all[j % n]);
+      p.hi = p.hi.cwiseMax(all[j % n]);
+    }
+    pockets.push_back(p);
+  }
+  // Every query near a pocket goes to the tree, after a test of each pocket's box: H's loop
+  // pays only where pockets are few (a closed chain's one notch, where its simplification starts
+  // and ends), not where R is bumpy all along.
+  if (static_cast<int>(pockets.size()) > kMaxPockets) return;
   Vec2 centre = Vec2::Zero();
-  for (int k = 0; k < n; ++k) {
-    tail[k] = tail_of(segments_[loop[k]]);
-    centre += tail[k];
-  }
-  centre /= static_cast<double>(n);
-  // turning left at every vertex (up to a billionth of a radian: rounding) ...
-  for (int k = 0; k < n; ++k) {
-    const Vec2 e0 = tail[(k + 1) % n] - tail[k], e1 = tail[(k + 2) % n] - tail[(k + 1) % n];
-    if (cross2(e0, e1) < -1e-9 * e0.norm() * e1.norm()) return;
-  }
+  for (int k = 0; k < m; ++k) centre += tail[k];
+  centre /= static_cast<double>(m);
+  for (int k = 0; k < m; ++k)
+    if (turns_right(tail[(k + 1) % m] - tail[k], tail[(k + 2) % m] - tail[(k + 1) % m])) return;
   // ... and once round the centre: the tails' angles about it increase from the smallest.
-  std::vector<double> angle(n);
-  for (int k = 0; k < n; ++k) angle[k] = pseudo_angle(Vec2::UnitX(), tail[k] - centre);
+  std::vector<double> angle(m);
+  for (int k = 0; k < m; ++k) angle[k] = pseudo_angle(Vec2::UnitX(), tail[k] - centre);
   const int start = static_cast<int>(std::min_element(angle.begin(), angle.end()) - angle.begin());
-  for (int k = 1; k < n; ++k)
-    if (!(angle[(start + k) % n] > angle[(start + k - 1) % n])) return;
+  for (int k = 1; k < m; ++k)
+    if (!(angle[(start + k) % m] > angle[(start + k - 1) % m])) return;
   std::vector<double> polar;
-  for (int k = 0; k < n; ++k) {
-    loop_.push_back(loop[(start + k) % n]);
-    loop_tail_.push_back(tail[(start + k) % n]);
-    polar.push_back(angle[(start + k) % n]);
+  for (int k = 0; k < m; ++k) {
+    loop_.push_back(edge[(start + k) % m]);
+    loop_tail_.push_back(tail[(start + k) % m]);
+    polar.push_back(angle[(start + k) % m]);
   }
   loop_polar_.build(std::move(polar));
   loop_centre_ = centre;
+  pockets_ = std::move(pockets);
+  loop_kind_ = pockets_.empty() ? LoopKind::kConvex : LoopKind::kPockets;
   // The edges' directions turn counter-clockwise along the loop, wrapping round once: where a
   // right turn within rounding takes an edge back across the wrap, they do not (not kept).
   double fall = 0.0;
   loop_edge_first_ = index_edge_angles(loop_tail_, &loop_edges_, &fall);
   if (fall > 1e-9) {
+    loop_kind_ = LoopKind::kNone;
     loop_.clear();
     loop_tail_.clear();
+    pockets_.clear();
   }
+}
+
+bool PlaneRegion::near_pocket(const Vec2& a, const Vec2& b, double distance) const {
+  // The shortcuts' answers depend on R only within their margin of the query's reach: where
+  // that is apart from every pocket, R and H agree there, and so do their boundaries.
+  const double grow = distance + 2.0 * kSureApart;
+  const Vec2 lo = a.cwiseMin(b).array() - grow, hi = a.cwiseMax(b).array() + grow;
+  for (const Pocket& p : pockets_)
+    if (p.lo.x() <= hi.x() && lo.x() <= p.hi.x() && p.lo.y() <= hi.y() && lo.y() <= p.hi.y()) return true;
+  return false;
 }
 
 void PlaneRegion::link_segments() {
@@ -1337,7 +1427,7 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
 }
 
 bool PlaneRegion::any_within(const Vec2& a, const Vec2& b, double distance) const {
-  if (!loop_.empty()) {
+  if (loop_answers(a, b, distance)) {
     const int sure = convex_within(a, b, distance);
     if (sure >= 0) return sure == 1;
   }
@@ -1436,7 +1526,7 @@ inline DiskPart disk_part(const Vec2& sa, const Vec2& sb, const Vec2& pivot, dou
 int PlaneRegion::loop_extreme(const Vec2& edge) const {
   // As hull_apart's search: the tail of the first edge turned at least as far as `edge`.
   const int i = loop_edge_first_ + loop_edges_.first_at_least(pseudo_angle(Vec2::UnitX(), edge));
-  const int n = static_cast<int>(loop_.size());
+  const int n = static_cast<int>(loop_tail_.size());
   return i >= n ? i - n : i;
 }
 
@@ -1445,7 +1535,7 @@ PlaneRegion::Chord PlaneRegion::convex_chord(const Q& q, int bottom, int top) co
   // The line crosses R: once on the chain from bottom to top (counter-clockwise; the height
   // rises along it) and once on the way back (it falls). On each, the first tail past the line
   // ends the edge crossed, found by halving.
-  const int n = static_cast<int>(loop_.size());
+  const int n = static_cast<int>(loop_tail_.size());
   const Vec2* T = loop_tail_.data();
   auto h = [&](int i) { return q.n.dot(T[i] - q.a); };
   auto crossing = [&](int from, int to, bool rising, double* t, int* edge) {
@@ -1472,7 +1562,7 @@ PlaneRegion::Chord PlaneRegion::convex_chord(const Q& q, int bottom, int top) co
 }
 
 double PlaneRegion::beyond_edge(int edge, const Vec2& x) const {
-  return segments_[loop_[edge]].normal.dot(x - loop_tail_[edge]);
+  return loop_[edge].normal.dot(x - loop_tail_[edge]);
 }
 
 int PlaneRegion::convex_clear(const Vec2& a, const Vec2& b, bool a_outside) const {
@@ -1543,7 +1633,7 @@ int PlaneRegion::convex_within(const Vec2& a, const Vec2& b, double distance) co
 }
 
 bool PlaneRegion::clear(const Vec2& a, const Vec2& b, bool a_outside) const {
-  if (!loop_.empty()) {
+  if (loop_answers(a, b, 0.0)) {
     const int sure = convex_clear(a, b, a_outside);
     if (sure >= 0) return sure == 1;
   }
@@ -1558,7 +1648,7 @@ bool PlaneRegion::clear(const Vec2& a, const Vec2& b, bool a_outside) const {
 
 bool PlaneRegion::depth_within(const Vec2& a, const Vec2& b, double allow) const {
   if (nodes_.empty()) return true;  // no boundary: R is empty
-  if (!loop_.empty() && convex_shallow(a, b, allow)) return true;
+  if (loop_kind_ != LoopKind::kNone && convex_shallow(a, b, allow)) return true;
   const Query q(a, b);
   const Vec2 d = b - a;
   const bool point = !(d.squaredNorm() > 0.0);
@@ -1595,7 +1685,8 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
                         std::vector<Span>* out) const {
   if (nodes_.empty()) return true;
   bool touching_loop = false;
-  if (!loop_.empty() && convex_spans(pivot, u, length, within, &touching_loop, out)) return !touching_loop;
+  if (loop_answers(pivot, pivot, length) && convex_spans(pivot, u, length, within, &touching_loop, out))
+    return !touching_loop;
   const double slack = 1e-12 * (extent_ + pivot.cwiseAbs().maxCoeff());
   const double reach = length + slack, l2 = length * length;
   const Vec2 behind = -length * u;  // the point at pseudo-angle +-2, for spans cut there
@@ -1667,7 +1758,7 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
 
 bool PlaneRegion::convex_spans(const Vec2& pivot, const Vec2& u, double length, double within, bool* touching,
                                std::vector<Span>* out) const {
-  const int n = static_cast<int>(loop_.size());
+  const int n = static_cast<int>(loop_tail_.size());
   const Vec2* T = loop_tail_.data();
   const double l2 = length * length;
   auto prev = [n](int i) { return i == 0 ? n - 1 : i - 1; };
@@ -1719,8 +1810,8 @@ bool PlaneRegion::convex_spans(const Vec2& pivot, const Vec2& u, double length, 
     bool asked = false;
     for (int f = 0; f < e; ++f) asked = asked || edges[f] == i;
     if (asked) continue;
-    const Segment& s = segments_[loop_[i]];
-    const DiskPart part = disk_part(s.a, s.b, pivot, l2, &ends[count], &ends[count + 1]);
+    // (A lid lies beyond the disk: spans() asks the loop only where the disk reaches no pocket.)
+    const DiskPart part = disk_part(loop_[i].a, loop_[i].b, pivot, l2, &ends[count], &ends[count + 1]);
     if (part == DiskPart::kTouching) {
       *touching = true;
       return true;
@@ -1849,7 +1940,7 @@ bool PlaneRegion::inside(const Vec2& x) const {
     const signed char label = cells_[static_cast<std::size_t>(g.y()) * cells_n_[0] + static_cast<std::size_t>(g.x())];
     if (label >= 0) return label == 1;
   }
-  if (!loop_.empty()) {
+  if (loop_answers(x, x, 0.0)) {
     const int sure = convex_inside(x);
     if (sure >= 0) return sure == 1;
   }
@@ -1883,7 +1974,7 @@ int PlaneRegion::loop_wedge(const Vec2& x) const {
   const double angle = pseudo_angle(Vec2::UnitX(), x - loop_centre_);
   if (!(std::abs(angle) <= 2.0)) return -1;
   // The last tail at or before the angle (before the first: the last, the loop wraps round).
-  const int i = loop_polar_.first_at_least(angle), n = static_cast<int>(loop_.size());
+  const int i = loop_polar_.first_at_least(angle), n = static_cast<int>(loop_tail_.size());
   return loop_polar_.angle[i] == angle ? i : (i == 0 ? n - 1 : i - 1);
 }
 

@@ -177,7 +177,12 @@ class PlaneRegion {
   const std::vector<Piece>& pieces() const { return pieces_; }
   /// True where the boundary is one convex loop: spans(), clear(), any_within(), inside() and
   /// depth_within() then ask the loop first, and the tree where it does not settle them.
-  bool convex() const { return !loop_.empty(); }
+  bool convex() const { return loop_kind_ == LoopKind::kConvex; }
+  /// Where the boundary is one loop but not convex: how many pockets its convex hull H has
+  /// (stretches where H lies outside R, each under one of H's edges, a lid). The same queries
+  /// then ask H's loop first where they reach no pocket (there R and H agree). 0 where R is
+  /// convex or not one loop.
+  int pockets() const { return loop_kind_ == LoopKind::kPockets ? static_cast<int>(pockets_.size()) : 0; }
   /// Segments dropped at build time as lying inside R.
   long dropped() const { return dropped_; }
   /// Number of 3D inside tests asked so far (side tests that were unsafe).
@@ -239,7 +244,14 @@ class PlaneRegion {
   void build_cells();
   /// next_: each segment's successor along the boundary (R on the left), or -1 at a junction.
   void link_segments();
-  /// loop_ and its companions, where the boundary is one convex loop (else they stay empty).
+  /// loop_ and its companions, where the boundary is one loop: convex, or whose hull has at most
+  /// kMaxPockets pockets (else they stay empty).
+  ///
+  /// The convex_* shortcuts below are written for a convex R. Where R is one loop but not convex
+  /// they answer for its hull H, and are asked only where the query's reach (the segment or
+  /// pivot grown by the distance asked, plus a margin) meets no pocket's box (loop_answers):
+  /// there R and H, and their boundaries, are the same, so H's answer is R's. convex_shallow
+  /// needs no such test: a point of R lies no deeper in R than in H.
   void build_loop();
   /// spans() where R is one convex loop: the pieces within `length` of the pivot are one run of
   /// the loop facing it, and the span of their union is settled by the few segments at its two
@@ -308,9 +320,30 @@ class PlaneRegion {
   /// Where the boundary is one loop that turns left at every vertex (a convex R): its segments
   /// in order along it (R on the left: counter-clockwise), loop_tail_[i] the tail of segment
   /// loop_[i] (its head is the next tail), and loop_polar_.angle[i] the pseudo-angle of
-  /// loop_tail_[i] about loop_centre_ (the tails' mean, inside R), increasing from i = 0.
-  std::vector<int> loop_;
+  /// loop_tail_[i] about loop_centre_ (the tails' mean, inside R), increasing from i = 0. Where
+  /// the boundary is one loop that does not turn left everywhere, the same of the loop of its
+  /// convex hull H (build_loop), whose edges are segments of R or lids over pockets_.
+  enum class LoopKind : std::uint8_t { kNone, kConvex, kPockets };
+  LoopKind loop_kind_ = LoopKind::kNone;
+  struct LoopEdge {
+    Vec2 a, b;   ///< a segment's ends as in segments_ (a lid's: its tail, then its head)
+    Vec2 normal;  ///< outward unit normal
+  };
+  std::vector<LoopEdge> loop_;
   std::vector<Vec2> loop_tail_;
+  /// A pocket of H outside R: the box of its stretch of R's boundary (the lid's ends included).
+  struct Pocket {
+    Vec2 lo, hi;
+  };
+  std::vector<Pocket> pockets_;
+  /// Whether the loop's shortcuts may answer a query reaching `distance` about segment [a, b]:
+  /// R's loop is convex, or H's loop's pockets lie beyond that reach.
+  bool loop_answers(const Vec2& a, const Vec2& b, double distance) const {
+    return loop_kind_ == LoopKind::kConvex || (loop_kind_ == LoopKind::kPockets && !near_pocket(a, b, distance));
+  }
+  /// True when segment [a, b] grown by `distance` (and twice kSureApart) reaches a pocket's box:
+  /// the loop's shortcuts then leave the query to the tree.
+  bool near_pocket(const Vec2& a, const Vec2& b, double distance) const;
   AngleIndex loop_polar_;
   Vec2 loop_centre_ = Vec2::Zero();
   /// The loop's edges' pseudo-angles (from +x), from edge loop_edge_first_ on (as the hull's),
