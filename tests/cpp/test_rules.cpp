@@ -6,7 +6,9 @@
 #include <memory>
 #include <random>
 
+#include "hugger/geometry/distance.hpp"
 #include "hugger/planner/planner.hpp"
+#include "hugger/world/section_skin.hpp"
 #include "hugger/world/simulated_world.hpp"
 #include "meshes.hpp"
 #include "scenes.hpp"
@@ -156,6 +158,54 @@ TEST(Rules, DoneFingerAtRestWhileThePalmAdvances) {
           exercised = true;
   }
   EXPECT_TRUE(exercised);
+}
+
+// No finger folds onto itself: at every configuration of hug-rule plans, from 16 approaches
+// about a cylinder and a box (where fingers' chains often fold while the palm steps: the palm
+// step's Tail2Head refuses them as it places them, and open_step's and reclose_step's too), every
+// two links of a finger not next to each other stay two link radii apart, as fingers_clear asks.
+TEST(Rules, NoFingerFoldsOntoItself) {
+  const HandModel hand = HandModel::uniform(5, 5, 0.02, 0.004, 0.03, 0.01);
+  const int M = hand.fingers(), N = hand.links();
+  const double sep = 2.0 * hand.link_radius();
+  long plans = 0, refused = 0, configurations = 0;
+  for (const test::Mesh& mesh : {test::cylinder(0.035, 0.05, 48), test::box(Vec3(0.03, 0.02, 0.05))}) {
+    auto skin = std::make_shared<SectionSkin>(std::make_shared<Object>(mesh.vertices, mesh.faces));
+    for (int k = 0; k < 16; ++k) {
+      // approaches spread over the sphere (a spiral), the palm 20 cm from the centre, facing it
+      const double z = 1.0 - (2.0 * k + 1.0) / 16.0, phi = 2.399963229728653 * k;
+      const Vec3 d(std::sqrt(1.0 - z * z) * std::cos(phi), std::sqrt(1.0 - z * z) * std::sin(phi), z);
+      Pose start = Pose::Identity();
+      start.linear() = Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), -d).toRotationMatrix();
+      start.translation() = 0.2 * d;
+      PlannerParams params;
+      params.rules = Rules::kHug;
+      std::unique_ptr<Planner> p;
+      try {
+        p = std::make_unique<Planner>(hand, skin, Vec3::Zero(), start, params);
+      } catch (const std::invalid_argument&) {
+        continue;  // the hand touches O at the start or while it turns
+      }
+      EXPECT_NE(p->plan(), Status::kMaxIterations);
+      ++plans;
+      refused += p->stats().finger_collisions;
+      for (const Configuration& c : p->history()) {
+        ++configurations;
+        for (int m = 0; m < M; ++m) {
+          const Vec3* j = &c.joints[static_cast<std::size_t>(m * (N + 1))];
+          for (int b = 2; b < N; ++b)
+            for (int a = 0; a + 2 <= b; ++a)
+              ASSERT_GE(segment_segment_squared(j[a], j[a + 1], j[b], j[b + 1]), sep * sep * (1.0 - 1e-9))
+                  << "approach " << k << " configuration " << c.iteration << " finger " << m << " links " << a
+                  << ", " << b;
+        }
+      }
+    }
+  }
+  std::printf("  %ld plans, %ld configurations, %ld chains refused for a collision or a fold\n", plans,
+              configurations, refused);
+  EXPECT_GE(plans, 20);
+  EXPECT_GE(refused, 20);  // the rule is exercised
 }
 
 // rotate_until_free turns a colliding link by the smallest angle that frees it: against a

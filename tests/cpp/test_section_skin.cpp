@@ -334,8 +334,7 @@ bool inside_by_parity(const std::vector<PlaneRegion::Segment>& segs, const Vec2&
 TEST(SectionSkin, AnyWithinMatchesEverySegment) {
   long checked = 0, hits = 0;
   for (const test::Mesh& m : {test::icosphere(3, Vec3::Constant(0.04)), test::curvy(4),
-                              test::cylinder(0.035, 0.05, 48), test::box(Vec3(0.03, 0.02, 0.05)), test::curvy(2),
-                              test::icosphere(5, Vec3::Constant(0.04))}) {
+                              test::cylinder(0.035, 0.05, 48), test::box(Vec3(0.03, 0.02, 0.05)), test::curvy(2)}) {
     Scene s(m, 11);
     for (int k = 0; k < 8; ++k) {
       const FingerPlane pl = test::random_plane(s.rng, s.c);
@@ -821,12 +820,12 @@ TEST(SectionSkin, RotateUntilFreeIsTheSmallestFreeingRotation) {
 // radius(k); f(scene, k, region) for each region with a boundary.
 template <class Radius, class F>
 void for_each_test_region(unsigned seed, Radius&& radius, F&& f) {
-  // (Convex loops: the coarse sphere, the cylinder and the box. One loop but not convex, its
-  // hull's loop with pockets: the fine sphere, where a chain's simplification starts and ends,
-  // and the coarse curvy's dents. Neither: the fine curvy, with its many pockets.)
+  // (Convex loops: most planes of the sphere, the cylinder and the box. One loop but not convex,
+  // its hull's loop with pockets: a few planes of the cylinder (one pocket each, where a closed
+  // chain's simplification starts and ends) and of curvy(4), most of curvy(2)'s (its dents).
+  // Neither: curvy(4)'s other planes, with many pockets or several loops.)
   for (const test::Mesh& m : {test::icosphere(3, Vec3(0.04, 0.03, 0.035)), test::cylinder(0.035, 0.05, 48),
-                              test::box(Vec3(0.03, 0.02, 0.05)), test::curvy(4),
-                              test::icosphere(5, Vec3(0.04, 0.03, 0.035)), test::curvy(2)}) {
+                              test::box(Vec3(0.03, 0.02, 0.05)), test::curvy(4), test::curvy(2)}) {
     Scene s(m, seed);
     for (int k = 0; k < 12; ++k) {
       const FingerPlane pl = test::random_plane(s.rng, s.c + Vec3(s.u() - 0.5, s.u() - 0.5, s.u() - 0.5) * 0.01);
@@ -897,7 +896,8 @@ TEST(SectionSkin, SpansAreTheUnionOfTheSegmentsParts) {
       const bool free_pivot = R->spans(pivot, u, len, within, &got);
       bool touch = false;
       const auto want = pieces_of(*R, pivot, u, len, &touch);
-      ++(R->convex() ? convex_queries : (R->pockets() > 0 ? pocket_queries : tree_queries));
+      ++(R->convex() ? convex_queries : tree_queries);
+      pocket_queries += R->pockets() > 0 && R->loop_answers(pivot, pivot, len);  // asked of a hull's loop
       ++checked;
       if (touch) {
         ++touching;
@@ -937,10 +937,11 @@ TEST(SectionSkin, SpansAreTheUnionOfTheSegmentsParts) {
         }
     }
   });
-  std::printf("  %ld queries (%ld on convex loops, %ld on hulls with pockets, %ld on the tree), %ld touching, %ld directions\n",
-              checked, convex_queries, pocket_queries, tree_queries, touching, directions);
+  std::printf("  %ld queries (%ld on convex loops, %ld others, of which %ld asked of a hull's loop with pockets), "
+              "%ld touching, %ld directions\n",
+              checked, convex_queries, tree_queries, pocket_queries, touching, directions);
   EXPECT_GE(convex_queries, 2000);
-  EXPECT_GE(pocket_queries, 1500);
+  EXPECT_GE(pocket_queries, 200);
   EXPECT_GE(tree_queries, 1000);
   EXPECT_GE(touching, 50);
 }
@@ -1040,11 +1041,11 @@ TEST(SectionSkin, ClearMatchesEverySegment) {
       ASSERT_EQ(R->clear(a, b, false), want) << "plane " << k << " query " << q << " best " << best;
       ++checked;
       convex_checked += R->convex();
-      pocket_checked += R->pockets() > 0;
+      pocket_checked += R->pockets() > 0 && R->loop_answers(a, b, 0.0);  // asked of a hull's loop
       blocked += !want;
     }
   });
-  std::printf("  %ld decisions (%ld on convex loops, %ld on hulls with pockets), %ld not clear; %ld inside tests\n",
+  std::printf("  %ld decisions (%ld on convex loops, %ld asked of hulls' loops with pockets), %ld not clear; %ld inside tests\n",
               checked, convex_checked, pocket_checked, blocked, inside_checked);
   EXPECT_GE(pocket_checked, 3000);
   EXPECT_GE(inside_checked, 8000);

@@ -351,10 +351,12 @@ SnakeRequest Planner::snake_request(int m, double front, bool stop_folding) cons
 
 double Planner::finger_separation() const { return std::max(2.0 * hand_.link_radius(), 1e-7); }
 
-bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others, bool self_clear) const {
+bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others,
+                            const SnakeRequest* placed) const {
   const int N = hand_.links();
   const double sep = finger_separation();
   const double sep2 = sep * sep;
+  const bool self_clear = placed != nullptr && placed->self_separation >= sep;
   // The finger against itself within its plane (an isometric copy of the world's), then the
   // others in the world. Its chain in the world is remembered too: accepted, it is the chain the
   // fingers after it are tested against.
@@ -510,7 +512,7 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
     std::array<char, kMaxLinks> turned;
     if (!tail_to_head(*sensing_, req, root, c, turned.data())) continue;
     // The cheap test first: a chain that hits a finger needs no motion check.
-    if (!fingers_clear(m, c, others, true) || !motion_ok(m, old, c, turned.data())) continue;
+    if (!fingers_clear(m, c, others, &req) || !motion_ok(m, old, c, turned.data())) continue;
     out = std::move(c);
     return true;
   }
@@ -529,11 +531,12 @@ bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others
   b[0] += inc;
   Chain c = hand_.forward_planar(m, chain[0], b.data());
   std::array<char, kMaxLinks> turned;
-  if (!tail_to_head(*sensing_, snake_request(m, chain[0].y(), true), chain[0], c, turned.data())) return false;
+  const SnakeRequest req = snake_request(m, chain[0].y(), true);
+  if (!tail_to_head(*sensing_, req, chain[0], c, turned.data())) return false;
   if (largest_move(chain, c) < params_.epsilon) return false;
   // A step the motion rules or the other fingers would refuse ends the closing here, so that the
   // ordinary rules move the finger in this same iteration.
-  if (!fingers_clear(m, c, others, true) || !motion_ok(m, chain, c, turned.data())) return false;
+  if (!fingers_clear(m, c, others, &req) || !motion_ok(m, chain, c, turned.data())) return false;
   chain = std::move(c);
   return true;
 }
@@ -833,7 +836,7 @@ void Planner::phase2_iteration() {
             ok = tail_to_head(*sensing_, req, root2d(m, new_eta), c, turned.data(), &folded);
             if (!ok) ++(folded ? stats_.finger_collisions : stats_.clinging_failures);
             if (ok && refuse_folds) {
-              checked = fingers_clear(m, c, out, true);
+              checked = fingers_clear(m, c, out, &req);
               if (!checked) {
                 ok = false;
                 ++stats_.finger_collisions;

@@ -245,10 +245,34 @@ int index_edge_angles(const std::vector<Vec2>& v, PlaneRegion::AngleIndex* index
 
 namespace {
 
-/// The convex hull of a closed polygon's vertices v (counter-clockwise, simple) as indices into
-/// v, in v's order from the smallest (strict: vertices on a hull edge are left out). False where
-/// the hull's vertices do not come in v's order round it (v is not a simple counter-clockwise
-/// polygon).
+/// Andrew's monotone chain over n distinct points, at(k) the k-th in order of x, then y: the
+/// lower hull left to right, then the upper right to left (counter-clockwise from the first
+/// point), as indices k; points on an edge are left out. n <= 2: every point.
+template <class At>
+std::vector<int> monotone_chain(int n, At&& at) {
+  std::vector<int> h;
+  if (n <= 2) {
+    for (int k = 0; k < n; ++k) h.push_back(k);
+    return h;
+  }
+  for (int pass = 0; pass < 2; ++pass) {
+    const std::size_t floor = h.size();
+    for (int k = 0; k < n; ++k) {
+      const int i = pass == 0 ? k : n - 1 - k;
+      while (h.size() >= floor + 2 &&
+             cross2(at(h[h.size() - 1]) - at(h[h.size() - 2]), at(i) - at(h[h.size() - 2])) <= 0.0)
+        h.pop_back();
+      h.push_back(i);
+    }
+    h.pop_back();  // the first point of the other pass
+  }
+  return h;
+}
+
+/// The convex hull of a closed polygon's vertices v as indices into v, in v's order from the
+/// smallest (points on a hull edge are left out). v is a counter-clockwise simple polygon (R's
+/// boundary: its pieces never cross, drop_inner_segments); false where the hull's vertices do not
+/// come in v's order round it, which a clockwise v shows (the order does not prove v simple).
 bool hull_of_polygon(const std::vector<Vec2>& v, std::vector<int>* hull) {
   const int n = static_cast<int>(v.size());
   std::vector<int> order(n);
@@ -256,22 +280,10 @@ bool hull_of_polygon(const std::vector<Vec2>& v, std::vector<int>* hull) {
   std::sort(order.begin(), order.end(), [&](int a, int b) {
     return v[a].x() < v[b].x() || (v[a].x() == v[b].x() && v[a].y() < v[b].y());
   });
-  // Andrew's monotone chain: the lower hull left to right, then the upper right to left.
-  std::vector<int> h;
-  for (int pass = 0; pass < 2; ++pass) {
-    const std::size_t base = h.size();
-    for (int k = 0; k < n; ++k) {
-      const int i = order[pass == 0 ? k : n - 1 - k];
-      while (h.size() >= base + 2 &&
-             cross2(v[h[h.size() - 1]] - v[h[h.size() - 2]], v[i] - v[h[h.size() - 1]]) <= 0.0)
-        h.pop_back();
-      h.push_back(i);
-    }
-    h.pop_back();  // the first point of the other pass
-  }
+  std::vector<int> h = monotone_chain(n, [&](int k) -> const Vec2& { return v[order[k]]; });
   if (h.size() < 3) return false;
-  const auto first = std::min_element(h.begin(), h.end());
-  std::rotate(h.begin(), first, h.end());
+  for (int& i : h) i = order[i];
+  std::rotate(h.begin(), std::min_element(h.begin(), h.end()), h.end());
   for (std::size_t k = 1; k < h.size(); ++k)
     if (!(h[k] > h[k - 1])) return false;
   *hull = std::move(h);
@@ -280,11 +292,15 @@ bool hull_of_polygon(const std::vector<Vec2>& v, std::vector<int>* hull) {
 
 }  // namespace
 
-void PlaneRegion::build_loop() {
+void PlaneRegion::clear_loop() {
   loop_kind_ = LoopKind::kNone;
   loop_.clear();
   loop_tail_.clear();
   pockets_.clear();
+}
+
+void PlaneRegion::build_loop() {
+  clear_loop();
   const int n = static_cast<int>(segments_.size());
   if (n < 3) return;
   // One loop through every segment,
@@ -363,17 +379,13 @@ void PlaneRegion::build_loop() {
   // right turn within rounding takes an edge back across the wrap, they do not (not kept).
   double fall = 0.0;
   loop_edge_first_ = index_edge_angles(loop_tail_, &loop_edges_, &fall);
-  if (fall > 1e-9) {
-    loop_kind_ = LoopKind::kNone;
-    loop_.clear();
-    loop_tail_.clear();
-    pockets_.clear();
-  }
+  if (fall > 1e-9) clear_loop();
 }
 
 bool PlaneRegion::near_pocket(const Vec2& a, const Vec2& b, double distance) const {
   // The shortcuts' answers depend on R only within their margin of the query's reach: where
   // that is apart from every pocket, R and H agree there, and so do their boundaries.
+  if (!(distance >= 0.0)) return true;  // (no caller asks so; the tree answers what it means)
   const double grow = distance + 2.0 * kSureApart;
   const Vec2 lo = a.cwiseMin(b).array() - grow, hi = a.cwiseMax(b).array() + grow;
   for (const Pocket& p : pockets_)
@@ -1253,26 +1265,13 @@ void PlaneRegion::build_hull() {
     pts.push_back(s.a);
     pts.push_back(s.b);
   }
-  // Andrew's monotone chain: the lower hull left to right, then the upper right to left
-  // (counter-clockwise); points on an edge are left out.
+  // (monotone_chain's order)
   std::sort(pts.begin(), pts.end(),
             [](const Vec2& p, const Vec2& q) { return p.x() < q.x() || (p.x() == q.x() && p.y() < q.y()); });
   pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
   std::vector<Vec2> h;
-  if (pts.size() <= 2) {
-    h = pts;
-  } else {
-    for (int pass = 0; pass < 2; ++pass) {
-      const std::size_t floor = h.size();
-      for (std::size_t k = 0; k < pts.size(); ++k) {
-        const Vec2& p = pass == 0 ? pts[k] : pts[pts.size() - 1 - k];
-        while (h.size() >= floor + 2 && cross2(h[h.size() - 1] - h[h.size() - 2], p - h[h.size() - 2]) <= 0.0)
-          h.pop_back();
-        h.push_back(p);
-      }
-      h.pop_back();  // the first point of the other pass
-    }
-  }
+  for (int i : monotone_chain(static_cast<int>(pts.size()), [&](int k) -> const Vec2& { return pts[k]; }))
+    h.push_back(pts[i]);
   // The edges' angles, indexed from the edge after their wrap round.
   const int k = static_cast<int>(h.size());
   const int start = index_edge_angles(h, &hull_index_);

@@ -163,9 +163,11 @@ class Planner {
   /// rules or the `others` fingers refuse the step.
   bool reclose_step(int m, Chain& chain, const std::vector<Chain>& others) const;
   /// Chain m clears itself (links not next to each other, in its plane) and the `others`
-  /// fingers (in the world) by finger_separation(). `self_clear`: the chain is known to clear
-  /// itself (Tail2Head placed it refusing folds, snake_request's stop_folding): not asked again.
-  bool fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others, bool self_clear = false) const;
+  /// fingers (in the world) by finger_separation(). `placed` (or nullptr): the request
+  /// Tail2Head placed the chain with; where it refused folds by finger_separation() or more
+  /// (snake_request's stop_folding), the chain clears itself and is not asked again.
+  bool fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others,
+                     const SnakeRequest* placed = nullptr) const;
   /// How far apart two links of the hand must stay: two link radii (at least 0.1 µm).
   double finger_separation() const;
   /// HandModel::planar_angles of finger m's `chain`, bit for bit, remembered for the last two

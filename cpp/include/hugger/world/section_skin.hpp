@@ -183,6 +183,11 @@ class PlaneRegion {
   /// then ask H's loop first where they reach no pocket (there R and H agree). 0 where R is
   /// convex or not one loop.
   int pockets() const { return loop_kind_ == LoopKind::kPockets ? static_cast<int>(pockets_.size()) : 0; }
+  /// Whether the loop's shortcuts may answer a query reaching `distance` (>= 0) about segment
+  /// [a, b] (a point: a == b): R's loop is convex, or H's pockets lie beyond that reach.
+  bool loop_answers(const Vec2& a, const Vec2& b, double distance) const {
+    return loop_kind_ == LoopKind::kConvex || (loop_kind_ == LoopKind::kPockets && !near_pocket(a, b, distance));
+  }
   /// Segments dropped at build time as lying inside R.
   long dropped() const { return dropped_; }
   /// Number of 3D inside tests asked so far (side tests that were unsafe).
@@ -253,6 +258,8 @@ class PlaneRegion {
   /// there R and H, and their boundaries, are the same, so H's answer is R's. convex_shallow
   /// needs no such test: a point of R lies no deeper in R than in H.
   void build_loop();
+  /// No loop (loop_kind_ kNone, its lists empty).
+  void clear_loop();
   /// spans() where R is one convex loop: the pieces within `length` of the pivot are one run of
   /// the loop facing it, and the span of their union is settled by the few segments at its two
   /// ends (found by walking the loop), each by the same formula as in the tree's visit. False
@@ -336,11 +343,7 @@ class PlaneRegion {
     Vec2 lo, hi;
   };
   std::vector<Pocket> pockets_;
-  /// Whether the loop's shortcuts may answer a query reaching `distance` about segment [a, b]:
-  /// R's loop is convex, or H's loop's pockets lie beyond that reach.
-  bool loop_answers(const Vec2& a, const Vec2& b, double distance) const {
-    return loop_kind_ == LoopKind::kConvex || (loop_kind_ == LoopKind::kPockets && !near_pocket(a, b, distance));
-  }
+
   /// True when segment [a, b] grown by `distance` (and twice kSureApart) reaches a pocket's box:
   /// the loop's shortcuts then leave the query to the tree.
   bool near_pocket(const Vec2& a, const Vec2& b, double distance) const;
