@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
-#include <cstring>
+
+#include "hugger/geometry/next.hpp"
 
 namespace hugger {
 
@@ -11,9 +12,7 @@ namespace {
 
 /// The bits of x (-0 taken as +0) as an unsigned integer in the same order as the doubles.
 std::uint64_t order_key(double x) {
-  x += 0.0;
-  std::uint64_t bits;
-  std::memcpy(&bits, &x, sizeof bits);
+  const std::uint64_t bits = bits_of(x + 0.0);
   return bits >> 63 ? ~bits : bits | (std::uint64_t{1} << 63);
 }
 

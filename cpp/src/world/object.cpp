@@ -4,7 +4,6 @@
 #include <array>
 #include <atomic>
 #include <cmath>
-#include <cstring>
 #include <future>
 #include <system_error>
 #include <unordered_map>
@@ -12,6 +11,7 @@
 
 #include "hugger/check.hpp"
 #include "hugger/geometry/frame.hpp"
+#include "hugger/geometry/next.hpp"
 
 namespace hugger {
 
@@ -72,12 +72,7 @@ void check_surface(const PointsN3& V, const FacesN3& F, const std::vector<std::i
   // compared by their sorted position triples.
   // Do two distinct vertices coincide? An open-addressing hash of the positions' bits (+ 0.0
   // makes -0 equal to 0): linear in the mesh.
-  auto bits = [&](std::int64_t i, int k) {
-    const double x = V(i, k) + 0.0;
-    std::uint64_t b;
-    std::memcpy(&b, &x, sizeof b);
-    return b;
-  };
+  auto bits = [&](std::int64_t i, int k) { return bits_of(V(i, k) + 0.0); };
   std::size_t capacity = 16;
   while (capacity < 2 * static_cast<std::size_t>(nv)) capacity *= 2;
   std::vector<std::int64_t> table(capacity, -1);

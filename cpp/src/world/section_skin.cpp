@@ -357,7 +357,7 @@ void PlaneRegion::build_loop() {
   Vec2 centre = Vec2::Zero();
   for (int k = 0; k < m; ++k) centre += tail[k];
   centre /= static_cast<double>(m);
-  for (int k = 0; k < m; ++k)
+  for (int k = 0; k < m && !convex; ++k)  // (the hull's turns: R's were tested above)
     if (turns_right(tail[(k + 1) % m] - tail[k], tail[(k + 2) % m] - tail[(k + 1) % m])) return;
   // ... and once round the centre: the tails' angles about it increase from the smallest.
   std::vector<double> angle(m);

@@ -182,7 +182,7 @@ class PlaneRegion {
   /// (stretches where H lies outside R, each under one of H's edges, a lid). The same queries
   /// then ask H's loop first where they reach no pocket (there R and H agree). 0 where R is
   /// convex or not one loop.
-  int pockets() const { return loop_kind_ == LoopKind::kPockets ? static_cast<int>(pockets_.size()) : 0; }
+  int pockets() const { return static_cast<int>(pockets_.size()); }  // (kept only with the loop)
   /// Whether the loop's shortcuts may answer a query reaching `distance` (>= 0) about segment
   /// [a, b] (a point: a == b): R's loop is convex, or H's pockets lie beyond that reach.
   bool loop_answers(const Vec2& a, const Vec2& b, double distance) const {
