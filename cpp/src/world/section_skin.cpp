@@ -1339,14 +1339,15 @@ bool PlaneRegion::hull_apart(const Q& q, double limit) const {
 }
 
 template <class Skip, class Visit>
-bool PlaneRegion::visit_segments(Skip&& skip, Visit&& visit) const {
+bool PlaneRegion::visit_segments(Skip&& skip, Visit&& visit, bool root_kept) const {
   if (nodes_.empty()) return false;
   int stack[96];
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
-    const Node& nd = nodes_[stack[--top]];
-    if (skip(nd)) continue;
+    const int at = stack[--top];
+    const Node& nd = nodes_[at];
+    if (!(at == 0 && root_kept) && skip(nd)) continue;
     if (nd.left >= 0) {
       stack[top++] = nd.right;
       stack[top++] = nd.left;
@@ -1438,13 +1439,15 @@ PlaneRegion::Reach PlaneRegion::reach(const Vec2& a, const Vec2& b, double dista
   const double limit = distance + q.slack(extent_);
   // The root's box first, then the hull (which a link tangent to a convex R is apart from).
   if (nodes_.empty() || node_farther(nodes_[0], q, distance) || hull_apart(q, limit)) return Reach::kApart;
+  // (The root's box was asked above.)
   return visit_segments([&](const Node& nd) { return node_farther(nd, q, distance); },
                         [&](int i) {
                           const Segment& s = segments_[i];
                           if (farther_than(q, s.a, s.b, s.normal, limit)) return false;
                           Vec2 c1, c2;
                           return segment_distance(a, b, s.a, s.b, &c1, &c2) <= distance;
-                        })
+                        },
+                        true)
              ? Reach::kWithin
              : Reach::kBeyond;
 }

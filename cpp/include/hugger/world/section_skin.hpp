@@ -207,9 +207,10 @@ class PlaneRegion {
   };
   /// Depth first over the 2D tree (left before right): skips every node `skip(node)` is true of
   /// and calls `visit(i)` on each segment of the leaves reached, stopping when `visit` returns
-  /// true. Returns whether it stopped.
+  /// true. Returns whether it stopped. `root_kept`: the caller has found `skip(root)` false
+  /// already, so the walk starts below the root without asking again.
   template <class Skip, class Visit>
-  bool visit_segments(Skip&& skip, Visit&& visit) const;
+  bool visit_segments(Skip&& skip, Visit&& visit, bool root_kept = false) const;
   void build_pieces();
   void build_bvh();
   /// The convex hull of the segments' end points (hull_, hull_index_).
