@@ -86,7 +86,7 @@ class SensorModel(Sensing):
         reads above ``cap`` (and above the range, which is the most the model reports)."""
         return min(cap, self.range) + 6.0 * self.gap_noise
 
-    def _reading(self, gap: float, cap: float) -> float:
+    def _reading(self, gap: float) -> float:
         """A sensed gap: noisy, calibrated to stay at or below the true gap, cut at the range."""
         if self.gap_noise > 0.0 and math.isfinite(gap):
             gap = gap - 3.0 * self.gap_noise + self._noise(self.gap_noise)
@@ -122,11 +122,11 @@ class SensorModel(Sensing):
                 if t is None or u.gap < t.gap:
                     t = u
             t = cast(Touch, t)  # the loop runs at least once
-        gap = self._reading(t.gap, cap)
+        gap = self._reading(t.gap)
         if not math.isfinite(t.gap) or t.gap > self.range:  # nothing felt: no contact point either
             return Touch(gap, t.on_hand, t.on_hand, t.normal)
         return Touch(gap, t.on_hand, t.on_object, self._tilt(np.asarray(t.normal)))
 
     def palm(self, pose: np.ndarray, radius: float, thickness: float, cap: float = math.inf) -> float:  # type: ignore[override]
         self.queries += 1
-        return self._reading(float(self.skin.palm(pose, radius, thickness, self._ask(cap))), cap)
+        return self._reading(float(self.skin.palm(pose, radius, thickness, self._ask(cap))))
