@@ -40,6 +40,8 @@ constexpr double kSureApart = 1e-9;
 constexpr int kMaxPockets = 16;
 
 inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+/// Points in order of x, then y (monotone_chain's order).
+inline bool x_then_y(const Vec2& p, const Vec2& q) { return p.x() < q.x() || (p.x() == q.x() && p.y() < q.y()); }
 /// v turned a quarter to the left.
 inline Vec2 left_of(const Vec2& v) { return Vec2(-v.y(), v.x()); }
 
@@ -277,9 +279,7 @@ bool hull_of_polygon(const std::vector<Vec2>& v, std::vector<int>* hull) {
   const int n = static_cast<int>(v.size());
   std::vector<int> order(n);
   for (int i = 0; i < n; ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](int a, int b) {
-    return v[a].x() < v[b].x() || (v[a].x() == v[b].x() && v[a].y() < v[b].y());
-  });
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return x_then_y(v[a], v[b]); });
   std::vector<int> h = monotone_chain(n, [&](int k) -> const Vec2& { return v[order[k]]; });
   if (h.size() < 3) return false;
   for (int& i : h) i = order[i];
@@ -357,8 +357,8 @@ void PlaneRegion::build_loop() {
   Vec2 centre = Vec2::Zero();
   for (int k = 0; k < m; ++k) centre += tail[k];
   centre /= static_cast<double>(m);
-  for (int k = 0; k < m && !convex; ++k)  // (the hull's turns: R's were tested above)
-    if (turns_right(tail[(k + 1) % m] - tail[k], tail[(k + 2) % m] - tail[(k + 1) % m])) return;
+  // (The hull turns left at every vertex as monotone_chain builds it; a turn the wrong way by
+  // more than rounding would also fail the edges' wrap test below.)
   // ... and once round the centre: the tails' angles about it increase from the smallest.
   std::vector<double> angle(m);
   for (int k = 0; k < m; ++k) angle[k] = pseudo_angle(Vec2::UnitX(), tail[k] - centre);
@@ -1265,9 +1265,7 @@ void PlaneRegion::build_hull() {
     pts.push_back(s.a);
     pts.push_back(s.b);
   }
-  // (monotone_chain's order)
-  std::sort(pts.begin(), pts.end(),
-            [](const Vec2& p, const Vec2& q) { return p.x() < q.x() || (p.x() == q.x() && p.y() < q.y()); });
+  std::sort(pts.begin(), pts.end(), x_then_y);
   pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
   std::vector<Vec2> h;
   for (int i : monotone_chain(static_cast<int>(pts.size()), [&](int k) -> const Vec2& { return pts[k]; }))
