@@ -2093,6 +2093,11 @@ const PlaneRegion* SectionSkin::region(const FingerPlane& plane, double radius) 
   return find_or_build(plane, radius);
 }
 
+// Out of line (where the compiler supports saying so): inlined, it would give region() the
+// frame of the build, which its test of the entry found last does not need.
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
 const PlaneRegion* SectionSkin::find_or_build(const FingerPlane& plane, double radius) const {
   if (const PlaneRegion* r = find(plane, radius)) return r;
   if (!finite_plane(plane, radius)) return nullptr;
