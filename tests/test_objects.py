@@ -65,6 +65,36 @@ def test_builtin_sizes_must_be_positive(make, kwargs, message):
         make(**kwargs)
 
 
+@pytest.mark.parametrize("make, kwargs, message", [
+    (objects.sphere, {"subdivisions": 20}, "subdivisions must be a whole number from 0 to 8, got 20"),
+    (objects.sphere, {"subdivisions": -1}, "subdivisions must be a whole number from 0 to 8"),
+    (objects.ellipsoid, {"subdivisions": 2.5}, "subdivisions must be a whole number"),
+    (objects.blob, {"subdivisions": "a"}, "subdivisions must be a whole number"),
+    (objects.apple, {"subdivisions": True}, "subdivisions must be a whole number"),
+    (objects.blob, {"seed": -1}, "seed must be a whole number >= 0"),
+    (objects.blob, {"seed": "a"}, "seed must be a whole number >= 0"),
+    (objects.box, {"divisions": 0}, "divisions must be a whole number >= 1"),
+    (objects.box, {"divisions": 1000}, "the box would have 12,000,000 triangles"),
+    (objects.cylinder, {"sections": 2}, "sections must be a whole number >= 3"),
+    (objects.cylinder, {"rings": 0}, "rings must be a whole number >= 1"),
+    (objects.torus, {"sections": 5000, "rings": 1000}, "the torus would have 10,000,000 triangles"),
+    (objects.torus, {"major_radius": "x"}, "major_radius must be a number"),
+    (objects.torus, {"major_radius": 0.01, "minor_radius": 0.02}, "minor_radius < major_radius"),
+    (objects.curvy, {"size": -0.04}, "size must be a positive finite number"),
+    (objects.apple, {"radius": 0.0}, "radius must be a positive finite number"),
+])
+def test_builtin_counts_and_seeds_are_checked(make, kwargs, message):
+    # Before any work: an unchecked count of subdivisions grows the mesh fourfold per level.
+    with pytest.raises(ValueError, match=message):
+        make(**kwargs)
+
+
+def test_builtin_counts_take_numpy_integers():
+    assert len(objects.sphere(subdivisions=np.int64(1)).faces) == 80
+    assert len(objects.box(divisions=np.int32(2)).faces) == 48
+    assert len(objects.blob(seed=np.int64(3), subdivisions=1).faces) == 80
+
+
 def test_unknown_builtin_names_the_choices():
     with pytest.raises(ValueError, match="choose from sphere, apple"):
         objects.get("banana")

@@ -20,6 +20,23 @@ def positive(name: str, value: Any, allow_zero: bool = False) -> float:
     return x
 
 
+def whole(name: str, value: Any, lo: int | None = None, hi: int | None = None) -> int:
+    """``value`` as an int: a whole number (an integer type, not a bool) from ``lo`` to ``hi``
+    (either may be None: unbounded); otherwise a ValueError naming ``name``."""
+    ok = not isinstance(value, bool) and isinstance(value, numbers.Integral)
+    if ok and (lo is None or value >= lo) and (hi is None or value <= hi):
+        return int(value)
+    if lo is not None and hi is not None:
+        rule = f"a whole number from {lo} to {hi}"
+    elif lo is not None:
+        rule = f"a whole number >= {lo}"
+    elif hi is not None:
+        rule = f"a whole number <= {hi}"
+    else:
+        rule = "a whole number"
+    raise ValueError(f"{name} must be {rule}, got {value!r}")
+
+
 def cpus() -> int:
     """The CPUs this process may run on (all of them where the OS cannot say)."""
     try:

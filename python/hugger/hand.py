@@ -2,14 +2,13 @@
 from __future__ import annotations
 
 import json
-import numbers
 import warnings
 from typing import Any, Callable
 
 import numpy as np
 
 from . import _core, _stable
-from ._checks import positive
+from ._checks import positive, whole
 
 from ._types import MAX_FINGERS, MAX_LINKS  # noqa: F401  (hugger.hand.MAX_FINGERS as before)
 
@@ -37,12 +36,6 @@ def rim_directions(finger_angles: Any) -> np.ndarray:
     if not np.all(np.isfinite(phi)):
         raise ValueError(f"finger_angles must be finite, got {phi.tolist()}")
     return np.stack([_stable.cos(phi), _stable.sin(phi), np.zeros(phi.shape)], axis=1)
-
-
-def _count(name: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise ValueError(f"{name} must be a whole number, got {value!r}")
-    return int(value)
 
 
 def _size(name: str, value: Any, allow_zero: bool = False) -> float:
@@ -111,7 +104,7 @@ class Hand:
 
     def __init__(self, fingers: int = 5, links: int = 5, link_length: Any = 0.02, link_radius: float = 0.004,
                  palm_radius: float = 0.03, palm_thickness: float = 0.01) -> None:
-        m, n = _count("fingers", fingers), _count("links", links)
+        m, n = whole("fingers", fingers), whole("links", links)
         if not 1 <= m <= MAX_FINGERS:
             raise ValueError(f"fingers must be between 1 and {MAX_FINGERS}, got {m}")
         if not 1 <= n <= MAX_LINKS:
@@ -346,14 +339,14 @@ class Hand:
         missing = [k for k in keys if k not in d]
         if missing:
             raise ValueError(f"the hand description lacks {missing}")
-        whole: Callable[[Any], Any] = lambda x: int(x) if isinstance(x, float) and x.is_integer() else x  # noqa: E731  (JSON may say 5.0)
-        fingers, links = whole(d["fingers"]), whole(d["links"])
+        integral: Callable[[Any], Any] = lambda x: int(x) if isinstance(x, float) and x.is_integer() else x  # noqa: E731  (JSON may say 5.0)
+        fingers, links = integral(d["fingers"]), integral(d["links"])
         layout_keys = ("finger_roots", "finger_directions", "rest_angles", "joint_limits")
         # The rim angles as given (default 2 pi m / M): fingers at other angles are a layout too.
         phi: np.ndarray | None = None
         spread = False
         if "finger_angles" in d:
-            m = _count("fingers", fingers)
+            m = whole("fingers", fingers)
             phi = _real_array("finger_angles", d["finger_angles"])
             if phi.shape != (m,):
                 raise ValueError(f"finger_angles must hold {m} angles, got shape {phi.shape}")
@@ -363,7 +356,7 @@ class Hand:
                        palm_radius=d["palm_radius"], palm_thickness=d["palm_thickness"])
             hand.name = d.get("name") if isinstance(d.get("name"), str) else None
             return hand
-        m, n = _count("fingers", fingers), _count("links", links)
+        m, n = whole("fingers", fingers), whole("links", links)
         if not (1 <= m <= MAX_FINGERS and 1 <= n <= MAX_LINKS):
             raise ValueError(f"fingers and links must be in 1..{MAX_FINGERS} and 1..{MAX_LINKS}, got {m}, {n}")
         palm_r = _size("palm_radius", d["palm_radius"])

@@ -16,12 +16,29 @@ from typing import Any, Callable
 import numpy as np
 
 from . import _stable
-from ._checks import positive
+from ._checks import positive, whole
 from .world import Object
 
 
+#: The most subdivisions of the icosphere the generators take: 20 * 4**8 = 1,310,720 triangles.
+MAX_SUBDIVISIONS = 8
+#: The most triangles the box, cylinder and torus generators make.
+MAX_TRIANGLES = 4_000_000
+
+
+def _subdivisions(value: Any) -> int:
+    return whole("subdivisions", value, 0, MAX_SUBDIVISIONS)
+
+
+def _triangles(what: str, count: int) -> None:
+    """A ValueError when a generator's counts would give more than MAX_TRIANGLES triangles."""
+    if count > MAX_TRIANGLES:
+        raise ValueError(f"{what} would have {count:,} triangles; at most {MAX_TRIANGLES:,} are made")
+
+
 def icosphere(subdivisions: int = 3) -> tuple[np.ndarray, np.ndarray]:
-    """Unit sphere: vertices (V, 3) and outward faces (F, 3); F = 20 * 4**subdivisions.
+    """Unit sphere: vertices (V, 3) and outward faces (F, 3); F = 20 * 4**subdivisions
+    (``subdivisions`` a whole number from 0 to MAX_SUBDIVISIONS).
 
     Each vertex is normalised as p / sqrt(p.x*p.x + p.y*p.y + p.z*p.z), in that order: the same
     bits on every x86-64 processor with FMA (hugger._stable), and those of the benchmark's C++
@@ -36,9 +53,10 @@ def icosphere(subdivisions: int = 3) -> tuple[np.ndarray, np.ndarray]:
         x, y, z = (float(c) for c in p)
         return p / math.sqrt(x * x + y * y + z * z)
 
+    levels = _subdivisions(subdivisions)
     verts = [unit(np.array(p, dtype=float)) for p in v]
     faces = f
-    for _ in range(int(subdivisions)):
+    for _ in range(levels):
         cache: dict[tuple[int, int], int] = {}
 
         def mid(a: int, b: int) -> int:
@@ -95,7 +113,7 @@ def blob(radius: float = 0.04, amplitude: float = 0.25, seed: int = 0, center: A
     waves of relative ``amplitude`` (random phases from ``seed``)."""
     radius = positive("radius", radius)
     v, f = icosphere(subdivisions)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(whole("seed", seed, 0))
     scale = np.ones(len(v))
     for _ in range(4):
         k = rng.normal(size=3)
@@ -108,7 +126,8 @@ def blob(radius: float = 0.04, amplitude: float = 0.25, seed: int = 0, center: A
 def box(extents: Any = (0.06, 0.05, 0.04), center: Any = (0, 0, 0), divisions: int = 4) -> Object:
     """Axis-aligned box of full ``extents`` (default 6 x 5 x 4 cm), each face a grid of
     ``divisions`` x ``divisions`` squares."""
-    n = max(1, int(divisions))
+    n = whole("divisions", divisions, 1)
+    _triangles("the box", 12 * n * n)
     e = _sizes("extents", extents) / 2.0
     verts: dict[tuple[int, ...], int] = {}
     points: list[np.ndarray] = []
@@ -140,7 +159,8 @@ def cylinder(radius: float = 0.035, height: float = 0.1, center: Any = (0, 0, 0)
              rings: int = 8) -> Object:
     """Cylinder along z of ``radius`` and ``height`` (default 3.5 x 10 cm), closed by flat caps."""
     radius, height = positive("radius", radius), positive("height", height)
-    s, r = max(3, int(sections)), max(1, int(rings))
+    s, r = whole("sections", sections, 3), whole("rings", rings, 1)
+    _triangles("the cylinder", 2 * s * (r + 1))
     ang = 2 * np.pi * np.arange(s) / s
     pts = [np.array([0.0, 0.0, -height / 2]), np.array([0.0, 0.0, height / 2])]
     for k in range(r + 1):
@@ -168,7 +188,7 @@ def apple(radius: float = 0.04, center: Any = (0, 0, 0), subdivisions: int = 5) 
     theta = _stable.arccos(np.clip(v[:, 2], -1.0, 1.0))  # angle from +z
     rho = (1.0 - 0.30 * _stable.exp(-((theta / 0.38) ** 2)) - 0.15 * _stable.exp(-(((np.pi - theta) / 0.40) ** 2))
            + 0.05 * _stable.sin(theta) ** 2)
-    rho = rho * radius
+    rho = rho * positive("radius", radius)
     return _star(v, f, rho, center)
 
 
@@ -188,7 +208,7 @@ def curvy(size: float = 0.04, center: Any = (0, 0, 0), subdivisions: int = 5) ->
     sin, cos, exp = _stable.sin, _stable.cos, _stable.exp  # the C library's, as hugger_bench's
     rho = (1.0 + 0.20 * sin(3.0 * x + 0.7) * cos(2.5 * y - 0.3) + 0.12 * sin(4.0 * z + 1.2) * cos(2.0 * x - 0.5)
            + 0.10 * cos(3.5 * y + 0.9) * sin(2.5 * z) - 0.10 * exp(-(((x - 0.1) / 0.3) ** 2)))
-    p = v * (rho * float(size))[:, None]
+    p = v * (rho * positive("size", size))[:, None]
     p[:, 0] *= 1.2
     return Object(p + _center(center), f)
 
@@ -198,9 +218,11 @@ def torus(major_radius: float = 0.04, minor_radius: float = 0.015, center: Any =
     """A ring about z: tube radius ``minor_radius`` (default 1.5 cm) around a circle of ``major_radius``
     (default 4 cm), so 11 x 11 x 3 cm. Its centre is not inside it: the natural target is in the tube,
     at (major_radius, 0, 0) from the centre."""
-    if not 0 < minor_radius < major_radius:
-        raise ValueError("torus needs 0 < minor_radius < major_radius")
-    s, r = max(3, int(sections)), max(3, int(rings))
+    major_radius, minor_radius = positive("major_radius", major_radius), positive("minor_radius", minor_radius)
+    if not minor_radius < major_radius:
+        raise ValueError(f"torus needs minor_radius < major_radius, got {minor_radius!r} and {major_radius!r}")
+    s, r = whole("sections", sections, 3), whole("rings", rings, 3)
+    _triangles("the torus", 2 * s * r)
     u = 2 * np.pi * np.arange(s) / s
     w = 2 * np.pi * np.arange(r) / r
     uu, ww = np.meshgrid(u, w, indexing="ij")

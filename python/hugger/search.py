@@ -27,10 +27,9 @@ by it (ties: lowest index).
 from __future__ import annotations
 
 import math
-import numbers
 import time
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Sequence, cast
 
 import numpy as np
 
@@ -129,9 +128,7 @@ class SearchResult:
 
 def _direction_count(name: str, count: Any) -> int:
     """``count`` as a number of directions, 1 to 10000; otherwise a ValueError naming ``name``."""
-    if isinstance(count, bool) or not isinstance(count, numbers.Integral) or not 1 <= int(count) <= 10000:
-        raise ValueError(f"{name} must be a whole number from 1 to 10000, got {count!r}")
-    return int(count)
+    return _checks.whole(name, count, 1, 10000)
 
 
 def approach_directions(count: int, pole: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
@@ -361,8 +358,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
     bad = set(params) - set(_PARAMS)
     if bad:
         raise ValueError(f"unknown planner parameters {sorted(bad)}; expected some of {list(_PARAMS)}")
-    if isinstance(verify, bool) or not isinstance(verify, numbers.Integral) or verify < 0:
-        raise ValueError(f"verify must be a whole number >= 0, got {verify!r}")
+    _checks.whole("verify", verify, 0)
     if not isinstance(robust, bool):
         raise ValueError(f"robust must be True or False, got {robust!r}")
     if robust and not verify:
@@ -381,7 +377,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
     distance = safe_distance(obj, hand, t)
     scale = torque_scale(obj, t)
 
-    def run(i: int) -> tuple[Candidate, Trajectory | None]:
+    def run(i: int) -> tuple[Candidate, Trajectory | None, Any]:
         d = dirs[i]
         pose = start_pose(obj, hand, t, d, distance=distance)
         t1 = time.perf_counter()
@@ -399,10 +395,10 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
         return judged, traj, found
 
     k = len(dirs)
-    results: list[tuple[Candidate, Trajectory | None, Any]] = [None] * k
+    slots: list[tuple[Candidate, Trajectory | None, Any] | None] = [None] * k
     if workers == 1 or k == 1:
         for i in range(k):
-            results[i] = run(i)
+            slots[i] = run(i)
             if progress is not None:
                 progress(i + 1, k)
     else:
@@ -411,12 +407,18 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
         with ThreadPoolExecutor(max_workers=min(workers, k), thread_name_prefix="hugger-search") as pool:
             futures = {pool.submit(run, i): i for i in range(k)}
             for done, fut in enumerate(as_completed(futures), 1):
-                results[futures[fut]] = fut.result()
+                slots[futures[fut]] = fut.result()
                 if progress is not None:
                     progress(done, k)
+    results = [r for r in slots if r is not None]  # every slot is filled (a failed run raised)
     trajs = [r[1] for r in results]
-    judge = lambda c: _judge(c, trajs[c.index], hand, obj, t, scale)[0]  # noqa: E731
-    caged = lambda c: _escape(c, trajs[c.index], hand, obj)  # noqa: E731
+
+    def judge(c: Candidate) -> Candidate:
+        return _judge(c, cast(Trajectory, trajs[c.index]), hand, obj, t, scale)[0]
+
+    def caged(c: Candidate) -> Candidate:
+        return _escape(c, cast(Trajectory, trajs[c.index]), hand, obj)
+
     best, ranked = rank([r[0] for r in results], judge, score, caged)
     verified: tuple[int, ...] = ()
     if verify:
@@ -427,6 +429,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
         for c in checked:
             ranked[c.index] = c
         verified = tuple(c.index for c in checked)
-    return SearchResult(best=best, trajectory=trajs[best], candidates=tuple(ranked), target=t,
+    # rank() chooses a candidate that was planned (it raises when none was): its plan is there
+    return SearchResult(best=best, trajectory=cast(Trajectory, trajs[best]), candidates=tuple(ranked), target=t,
                         time_s=time.perf_counter() - t0, trajectories=tuple(trajs) if keep_all else None,
                         contacts=tuple(r[2] for r in results) if keep_all else None, verified=verified)
