@@ -139,6 +139,17 @@ def test_skin_answers_are_callable_from_python():
         mesh.capsule(np.zeros(3), np.zeros(3), -1.0)
 
 
+def test_a_sensor_model_of_an_object_records_it(hand):
+    obj = hugger.objects.sphere(0.04, subdivisions=3)
+    traj = hugger.Planner(hand, skins.SensorModel(obj), [0, 0, 0], start()).plan()
+    assert traj.has_object and np.array_equal(traj.object_faces, obj.faces)
+    assert traj.summary()["links_in_contact"] > 0
+    other = hugger.objects.sphere(0.04, subdivisions=2)  # a record_object given wins
+    traj = hugger.Planner(hand, skins.SensorModel(obj), [0, 0, 0], start(), record_object=other).plan()
+    assert np.array_equal(traj.object_faces, other.faces)
+    assert not hugger.Planner(hand, skins.SensorModel(Ball([0, 0, 0], 0.04)), [0, 0, 0], start()).plan().has_object
+
+
 def test_object_free_plan_saves_and_hugger_info_reads_it(hand, tmp_path):
     traj = hugger.Planner(hand, Ball([0, 0, 0], 0.04), [0, 0, 0], start()).plan()
     path = tmp_path / "free.npz"
@@ -154,6 +165,11 @@ def test_object_free_plan_saves_and_hugger_info_reads_it(hand, tmp_path):
         assert main(["validate", str(path)]) == 2
         with pytest.raises(ValueError, match="object-free"):
             hugger.physics.validate(back)
+        assert main(["export-mjcf", str(path), "--out", str(tmp_path / "free.xml")]) == 2
+        with pytest.raises(ValueError, match="object-free"):
+            hugger.physics.export_mjcf(back)
+    with pytest.raises(ValueError, match="object-free"):
+        back.summary()
     with pytest.raises(ValueError, match="record_object"):
         hugger.Planner(hand, hugger.objects.sphere(0.04), [0, 0, 0], start(), record_object=hugger.objects.sphere(0.04))
 

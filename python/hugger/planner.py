@@ -62,7 +62,8 @@ class Planner:
     ``skin="mesh"`` the simulated mesh world) or any skin, a :class:`hugger.skins.Sensing`
     (docs/skins.md): an analytic shape, a sensor model, a simulator, a real tactile hand. A skin
     need not have a mesh; ``record_object`` (a :class:`hugger.Object`) is then the mesh saved
-    with the plan for the record and the checker (without it the trajectory is object-free). An
+    with the plan for the record and the checker (without it the trajectory is object-free; a
+    :class:`hugger.skins.SensorModel` made from an Object records that Object). An
     exception raised by a skin reaches the caller of ``step()``/``plan()`` unchanged and ends the
     plan (status ``error``; the configurations completed before it stay valid).
 
@@ -104,6 +105,8 @@ class Planner:
                                      max_iterations=max_iterations, rules=rules)
         from .skins.sensor import SensorModel
 
+        if isinstance(sensing, SensorModel) and obj is None:
+            obj = sensing.object  # a sensor model of an Object records that Object (None: none)
         if isinstance(sensing, SensorModel):  # (the engine would find every part touching at the start)
             given = params.contact_tolerance
             tolerance = _core.DEFAULT_CONTACT_TOLERANCE if given is None else given

@@ -40,6 +40,11 @@ _ARRAYS = {
 _STRINGS = ("hand_json", "params_json", "status")
 
 
+#: Why an object-free plan (made with a skin that has no mesh) cannot be judged or exported.
+OBJECT_FREE = ("this plan is object-free (made with a skin that has no mesh): give the planner record_object= "
+               "to judge its contacts")
+
+
 @dataclass(frozen=True)
 class Trajectory:
     """A plan: K configurations of a hand with M fingers of N links, and what it grasped.
@@ -259,8 +264,7 @@ class Trajectory:
         record; edit a copy (``dataclasses.replace``), not the arrays in place."""
         if self._object is None:
             if not self.has_object:
-                raise ValueError("this plan is object-free (made with a skin that has no mesh): give the planner "
-                                 "record_object= to judge its contacts")
+                raise ValueError(OBJECT_FREE)
             obj = Object(self.object_vertices, self.object_faces, warn_size=False)  # warned when it was made
             object.__setattr__(self, "_object", obj)  # a cache on a frozen dataclass
         return cast(Object, self._object)
@@ -280,7 +284,9 @@ class Trajectory:
                                         float(h["palm_thickness"])))
 
     def summary(self, contact_distance: float = CONTACT_DISTANCE, obj: Object | None = None) -> dict[str, Any]:
-        """Figures of the final grasp: status, sizes, palm contact, links within ``contact_distance``."""
+        """Figures of the final grasp: status, sizes, palm contact, links within ``contact_distance``.
+        ``phase2_iterations`` and ``first_contact_iteration`` are the planner's own counts (None
+        where the trajectory's stats lack them)."""
         obj = obj if obj is not None else self.object()
         gaps = self.link_gaps(-1, obj)
         palm = self.palm_gap(-1, obj)
@@ -289,7 +295,9 @@ class Trajectory:
             "status": self.status,
             "configurations": len(self),
             "phase1_configurations": int(np.sum(self.phase == 1)),
-            "phase2_iterations": int(np.sum(self.phase == 2)),
+            "phase2_configurations": int(np.sum(self.phase == 2)),
+            # (an iteration that approaches free space emits several configurations)
+            "phase2_iterations": stats.get("phase2_iterations"),
             "palm_contact": bool(palm <= contact_distance),
             "palm_gap_m": palm,
             "links_in_contact": int(np.sum(gaps <= contact_distance)),

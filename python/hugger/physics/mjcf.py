@@ -12,7 +12,7 @@ import numpy as np
 
 from .._checks import positive as _positive
 from .._rotation import quaternion_wxyz
-from ..trajectory import Trajectory
+from ..trajectory import OBJECT_FREE, Trajectory
 from ._common import _floats, _index, _mujoco, _trajectory
 from .decompose import convex_pieces
 from .mass import mass_properties
@@ -93,6 +93,8 @@ def _build_mjcf(traj: Trajectory, k: int, object_mass: float, friction: float, d
     ranges = joint_ranges(traj, squeeze)
     angles = np.asarray(traj.angles[k], dtype=np.float64)
 
+    if not traj.has_object:
+        raise ValueError(OBJECT_FREE)
     verts = np.asarray(traj.object_vertices, dtype=np.float64)
     faces = np.asarray(traj.object_faces, dtype=np.int64)
     volume, centre, inertia_unit = mass_properties(verts, faces)

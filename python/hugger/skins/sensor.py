@@ -25,6 +25,7 @@ from typing import Any, cast
 
 import numpy as np
 
+from .._checks import whole
 from .._core import Sensing, Touch
 
 
@@ -45,6 +46,9 @@ class SensorModel(Sensing):
         super().__init__()
         from ..world import Object
 
+        #: The Object given as the skin (sensed through its mesh world), else None: a planner
+        #: records it with the plan unless given another ``record_object``.
+        self.object: Object | None = skin if isinstance(skin, Object) else None
         if isinstance(skin, Object):
             from .mesh import MeshSkin
 
@@ -60,8 +64,8 @@ class SensorModel(Sensing):
         self.taxel_spacing = None if taxel_spacing is None else _setting("taxel_spacing", taxel_spacing)
         if self.taxel_spacing == 0:
             raise ValueError("taxel_spacing must be positive (m) or None")
-        self.seed = seed
-        self._rng = np.random.default_rng(seed)
+        self.seed = whole("seed", seed, 0)
+        self._rng = np.random.default_rng(self.seed)
         self.queries = 0
 
     def uncertainty(self, radius: float) -> float:
