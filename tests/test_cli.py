@@ -179,6 +179,11 @@ def test_mesh_files_are_read_once_per_process(tmp_path, monkeypatch):
     (["render", "no/such/plan.npz", "--out", "x.png"], "no such trajectory file"),
     (["frobnicate"], "invalid choice"),
     ([], "required"),
+    (["plan", "sphere", "--out", "x.npz", "--step", "nan"], "argument --step: expected a finite number, got 'nan'"),
+    (["plan", "sphere", "--out", "x.npz", "--contact-tolerance", "inf"], "expected a finite number"),
+    (["objects", "extra"], "unrecognized arguments: extra (see 'hugger objects --help')"),
+    (["hands", "--bogus"], "see 'hugger hands --help'"),
+    (["generate", "sphere", "--out", "no/such/dir/gen"], "no such directory 'no/such/dir'"),
 ])
 def test_bad_arguments_exit_2_with_one_line(args, message, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)

@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import math
 import os
 import sys
 import time
@@ -80,11 +81,11 @@ def _hand_options(p: argparse.ArgumentParser) -> None:
 
 def _planner_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("planner (defaults as hugger.Planner)")
-    g.add_argument("--step", type=float, help="approach step, m (default shortest link / 20)")
-    g.add_argument("--epsilon", type=float,
+    g.add_argument("--step", type=_finite, help="approach step, m (default shortest link / 20)")
+    g.add_argument("--epsilon", type=_finite,
                    help="overextension threshold epsilon of the planner, m (default step / 10); not the "
                         "Ferrari-Canny epsilon of the grasp quality")
-    g.add_argument("--contact-tolerance", type=float, help="sensing distance delta, m (default 1e-4)")
+    g.add_argument("--contact-tolerance", type=_finite, help="sensing distance delta, m (default 1e-4)")
     g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
     g.add_argument("--rules", choices=RULES, default="hug",
                    help="Phase 2 rule set: 'hug' (default; the paper's rules plus extensions for firmer "
@@ -159,6 +160,13 @@ def _load(path: str) -> Trajectory:
 
 # --- output paths: an existing directory, the right suffix, written atomically ------------------
 
+def _parent_exists(out: Path, option: str = "--out") -> None:
+    """A UsageError (exit 2) unless the directory ``out`` goes into exists: nothing is created
+    silently."""
+    if not out.parent.is_dir():
+        raise UsageError(f"{option}: no such directory {str(out.parent)!r} (create it first)")
+
+
 def _out_path(value: str, suffixes: Sequence[str], option: str = "--out") -> Path:
     """``value`` as an output path: its directory must exist (nothing is created silently) and
     its suffix must be one of ``suffixes`` (case-insensitive); otherwise a UsageError (exit 2)."""
@@ -169,9 +177,7 @@ def _out_path(value: str, suffixes: Sequence[str], option: str = "--out") -> Pat
         raise UsageError(f"{option} {value!r} is a directory, expected a file name ending in {' or '.join(suffixes)}")
     if out.suffix.lower() not in suffixes:
         raise UsageError(f"{option} must end in {' or '.join(suffixes)}, got {out.name!r}")
-    parent = out.parent
-    if not parent.is_dir():
-        raise UsageError(f"{option}: no such directory {str(parent)!r} (create it first)")
+    _parent_exists(out, option)
     return out
 
 
@@ -180,8 +186,7 @@ def _out_dir(value: str, option: str = "--out") -> Path:
     out = Path(value)
     if out.exists() and not out.is_dir():
         raise UsageError(f"{option} {value!r} exists and is not a directory")
-    if not out.parent.is_dir():
-        raise UsageError(f"{option}: no such directory {str(out.parent)!r} (create it first)")
+    _parent_exists(out, option)
     out.mkdir(exist_ok=True)
     return out
 
@@ -513,6 +518,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
     if args.address is not None and args.backend != "ray":
         raise UsageError("--address applies to --backend ray only")
+    _parent_exists(Path(args.out))  # the dataset's folder is made by dataset.generate
     interactive = sys.stderr.isatty()
     log = None if interactive else _note  # plain lines in logs, a bar on a terminal
     argv = args._argv
@@ -744,9 +750,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--address", default=None, help="Ray cluster address for --backend ray (default: start a local Ray)")
     p.add_argument("--scale", type=float, default=1.0, help="multiply mesh coordinates (0.001 for millimetres)")
     g = p.add_argument_group("planner (defaults as hugger.Planner; no timeout: datasets are deterministic)")
-    g.add_argument("--step", type=float, help="approach step, m (default shortest link / 20)")
-    g.add_argument("--epsilon", type=float, help="overextension threshold epsilon of the planner, m (default step / 10)")
-    g.add_argument("--contact-tolerance", type=float, help="sensing distance delta, m (default 1e-4)")
+    g.add_argument("--step", type=_finite, help="approach step, m (default shortest link / 20)")
+    g.add_argument("--epsilon", type=_finite, help="overextension threshold epsilon of the planner, m (default step / 10)")
+    g.add_argument("--contact-tolerance", type=_finite, help="sensing distance delta, m (default 1e-4)")
     g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
     g.add_argument("--rules", choices=RULES, default=None, help="Phase 2 rule set (default hug)")
     p.set_defaults(func=cmd_generate)
@@ -784,6 +790,17 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
+def _finite(text: str) -> float:
+    """A finite number (the planner's own checks then say what else it must be)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
 def _count(text: str) -> int:
     try:
         value = int(text)
@@ -810,7 +827,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _main(argv: Sequence[str] | None) -> int:
     try:
-        args = build_parser().parse_args(argv)
+        parser = build_parser()
+        args, extra = parser.parse_known_args(argv)
+        if extra:  # named by the subcommand's help, which lists what it takes
+            prog = f"{parser.prog} {args.command}" if getattr(args, "command", None) else parser.prog
+            raise UsageError(f"unrecognized arguments: {' '.join(extra)} (see '{prog} --help')")
         args._argv = [str(a) for a in argv] if argv is not None else sys.argv[1:]
         return int(args.func(args))
     except (UsageError, ValueError, FileNotFoundError, IsADirectoryError, NotADirectoryError, PermissionError,
