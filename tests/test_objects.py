@@ -89,6 +89,21 @@ def test_builtin_counts_and_seeds_are_checked(make, kwargs, message):
         make(**kwargs)
 
 
+@pytest.mark.parametrize("make, kwargs", [
+    (objects.sphere, {"radius": -1.0}), (objects.sphere, {"center": (0, 0)}),
+    (objects.ellipsoid, {"center": (0, float("nan"), 0)}), (objects.blob, {"seed": -1}),
+    (objects.blob, {"amplitude": -0.1}), (objects.blob, {"center": "x"}), (objects.apple, {"radius": 0.0}),
+    (objects.apple, {"center": (1, 2)}), (objects.curvy, {"size": -0.04}), (objects.curvy, {"center": (0,)}),
+])
+def test_builtin_arguments_are_checked_before_the_mesh_is_made(make, kwargs, monkeypatch):
+    def made(*args, **kw):
+        raise AssertionError("the mesh was made before the arguments were checked")
+
+    monkeypatch.setattr(objects, "icosphere", made)
+    with pytest.raises(ValueError):
+        make(**kwargs)
+
+
 def test_builtin_counts_take_numpy_integers():
     assert len(objects.sphere(subdivisions=np.int64(1)).faces) == 80
     assert len(objects.box(divisions=np.int32(2)).faces) == 48

@@ -97,38 +97,40 @@ def _sizes(name: str, value: Any) -> np.ndarray:
 
 def sphere(radius: float = 0.04, center: Any = (0, 0, 0), subdivisions: int = 4) -> Object:
     """Sphere of ``radius`` (default 4 cm), 20 * 4**subdivisions triangles."""
+    r, c = positive("radius", radius), _center(center)  # every argument checked before any work
     v, f = icosphere(subdivisions)
-    return Object(v * positive("radius", radius) + _center(center), f)
+    return Object(v * r + c, f)
 
 
 def ellipsoid(radii: Any = (0.05, 0.04, 0.03), center: Any = (0, 0, 0), subdivisions: int = 4) -> Object:
     """Axis-aligned ellipsoid with semi-axes ``radii`` (default 5 x 4 x 3 cm)."""
+    r, c = _sizes("radii", radii), _center(center)
     v, f = icosphere(subdivisions)
-    return Object(v * _sizes("radii", radii) + _center(center), f)
+    return Object(v * r + c, f)
 
 
 def blob(radius: float = 0.04, amplitude: float = 0.25, seed: int = 0, center: Any = (0, 0, 0),
          subdivisions: int = 4) -> Object:
     """A smooth, non-convex, star-shaped body: a sphere whose radius varies by a few low-order
-    waves of relative ``amplitude`` (random phases from ``seed``)."""
-    radius = positive("radius", radius)
+    waves of relative ``amplitude`` (>= 0; random phases from ``seed``, a whole number >= 0)."""
+    radius, amplitude = positive("radius", radius), positive("amplitude", amplitude, allow_zero=True)
+    rng, c = np.random.default_rng(whole("seed", seed, 0)), _center(center)
     v, f = icosphere(subdivisions)
-    rng = np.random.default_rng(whole("seed", seed, 0))
     scale = np.ones(len(v))
     for _ in range(4):
         k = rng.normal(size=3)
         k *= rng.uniform(2.0, 4.0) / float(_stable.norm(k))
         scale += amplitude / 4 * _stable.sin(_stable.matmul(v, k[:, None])[:, 0] + rng.uniform(0, 2 * np.pi))
     scale = np.maximum(scale, 0.4)
-    return Object(v * (radius * scale)[:, None] + _center(center), f)
+    return Object(v * (radius * scale)[:, None] + c, f)
 
 
 def box(extents: Any = (0.06, 0.05, 0.04), center: Any = (0, 0, 0), divisions: int = 4) -> Object:
     """Axis-aligned box of full ``extents`` (default 6 x 5 x 4 cm), each face a grid of
-    ``divisions`` x ``divisions`` squares."""
+    ``divisions`` x ``divisions`` squares (a whole number >= 1; at most MAX_TRIANGLES triangles)."""
     n = whole("divisions", divisions, 1)
     _triangles("the box", 12 * n * n)
-    e = _sizes("extents", extents) / 2.0
+    e, c = _sizes("extents", extents) / 2.0, _center(center)
     verts: dict[tuple[int, ...], int] = {}
     points: list[np.ndarray] = []
     faces: list[tuple[int, int, int]] = []
@@ -152,15 +154,17 @@ def box(extents: Any = (0.06, 0.05, 0.04), center: Any = (0, 0, 0), divisions: i
                     if side == 0:
                         quad = quad[::-1]
                     faces += [(quad[0], quad[1], quad[2]), (quad[0], quad[2], quad[3])]
-    return Object(np.array(points) + _center(center), np.array(faces, dtype=np.int64))
+    return Object(np.array(points) + c, np.array(faces, dtype=np.int64))
 
 
 def cylinder(radius: float = 0.035, height: float = 0.1, center: Any = (0, 0, 0), sections: int = 48,
              rings: int = 8) -> Object:
-    """Cylinder along z of ``radius`` and ``height`` (default 3.5 x 10 cm), closed by flat caps."""
+    """Cylinder along z of ``radius`` and ``height`` (default 3.5 x 10 cm), closed by flat caps:
+    ``sections`` (>= 3) around, ``rings`` (>= 1) along z, at most MAX_TRIANGLES triangles."""
     radius, height = positive("radius", radius), positive("height", height)
     s, r = whole("sections", sections, 3), whole("rings", rings, 1)
     _triangles("the cylinder", 2 * s * (r + 1))
+    origin = _center(center)
     ang = 2 * np.pi * np.arange(s) / s
     pts = [np.array([0.0, 0.0, -height / 2]), np.array([0.0, 0.0, height / 2])]
     for k in range(r + 1):
@@ -173,7 +177,7 @@ def cylinder(radius: float = 0.035, height: float = 0.1, center: Any = (0, 0, 0)
         faces.append((1, ring(r, i), ring(r, i + 1)))
         for k in range(r):
             faces += [(ring(k, i), ring(k, i + 1), ring(k + 1, i + 1)), (ring(k, i), ring(k + 1, i + 1), ring(k + 1, i))]
-    return Object(np.array(pts) + _center(center), np.array(faces, dtype=np.int64))
+    return Object(np.array(pts) + origin, np.array(faces, dtype=np.int64))
 
 
 def _star(v: np.ndarray, f: np.ndarray, rho: np.ndarray, center: Any) -> Object:
@@ -184,12 +188,13 @@ def _star(v: np.ndarray, f: np.ndarray, rho: np.ndarray, center: Any) -> Object:
 def apple(radius: float = 0.04, center: Any = (0, 0, 0), subdivisions: int = 5) -> Object:
     """An apple: a sphere of ``radius`` (default 4 cm) widened at the equator (8.4 cm wide, 6.9 cm tall)
     with a stem dimple on top (+z) and a shallower calyx dimple below."""
+    r, c = positive("radius", radius), _center(center)
     v, f = icosphere(subdivisions)
     theta = _stable.arccos(np.clip(v[:, 2], -1.0, 1.0))  # angle from +z
     rho = (1.0 - 0.30 * _stable.exp(-((theta / 0.38) ** 2)) - 0.15 * _stable.exp(-(((np.pi - theta) / 0.40) ** 2))
            + 0.05 * _stable.sin(theta) ** 2)
-    rho = rho * positive("radius", radius)
-    return _star(v, f, rho, center)
+    rho = rho * r
+    return _star(v, f, rho, c)
 
 
 def curvy(size: float = 0.04, center: Any = (0, 0, 0), subdivisions: int = 5) -> Object:
@@ -203,26 +208,29 @@ def curvy(size: float = 0.04, center: Any = (0, 0, 0), subdivisions: int = 5) ->
 
     (The benchmark binary ``hugger_bench`` builds the same body.)
     """
+    scale, c = positive("size", size), _center(center)
     v, f = icosphere(subdivisions)
     x, y, z = v.T
     sin, cos, exp = _stable.sin, _stable.cos, _stable.exp  # the C library's, as hugger_bench's
     rho = (1.0 + 0.20 * sin(3.0 * x + 0.7) * cos(2.5 * y - 0.3) + 0.12 * sin(4.0 * z + 1.2) * cos(2.0 * x - 0.5)
            + 0.10 * cos(3.5 * y + 0.9) * sin(2.5 * z) - 0.10 * exp(-(((x - 0.1) / 0.3) ** 2)))
-    p = v * (rho * positive("size", size))[:, None]
+    p = v * (rho * scale)[:, None]
     p[:, 0] *= 1.2
-    return Object(p + _center(center), f)
+    return Object(p + c, f)
 
 
 def torus(major_radius: float = 0.04, minor_radius: float = 0.015, center: Any = (0, 0, 0), sections: int = 96,
           rings: int = 32) -> Object:
     """A ring about z: tube radius ``minor_radius`` (default 1.5 cm) around a circle of ``major_radius``
     (default 4 cm), so 11 x 11 x 3 cm. Its centre is not inside it: the natural target is in the tube,
-    at (major_radius, 0, 0) from the centre."""
+    at (major_radius, 0, 0) from the centre. ``sections`` (>= 3) around z, ``rings`` (>= 3) around
+    the tube, at most MAX_TRIANGLES triangles."""
     major_radius, minor_radius = positive("major_radius", major_radius), positive("minor_radius", minor_radius)
     if not minor_radius < major_radius:
         raise ValueError(f"torus needs minor_radius < major_radius, got {minor_radius!r} and {major_radius!r}")
     s, r = whole("sections", sections, 3), whole("rings", rings, 3)
     _triangles("the torus", 2 * s * r)
+    origin = _center(center)
     u = 2 * np.pi * np.arange(s) / s
     w = 2 * np.pi * np.arange(r) / r
     uu, ww = np.meshgrid(u, w, indexing="ij")
@@ -232,7 +240,7 @@ def torus(major_radius: float = 0.04, minor_radius: float = 0.015, center: Any =
     a, b = i * r + j, ((i + 1) % s) * r + j
     c, d = ((i + 1) % s) * r + (j + 1) % r, i * r + (j + 1) % r
     faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
-    return Object(pts + _center(center), faces.astype(np.int64))
+    return Object(pts + origin, faces.astype(np.int64))
 
 
 @dataclass(frozen=True)
