@@ -40,11 +40,6 @@ _ARRAYS = {
 _STRINGS = ("hand_json", "params_json", "status")
 
 
-#: Why an object-free plan (made with a skin that has no mesh) cannot be judged or exported.
-OBJECT_FREE = ("this plan is object-free (made with a skin that has no mesh): give the planner record_object= "
-               "to judge its contacts")
-
-
 @dataclass(frozen=True)
 class Trajectory:
     """A plan: K configurations of a hand with M fingers of N links, and what it grasped.
@@ -264,7 +259,8 @@ class Trajectory:
         record; edit a copy (``dataclasses.replace``), not the arrays in place."""
         if self._object is None:
             if not self.has_object:
-                raise ValueError(OBJECT_FREE)
+                raise ValueError("this plan is object-free (made with a skin that has no mesh): plan it again "
+                                 "with record_object= to judge, simulate or export it")
             obj = Object(self.object_vertices, self.object_faces, warn_size=False)  # warned when it was made
             object.__setattr__(self, "_object", obj)  # a cache on a frozen dataclass
         return cast(Object, self._object)

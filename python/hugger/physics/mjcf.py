@@ -12,7 +12,7 @@ import numpy as np
 
 from .._checks import positive as _positive
 from .._rotation import quaternion_wxyz
-from ..trajectory import OBJECT_FREE, Trajectory
+from ..trajectory import Trajectory
 from ._common import _floats, _index, _mujoco, _trajectory
 from .decompose import convex_pieces
 from .mass import mass_properties
@@ -93,8 +93,6 @@ def _build_mjcf(traj: Trajectory, k: int, object_mass: float, friction: float, d
     ranges = joint_ranges(traj, squeeze)
     angles = np.asarray(traj.angles[k], dtype=np.float64)
 
-    if not traj.has_object:
-        raise ValueError(OBJECT_FREE)
     verts = np.asarray(traj.object_vertices, dtype=np.float64)
     faces = np.asarray(traj.object_faces, dtype=np.int64)
     volume, centre, inertia_unit = mass_properties(verts, faces)
@@ -181,7 +179,7 @@ def export_mjcf(traj: Any, path: str | os.PathLike[str] | None = None, k: int = 
     also written to ``path`` when given. Raises ``ValueError`` for bad input, ``ImportError`` when
     MuJoCo or CoACD are missing.
     """
-    traj = _trajectory(traj)
+    traj = _trajectory(traj, needs_object=True)
     k = _index(traj, k)
     object_mass = _positive("object_mass", object_mass)
     friction = _positive("friction", friction)
