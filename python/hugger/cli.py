@@ -30,7 +30,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, NoReturn, Sequence, TextIO
+from typing import TYPE_CHECKING, Any, Mapping, NoReturn, Sequence, TextIO
 
 from ._files import atomic_path, write_atomic
 from ._progress import Progress
@@ -55,6 +55,9 @@ class UsageError(Exception):
 
 
 class _Parser(argparse.ArgumentParser):
+    #: The subcommands' parsers, by name (the top-level parser's; empty for a subcommand's).
+    commands: Mapping[str, argparse.ArgumentParser] = {}
+
     def error(self, message: str) -> NoReturn:  # one line, exit 2, no usage dump
         raise UsageError(f"{message} (see '{self.prog} --help')")
 
@@ -79,14 +82,19 @@ def _hand_options(p: argparse.ArgumentParser) -> None:
                    help="with --hand FILE: hold this joint at RAD (repeatable; e.g. a spread joint)")
 
 
-def _planner_options(p: argparse.ArgumentParser) -> None:
-    g = p.add_argument_group("planner (defaults as hugger.Planner)")
+def _planner_params(g: Any) -> None:
+    """The planner's parameters (a group of options), as hugger.Planner takes them."""
     g.add_argument("--step", type=_finite, help="approach step, m (default shortest link / 20)")
     g.add_argument("--epsilon", type=_finite,
                    help="overextension threshold epsilon of the planner, m (default step / 10); not the "
                         "Ferrari-Canny epsilon of the grasp quality")
     g.add_argument("--contact-tolerance", type=_finite, help="sensing distance delta, m (default 1e-4)")
     g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
+
+
+def _planner_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("planner (defaults as hugger.Planner)")
+    _planner_params(g)
     g.add_argument("--rules", choices=RULES, default="hug",
                    help="Phase 2 rule set: 'hug' (default; the paper's rules plus extensions for firmer "
                         "grasps) or 'paper' (the 1994 method with the documented decisions only)")
@@ -652,13 +660,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser() -> _Parser:
     ap = _Parser(prog="hugger", description="Hugging grasps for multi-finger hands (Reznik & Lumelsky, ICRA 1994).",
                  epilog="Exit status: 0 success, 2 bad input or missing optional dependency, 1 internal error "
                         "(hugger validate: 1 also when the grasp is not held).")
     ap.add_argument("--version", action="version", version=f"hugger {VERSION}")
     sub = ap.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
+    ap.commands = sub.choices
     from .viz import FIGURES
 
     p = sub.add_parser("plan", help="plan a grasp of a built-in object or a mesh file")
@@ -750,10 +759,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--address", default=None, help="Ray cluster address for --backend ray (default: start a local Ray)")
     p.add_argument("--scale", type=float, default=1.0, help="multiply mesh coordinates (0.001 for millimetres)")
     g = p.add_argument_group("planner (defaults as hugger.Planner; no timeout: datasets are deterministic)")
-    g.add_argument("--step", type=_finite, help="approach step, m (default shortest link / 20)")
-    g.add_argument("--epsilon", type=_finite, help="overextension threshold epsilon of the planner, m (default step / 10)")
-    g.add_argument("--contact-tolerance", type=_finite, help="sensing distance delta, m (default 1e-4)")
-    g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
+    _planner_params(g)
     g.add_argument("--rules", choices=RULES, default=None, help="Phase 2 rule set (default hug)")
     p.set_defaults(func=cmd_generate)
 
@@ -829,9 +835,9 @@ def _main(argv: Sequence[str] | None) -> int:
     try:
         parser = build_parser()
         args, extra = parser.parse_known_args(argv)
-        if extra:  # named by the subcommand's help, which lists what it takes
-            prog = f"{parser.prog} {args.command}" if getattr(args, "command", None) else parser.prog
-            raise UsageError(f"unrecognized arguments: {' '.join(extra)} (see '{prog} --help')")
+        if extra:  # said by the subcommand's parser, whose help lists what it takes
+            parser.commands.get(getattr(args, "command", None) or "", parser).error(
+                f"unrecognized arguments: {' '.join(extra)}")
         args._argv = [str(a) for a in argv] if argv is not None else sys.argv[1:]
         return int(args.func(args))
     except (UsageError, ValueError, FileNotFoundError, IsADirectoryError, NotADirectoryError, PermissionError,
