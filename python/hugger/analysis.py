@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any, Callable, cast
 import numpy as np
 
 from . import _core, _stable
-from ._checks import positive
+from ._checks import positive, whole
 from ._types import CONTACT_DISTANCE
 
 if TYPE_CHECKING:
@@ -558,8 +558,7 @@ def grasp_quality(contacts: Contacts, center: Any, mu: float = 0.5, cone_edges: 
     if c.shape != (3,) or not np.all(np.isfinite(c)):
         raise ValueError(f"center must be a finite 3-vector (m), got {center!r}")
     mu_f = positive("mu", mu, allow_zero=True)
-    if isinstance(cone_edges, bool) or not isinstance(cone_edges, (int, np.integer)) or not 3 <= cone_edges <= 64:
-        raise ValueError(f"cone_edges must be a whole number from 3 to 64, got {cone_edges!r}")
+    cone_edges = whole("cone_edges", cone_edges, 3, 64)
     if torque_scale is None:
         if obj is not None:
             torque_scale = _stable.farthest(obj.vertices, c)

@@ -30,6 +30,7 @@ import numpy as np
 
 from . import _palette, analysis
 from ._palette import rgb255
+from ._checks import whole
 from ._files import write_atomic
 from ._rotation import quaternion_wxyz
 from .trajectory import Trajectory
@@ -206,8 +207,7 @@ class Viewer:
     def __init__(self, trajs: Any, *, host: str = "127.0.0.1", port: int = 8080, fps: float = 20.0,
                  labels: Sequence[str] | None = None) -> None:
         plans = _plans(trajs)
-        if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
-            raise ValueError(f"port must be a whole number in 0..65535, got {port!r}")
+        port = whole("port", port, 0, 65535)
         if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
             raise ValueError(f"fps must be a positive number, got {fps!r}")
         if labels is not None and len(labels) != len(plans):

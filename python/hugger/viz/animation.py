@@ -7,7 +7,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .._checks import positive
+from .._checks import positive, whole
 from ..trajectory import Trajectory
 from .backend import _MOVIE_EXTENSIONS, _check_faces, _check_traj, _ffmpeg, _pyplot, _suffix
 from .scene import _Scene, _camera, _legend, _phase_name, _subsample, draw_configuration
@@ -36,8 +36,7 @@ def animate(traj: Trajectory, path: str | os.PathLike[str], fps: float = 30, max
         raise ValueError(f"cannot animate to {Path(os.fspath(path)).name!r}: use .gif or .mp4")
     fps = positive("fps", fps)
     hold = positive("hold", hold, allow_zero=True)
-    if isinstance(max_frames, bool) or not isinstance(max_frames, (int, np.integer)) or max_frames < 1:
-        raise ValueError(f"max_frames must be a positive whole number, got {max_frames!r}")
+    max_frames = whole("max_frames", max_frames, 1)
     if progress is not None and not callable(progress):
         raise ValueError("progress must be callable as progress(i, n)")
     dpi = positive("dpi", dpi)

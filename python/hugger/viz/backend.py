@@ -7,8 +7,8 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 
+from .._checks import whole
 from ..trajectory import Trajectory
 
 _STILL_EXTENSIONS = (".png", ".pdf", ".svg")
@@ -86,9 +86,7 @@ def _check_traj(traj: Any) -> Trajectory:
 
 
 def _check_faces(max_faces: Any) -> int:
-    if isinstance(max_faces, bool) or not isinstance(max_faces, (int, np.integer)) or max_faces < 100:
-        raise ValueError(f"max_faces must be a whole number >= 100, got {max_faces!r}")
-    return int(max_faces)
+    return whole("max_faces", max_faces, 100)
 
 
 def _suffix(path: Any) -> str:

@@ -9,7 +9,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .._checks import positive
+from .._checks import positive, whole
 from .._types import CONTACT_DISTANCE
 from ..trajectory import Trajectory
 from .animation import animate
@@ -186,8 +186,7 @@ def tipstate_plot(traj: Trajectory, path: str | os.PathLike[str] | None = None, 
     traj = _check_traj(traj)
     _check_still(path)
     dpi = positive("dpi", dpi)
-    if isinstance(max_samples, bool) or not isinstance(max_samples, (int, np.integer)) or max_samples < 1:
-        raise ValueError(f"max_samples must be a positive whole number, got {max_samples!r}")
+    max_samples = whole("max_samples", max_samples, 1)
     count, fingers = traj.tip_state.shape
     obj = traj.object()
     ks = _subsample(count, int(max_samples))
