@@ -46,9 +46,11 @@ class SensorModel(Sensing):
         super().__init__()
         from ..world import Object
 
-        #: The Object given as the skin (sensed through its mesh world), else None: a planner
-        #: records it with the plan unless given another ``record_object``.
-        self.object: Object | None = skin if isinstance(skin, Object) else None
+        #: The Object given as the skin (sensed through its mesh world; or that of a SensorModel
+        #: given), else None: a planner records it with the plan unless given another
+        #: ``record_object``.
+        self.object: Object | None = (skin if isinstance(skin, Object) else
+                                      skin.object if isinstance(skin, SensorModel) else None)
         if isinstance(skin, Object):
             from .mesh import MeshSkin
 
