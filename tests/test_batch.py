@@ -156,6 +156,10 @@ def test_progress_exception_propagates(cases):
     ({"timeout": float("nan")}, "timeout"),
     ({"stepp": 1e-3}, "unknown planner parameters"),
     ({"hand": "hand"}, "hand"),
+    ({"step": -1.0}, "step must be a positive finite number"),  # as Planner says, before any plan
+    ({"rules": "x"}, "rules must be one of"),
+    ({"skin": "x"}, "skin must be one of"),
+    ({"max_iterations": 10**12}, "max_iterations must be between"),
 ])
 def test_bad_arguments(cases, kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -168,6 +172,8 @@ def test_bad_arguments(cases, kwargs, match):
     ({"wat": 1}, "case 0: unknown keys"),
     ((1, 2, 3), "case 0: a tuple case"),
     (42, "case 0: expected a mapping"),
+    ({"target": [0, 0, 0], "palm_pose": np.eye(3), "obj": "o"}, r"case 0: palm_pose must have shape \(4, 4\)"),
+    ({"target": [0, 0, 0], "palm_pose": np.eye(4), "obj": "o", "epsilon": -1}, "case 0: epsilon must be a positive"),
 ])
 def test_malformed_cases_are_refused_before_planning(hand, case, match):
     with pytest.raises(ValueError, match=match):

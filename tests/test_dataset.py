@@ -230,6 +230,16 @@ def test_bad_input(tmp_path, capsys):
     assert main(["generate", "box", "--out", str(tmp_path), "--address", "x:1"]) == 2
     with pytest.raises(ValueError, match="twice"):
         dataset.generate(["box"], tmp_path, hands=["5x5", "5x5"])
+    for kwargs, message in (({"objects": "box"}, "objects must be a list of names"),
+                            ({"hands": "5x5"}, "hands must be a list of names"), ({"hands": []}, "at least one hand"),
+                            ({"validate": "yes"}, "validate must be True or False"),
+                            ({"progress": 5}, "progress must be callable"), ({"log": 5}, "log must be callable"),
+                            ({"params": {"step": -1.0}}, "step must be a positive finite number")):
+        with pytest.raises(ValueError, match=message):
+            dataset.generate(**{"objects": ["box"], "out": tmp_path / "refused", **kwargs})
+        assert not (tmp_path / "refused").exists()  # refused before the folder is made
+    assert main(["generate", "box", "--out", str(tmp_path / "neg"), "--step", "-1"]) == 2
+    assert "step must be a positive finite number" in capsys.readouterr().err and not (tmp_path / "neg").exists()
     with pytest.raises(ValueError, match="link_length is given twice"):
         dataset.parse_hand("5x5:link_length=0.02,link_length=0.03")
     assert dataset.parse_hand("4x3:link_length=0.025,palm_radius=0.035") == (

@@ -30,6 +30,9 @@ def test_directions_are_unit_spread_and_start_at_the_pole():
     for bad in (0, -1, 2.5, True):
         with pytest.raises(ValueError, match="approaches"):
             approach_directions(bad)
+    for pole in ((0, 1), "up", (1e300, 1e300, 0), (0, 0, 0), (np.nan, 0, 1)):  # one sentence, no warning
+        with pytest.raises(ValueError, match="pole must be a finite non-zero 3-vector"):
+            approach_directions(3, pole)
 
 
 def _cand(i, hug, closure=None, eps=None, status="done"):
@@ -185,6 +188,14 @@ def test_search_rejects_bad_input(hand):
         hugger.search(hand, obj, approaches=2, threads=0)
     with pytest.raises(ValueError, match="hand"):
         hugger.search("hand", obj)
+    with pytest.raises(ValueError, match="keep_all must be True or False"):
+        hugger.search(hand, obj, approaches=2, keep_all="no")
+    # The planner's settings and the callback are checked once, before any approach is planned.
+    for kwargs, message in (({"step": -1.0}, "step must be a positive finite number"), ({"rules": "x"}, "rules must be"),
+                            ({"skin": "x"}, "skin must be one of"), ({"progress": 5}, "progress must be callable")):
+        with pytest.raises(ValueError, match=message) as info:
+            hugger.search(hand, obj, approaches=2, **kwargs)
+        assert "no approach could be planned" not in str(info.value)
     for answer in ("x", None, float("nan")):  # the scorer's mistake, named as such
         with pytest.raises(ValueError, match="score must return a finite number"):
             hugger.search(hand, obj, approaches=2, score=lambda c, a=answer: a)

@@ -9,13 +9,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Mapping
 
-from . import _checks
+import numpy as np
+
+from . import _checks, _core
 from .hand import Hand
-from .planner import Planner, _timeout
+from .planner import PARAMS as _PARAMS
+from .planner import Planner, _timeout, check_params
 from .trajectory import Trajectory
 from .world import Object
 
-_PARAMS = ("step", "epsilon", "contact_tolerance", "max_iterations", "rules", "skin")
 
 
 @dataclass(frozen=True)
@@ -72,9 +74,6 @@ def _job(index: int, case: Any, hand: Hand | None, params: dict[str, Any], timeo
         if len(case) == 5 and isinstance(case[4], Mapping):
             c_hand, obj, target, pose = case[:4]
             own = dict(case[4])
-            bad = set(own) - set(_PARAMS)
-            if bad:
-                raise ValueError(f"case {index}: unknown parameters {sorted(bad)}")
         elif len(case) == 4:
             c_hand, obj, target, pose = case
         else:
@@ -90,6 +89,11 @@ def _job(index: int, case: Any, hand: Hand | None, params: dict[str, Any], timeo
         raise ValueError(f"case {index}: no hand (give one in the case or plan_many(..., hand=...))")
     if obj is None or target is None or pose is None:
         raise ValueError(f"case {index}: obj, target and palm_pose are all required")
+    try:  # as the planner would refuse them, before anything is planned
+        check_params(own, "parameters")
+        _core.check_pose(np.asarray(pose, dtype=np.float64))
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"case {index}: {exc}") from None
     return _Job(c_hand, obj, target, pose, {**params, **own}, timeout)
 
 
@@ -128,9 +132,7 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
         raise ValueError("progress must be callable as progress(done, total), or None")
     if hand is not None and not isinstance(hand, Hand):
         raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
-    bad = set(params) - set(_PARAMS)
-    if bad:
-        raise ValueError(f"unknown planner parameters {sorted(bad)}; expected some of {list(_PARAMS)}")
+    check_params(params)
     if isinstance(cases, (str, bytes)) or not isinstance(cases, Iterable):
         raise ValueError(f"cases must be an iterable of cases, got {type(cases).__name__}")
     limit = _timeout(timeout)

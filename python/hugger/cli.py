@@ -153,7 +153,7 @@ def _hand(args: argparse.Namespace) -> Hand:
 
 
 def _params(args: argparse.Namespace) -> dict[str, Any]:
-    from .batch import _PARAMS
+    from .planner import PARAMS as _PARAMS
 
     return {k: v for k in _PARAMS if (v := getattr(args, k, None)) is not None}
 

@@ -312,19 +312,28 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     approach_directions(approaches)  # checks K
     if backend not in ("local", "ray"):
         raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
+    for name, value in (("objects", objects), ("hands", hands)):  # a string is one name, not a list
+        if isinstance(value, (str, bytes, os.PathLike)):
+            raise ValueError(f"{name} must be a list of names, got the single {value!r} (write [{value!r}])")
     if not objects:
         raise ValueError("give at least one object")
+    if not hands:
+        raise ValueError("give at least one hand")
+    if not isinstance(validate, bool):
+        raise ValueError(f"validate must be True or False, got {validate!r}")
+    for name, fn in (("log", log), ("progress", progress)):
+        if fn is not None and not callable(fn):
+            raise ValueError(f"{name} must be callable or None, got {fn!r}")
     if Path(out).exists() and not Path(out).is_dir():
         raise NotADirectoryError(f"{out} is a file; a dataset is a folder (give a new folder, or the folder of a "
                                  f"dataset to finish)")
     workers = _checks.workers("workers", workers)
     ray: Any = _ray() if backend == "ray" else None
-    from .batch import _PARAMS
+    from .planner import PARAMS as _PARAMS
+    from .planner import check_params
 
     params = dict(params or {})
-    bad = set(params) - set(_PARAMS)
-    if bad:
-        raise ValueError(f"unknown planner parameters {sorted(bad)}")
+    check_params(params)
     if params.get("rules") is not None:  # the rule set given among the planner parameters
         if rules is not None and rules != params["rules"]:
             raise ValueError(f"the rule set is given twice: rules={rules!r} and params['rules']={params['rules']!r}")

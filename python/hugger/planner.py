@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import json
-from typing import Any, Iterator, cast
+from typing import Any, Iterator, Mapping, cast
 
 import numpy as np
 
@@ -43,6 +43,24 @@ MIN_RELATIVE_TOLERANCE = 1e-10
 #: geometry (docs/performance.md), ``mesh`` by 3D queries on the mesh (the reference).
 SKINS: tuple[str, ...] = _core.SKINS
 DEFAULT_SKIN = "section"
+#: The planner's parameters: the keywords of Planner after its first four (record_object aside).
+PARAMS = ("step", "epsilon", "contact_tolerance", "max_iterations", "rules", "skin")
+
+
+def check_params(params: Mapping[str, Any], what: str = "planner parameters") -> None:
+    """Raise ValueError, saying what is wrong, unless ``params`` are planner parameters (names of
+    PARAMS, values None or as Planner takes them) with values Planner would take: the check of
+    many plans before any is made. (Planner checks contact_tolerance against the scene too.)"""
+    bad = set(params) - set(PARAMS)
+    if bad:
+        raise ValueError(f"unknown {what} {sorted(bad)}; expected some of {list(PARAMS)}")
+    skin = params.get("skin")
+    if skin is not None and skin not in SKINS:
+        raise ValueError(f"skin must be one of {list(SKINS)} or None (the default), got {skin!r}")
+    rules = params.get("rules")
+    _core.PlannerParams(step=params.get("step"), epsilon=params.get("epsilon"),
+                        contact_tolerance=params.get("contact_tolerance"),
+                        max_iterations=params.get("max_iterations"), rules="hug" if rules is None else rules)
 
 
 def _timeout(value: Any) -> float | None:

@@ -140,9 +140,13 @@ def approach_directions(count: int, pole: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
     (deterministic). ``count`` = 1 gives the pole alone (the default single approach).
     """
     n = _direction_count("approaches", count)
-    p = np.asarray(pole, dtype=np.float64).reshape(3)
-    length = float(_stable.norm(p))
-    if not np.all(np.isfinite(p)) or length == 0:
+    try:
+        p = np.asarray(pole, dtype=np.float64).reshape(3)
+    except (TypeError, ValueError):
+        raise ValueError(f"pole must be a finite non-zero 3-vector, got {pole!r}") from None
+    with np.errstate(over="ignore"):  # a length beyond ~1e154 overflows: refused below
+        length = float(_stable.norm(p))
+    if not np.all(np.isfinite(p)) or not 0 < length < math.inf:
         raise ValueError(f"pole must be a finite non-zero 3-vector, got {pole!r}")
     p = p / length
     if n == 1:
@@ -346,8 +350,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
     then, and shrinks when perturbations are skipped). The choice does not depend on ``threads``
     or ``workers``.
     """
-    from .batch import _PARAMS
-    from .planner import Planner, _timeout
+    from .planner import Planner, _timeout, check_params
     from .scenarios import interior_target, safe_distance, start_pose
 
     t0 = time.perf_counter()
@@ -355,12 +358,13 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
         raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
     if not isinstance(obj, Object):
         raise ValueError(f"obj must be a hugger.Object, got {type(obj).__name__}")
-    bad = set(params) - set(_PARAMS)
-    if bad:
-        raise ValueError(f"unknown planner parameters {sorted(bad)}; expected some of {list(_PARAMS)}")
+    check_params(params if rules is None else {**params, "rules": rules})  # before any planning
+    if progress is not None and not callable(progress):
+        raise ValueError("progress must be callable as progress(done, total), or None")
     _checks.whole("verify", verify, 0)
-    if not isinstance(robust, bool):
-        raise ValueError(f"robust must be True or False, got {robust!r}")
+    for name, flag in (("robust", robust), ("keep_all", keep_all)):
+        if not isinstance(flag, bool):
+            raise ValueError(f"{name} must be True or False, got {flag!r}")
     if robust and not verify:
         raise ValueError("robust=True checks the verify=V best-ranked candidates: give verify >= 1")
     procs = _checks.workers("workers", workers)
