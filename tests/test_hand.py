@@ -124,6 +124,9 @@ def test_hand_from_dict_places_fingers_at_the_given_finger_angles():
     # stayed at 2 pi m / M, and a list of the wrong length was accepted.
     d = hugger.Hand(fingers=3, links=2).to_dict()
     assert hugger.Hand.from_dict(d).same_as(hugger.Hand(fingers=3, links=2))  # the default angles: the rim hand
+    for tol in (-1.0, float("nan")):
+        with pytest.raises(ValueError, match="tol must be a non-negative finite number"):
+            hugger.Hand().same_as(hugger.Hand(), tol)
     angles = [0.0, 0.5 * np.pi, np.pi]
     h = hugger.Hand.from_dict({**d, "finger_angles": angles})
     np.testing.assert_allclose(h.finger_roots, 0.03 * np.stack([np.cos(angles), np.sin(angles), np.zeros(3)], axis=1),

@@ -15,6 +15,21 @@ from helpers import FILE_ARRAYS, same, start
 
 # --- trajectory file -----------------------------------------------------------------------
 
+def test_an_empty_trajectory_is_neither_saved_nor_summed_up(hand, tmp_path):
+    planner = hugger.Planner(hand, hugger.objects.sphere(0.04, subdivisions=2), [0, 0, 0],
+                             hugger.look_at([0, 0, 0.2], [0, 0, 0]))
+    empty = planner.trajectory()  # before the first step()
+    with pytest.raises(ValueError, match="holds no configuration"):
+        empty.save(tmp_path / "empty.npz")
+    assert not (tmp_path / "empty.npz").exists()
+    with pytest.raises(ValueError, match="holds no configuration"):
+        empty.summary()
+    traj = planner.plan()
+    for bad in (-1.0, float("nan"), "x"):
+        with pytest.raises(ValueError, match="contact_distance must be"):
+            traj.summary(contact_distance=bad)
+
+
 def test_save_load_round_trip(hand, fine_sphere_plan, tmp_path):
     traj = fine_sphere_plan
     traj.save(tmp_path / "plan.npz")

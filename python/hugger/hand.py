@@ -374,6 +374,7 @@ class Hand:
     def same_as(self, other: Hand, tol: float = 1e-9) -> bool:
         """True when ``other`` describes the same hand: equal counts and, within ``tol`` (m or rad),
         equal sizes, roots, directions, rest angles and limits (infinite limits equal)."""
+        tol = positive("tol", tol, allow_zero=True)
         if not isinstance(other, Hand) or (self.fingers, self.links) != (other.fingers, other.links):
             return False
         pairs = [(self.link_lengths, other.link_lengths), (self.finger_roots, other.finger_roots),

@@ -13,6 +13,7 @@ from typing import Any, cast
 
 import numpy as np
 
+from ._checks import positive
 from ._files import atomic_path
 from ._types import CONTACT_DISTANCE, MAX_FINGERS, MAX_LINKS, VERSION, Configuration
 from .world import Object
@@ -117,7 +118,10 @@ class Trajectory:
         """Write the .npz (loads with ``allow_pickle=False``) atomically: under a temporary name in
         the same directory (which must exist), then renamed, so that an interrupted save never
         leaves a partial file under ``path``. The provenance gets ``hugger_version`` and
-        ``object_sha256`` when it lacks them."""
+        ``object_sha256`` when it lacks them. ``ValueError`` for a trajectory of no configuration
+        (``Planner.trajectory()`` before the first ``step()``), which no file may hold."""
+        if len(self) == 0:
+            raise ValueError("the trajectory holds no configuration (a plan starts with C_init): nothing to save")
         prov = dict(self.provenance)
         prov.setdefault("hugger_version", VERSION)
         if "object_sha256" not in prov:  # hashing the mesh only when the provenance lacks it
@@ -283,6 +287,9 @@ class Trajectory:
         """Figures of the final grasp: status, sizes, palm contact, links within ``contact_distance``.
         ``phase2_iterations`` and ``first_contact_iteration`` are the planner's own counts (None
         where the trajectory's stats lack them)."""
+        contact_distance = positive("contact_distance", contact_distance, allow_zero=True)
+        if len(self) == 0:
+            raise ValueError("the trajectory holds no configuration (a plan starts with C_init): no grasp to sum up")
         obj = obj if obj is not None else self.object()
         gaps = self.link_gaps(-1, obj)
         palm = self.palm_gap(-1, obj)
