@@ -13,6 +13,7 @@ from typing import Any, cast
 
 import numpy as np
 
+from . import _core
 from ._checks import positive
 from ._files import atomic_path
 from ._types import CONTACT_DISTANCE, MAX_FINGERS, MAX_LINKS, VERSION, Configuration
@@ -238,6 +239,11 @@ class Trajectory:
                 raise ValueError(f"{source}: {key} holds {a.max() if a.max() > 2 else a.min()}; allowed are {allowed}")
         for key in ("object_vertices", "target", "palm_pose", "joints", "angles"):
             arrays[key] = arrays[key].astype(np.float64)
+        for i, pose in enumerate(arrays["palm_pose"]):  # rigid, as the engine requires (its rule)
+            try:
+                _core.check_pose(pose, f"palm_pose[{i}]")
+            except ValueError as exc:
+                raise ValueError(f"{source}: {exc}") from None
         arrays["tip_state"] = arrays["tip_state"].astype(np.int8)
         arrays["phase"] = arrays["phase"].astype(np.int8)
         arrays["object_faces"] = arrays["object_faces"].astype(np.int64)
