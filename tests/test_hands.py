@@ -247,6 +247,13 @@ def test_urdf_with_fixed_spread_joints_imports_and_plans(tmp_path, checker):
     # a spread held away from 0 turns the finger's plane about the palm normal
     turned = hugger.Hand.from_urdf(f, fixed_joints={**fixed, "f0_spread": 0.2})
     assert np.allclose(turned.finger_directions[0], [math.cos(0.2), math.sin(0.2), 0], atol=1e-12)
+    for bad, message in (({**fixed, "f0_spread": math.inf}, r"fixed_joints\['f0_spread'\] must be a finite angle"),
+                         ({**fixed, "f0_spread": "x"}, r"fixed_joints\['f0_spread'\] must be an angle"),
+                         (list(fixed), "fixed_joints must map joint names to angles")):
+        with pytest.raises(ValueError, match=message):
+            hugger.Hand.from_urdf(f, fixed_joints=bad)
+    with pytest.raises(ValueError, match="the preset 'barrett_bh8' has none to hold"):
+        hugger.hands.load("barrett_bh8", fixed_joints={"f0_spread": 0.0})
 
 
 def test_cli_hands_export_urdf_and_plan_with_it(tmp_path):
@@ -304,8 +311,13 @@ def test_mjcf_with_a_non_planar_finger_names_the_joint(tmp_path):
 def test_urdf_grasp_comment_gives_plain_joint_values():
     pytest.importorskip("yourdfpy")
     hand = hands.preset("barrett_bh8")
-    angles = hand.rest_angles + 0.05
+    angles = np.clip(hand.rest_angles + 0.05, hand.joint_limits[..., 0], hand.joint_limits[..., 1])
     text = hands.to_urdf(hand, angles)
     line = next(x for x in text.splitlines() if "grasp joint values" in x)
     pairs = dict(item.split("=") for item in line.split(":", 1)[1].replace("-->", "").split())
     assert {k: float(v) for k, v in pairs.items()} == hands.grasp_joint_values(hand, angles)
+    for write in (hands.to_urdf, hands.to_mjcf):  # a grasp the hand cannot take is refused
+        with pytest.raises(ValueError, match="angles must be finite"):
+            write(hand, np.full(angles.shape, np.nan))
+        with pytest.raises(ValueError, match=r"angles\[0, 0\] = 10 rad is outside that joint's limits"):
+            write(hand, np.full(angles.shape, 10.0))

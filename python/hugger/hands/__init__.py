@@ -24,6 +24,8 @@ def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = N
     ``ValueError`` for an unknown preset, a missing file or an unknown extension."""
     text = os.fspath(spec)
     if text in PRESETS:
+        if fixed_joints:
+            raise ValueError(f"fixed_joints hold joints of a URDF or MJCF file; the preset {text!r} has none to hold")
         return preset(text)
     ext = os.path.splitext(text)[1].lower()
     if ext not in (".urdf", ".xml", ".mjcf", ".json"):

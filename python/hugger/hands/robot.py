@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass, field
-from typing import Any, Callable, cast
+from typing import Any, Callable, Mapping, cast
 
 import numpy as np
 
@@ -147,6 +147,28 @@ def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | No
 
 
 # ------------------------------------------------------------------------------------- URDF
+
+#: How far (rad) exported angles may lie beyond a joint limit: rounding, not motion.
+LIMIT_TOLERANCE = 1e-6
+
+
+def _fixed_joints(value: Any) -> dict[str, float]:
+    """``fixed_joints`` as {joint name: finite angle (rad)}, or a ValueError saying what is wrong."""
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise ValueError(f"fixed_joints must map joint names to angles (rad), got {type(value).__name__}")
+    out: dict[str, float] = {}
+    for name, angle in value.items():
+        try:
+            x = float(angle)
+        except (TypeError, ValueError):
+            raise ValueError(f"fixed_joints[{name!r}] must be an angle (rad), got {angle!r}") from None
+        if not math.isfinite(x):
+            raise ValueError(f"fixed_joints[{name!r}] must be a finite angle (rad), got {angle!r}")
+        out[str(name)] = x
+    return out
+
 def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_joints: dict[str, float] | None = None,
               link_radius: float | None = None) -> Hand:
     """The hand of a URDF file (read with yourdfpy).
@@ -170,7 +192,7 @@ def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_
     except Exception as exc:  # noqa: BLE001 - lxml and yourdfpy raise their own error types
         raise ValueError(f"{source}: cannot read the URDF ({type(exc).__name__}: {exc})") from None
     robot = urdf.robot
-    fixed = {} if fixed_joints is None else {str(k): float(v) for k, v in dict(fixed_joints).items()}
+    fixed = _fixed_joints(fixed_joints)
     names = {j.name for j in robot.joints}
     unknown = sorted(set(fixed) - names)
     if unknown:
@@ -360,6 +382,14 @@ def _joint_values(hand: Hand, angles: Any) -> np.ndarray:
     a = np.asarray(angles, dtype=np.float64)
     if a.shape != (hand.fingers, hand.links):
         raise ValueError(f"angles must have shape ({hand.fingers}, {hand.links}), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError("angles must be finite (rad)")
+    lim = hand.joint_limits  # a plan's angles lie within them up to rounding
+    outside = np.argwhere((a < lim[..., 0] - LIMIT_TOLERANCE) | (a > lim[..., 1] + LIMIT_TOLERANCE))
+    if len(outside):
+        m, n = (int(i) for i in outside[0])
+        raise ValueError(f"angles[{m}, {n}] = {a[m, n]:.6g} rad is outside that joint's limits "
+                         f"[{lim[m, n, 0]:.6g}, {lim[m, n, 1]:.6g}]")
     return cast(np.ndarray, a - hand.rest_angles)
 
 
@@ -385,7 +415,7 @@ def from_mjcf(path: str | os.PathLike[str], palm_body: str | None = None, fixed_
     except (ValueError, OSError) as exc:
         raise ValueError(f"{source}: cannot read the MJCF ({exc})") from None
     data = mujoco.MjData(model)
-    fixed = {} if fixed_joints is None else {str(k): float(v) for k, v in dict(fixed_joints).items()}
+    fixed = _fixed_joints(fixed_joints)
     jname: Callable[[int], str] = lambda j: mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)  # noqa: E731
     bname: Callable[[int], str] = lambda b: mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b)  # noqa: E731
     names = {jname(j): j for j in range(model.njnt)}
