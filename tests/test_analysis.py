@@ -455,7 +455,8 @@ def test_bad_input_raises_clear_errors(reference_plan, sphere_contacts):
     c = sphere_contacts
     origin = np.zeros(3)
     for kwargs, match in [({"mu": -0.1}, "mu"), ({"mu": float("nan")}, "mu"), ({"cone_edges": 2}, "cone_edges"),
-                          ({"cone_edges": 4.0}, "cone_edges"), ({"torque_scale": 0.0}, "torque_scale")]:
+                          ({"cone_edges": 4.0}, "cone_edges"), ({"torque_scale": 0.0}, "torque_scale"),
+                          ({"volume": "no"}, "volume must be True or False")]:
         with pytest.raises(ValueError, match=match):
             A.grasp_quality(c, origin, **kwargs)
     with pytest.raises(ValueError, match="center"):

@@ -184,6 +184,7 @@ def test_mesh_files_are_read_once_per_process(tmp_path, monkeypatch):
     (["objects", "extra"], "unrecognized arguments: extra (see 'hugger objects --help')"),
     (["hands", "--bogus"], "see 'hugger hands --help'"),
     (["generate", "sphere", "--out", "no/such/dir/gen"], "no such directory 'no/such/dir'"),
+    (["info", "."], ". is a folder, not a trajectory file"),
 ])
 def test_bad_arguments_exit_2_with_one_line(args, message, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)

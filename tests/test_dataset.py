@@ -183,6 +183,14 @@ def test_loader_and_every_saved_grasp_passes_the_checker(reference, tmp_path, ch
         ds[len(ds)]
 
 
+def test_a_shard_index_out_of_range_says_so(reference):
+    ds = hugger.Dataset(reference)
+    assert ds.shard(-1) is ds.shard(len(ds.shards) - 1)  # negative counts from the end, as for grasps
+    for bad in (len(ds.shards), -len(ds.shards) - 1, 1.0, True):
+        with pytest.raises(IndexError, match="out of range for a dataset of"):
+            ds.shard(bad)
+
+
 def test_export_mjcf_keyframe(reference, tmp_path):
     mujoco = pytest.importorskip("mujoco")
     ds = hugger.Dataset(reference)

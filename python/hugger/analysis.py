@@ -559,6 +559,8 @@ def grasp_quality(contacts: Contacts, center: Any, mu: float = 0.5, cone_edges: 
         raise ValueError(f"center must be a finite 3-vector (m), got {center!r}")
     mu_f = positive("mu", mu, allow_zero=True)
     cone_edges = whole("cone_edges", cone_edges, 3, 64)
+    if not isinstance(volume, (bool, np.bool_)):
+        raise ValueError(f"volume must be True or False, got {volume!r}")
     if torque_scale is None:
         if obj is not None:
             torque_scale = _stable.farthest(obj.vertices, c)

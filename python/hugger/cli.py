@@ -161,6 +161,8 @@ def _params(args: argparse.Namespace) -> dict[str, Any]:
 def _load(path: str) -> Trajectory:
     import hugger
 
+    if os.path.isdir(path):
+        raise UsageError(f"{path} is a folder, not a trajectory file (.npz)")
     if not os.path.isfile(path):
         raise UsageError(f"no such trajectory file: {path}")
     return hugger.Trajectory.load(path)

@@ -498,6 +498,9 @@ class Dataset:
 
     def shard(self, i: int) -> dict[str, np.ndarray]:
         """Every array of shard i (see docs/generation.md), loaded without pickles."""
+        if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not -len(self.shards) <= i < len(self.shards):
+            raise IndexError(f"shard {i!r} is out of range for a dataset of {len(self.shards)} shards")
+        i = int(i) % len(self.shards)
         if i not in self._cache:
             with _open_shard(self.root / self.shards[i]["file"]) as z:
                 self._cache[i] = {k: z[k] for k in z.files}
