@@ -24,14 +24,13 @@ from hugger import scenarios
 
 HANDS = (None, "barrett_bh8", "robotiq_3f", "parallel_3link")
 FIELDS = ("palm_pose", "joints", "angles", "tip_state", "iteration", "phase")
-#: The summary's figures hashed, as (name hashed, key of ``Trajectory.summary()``), in the order
-#: and under the names of the digests quoted since they began, so that the same plans keep their
-#: digests: ``phase2_iterations`` there was the count of Phase 2 configurations (the summary's
-#: ``phase2_configurations`` since a8fba36).
-SUMMARY = (("status", "status"), ("configurations", "configurations"),
-           ("phase1_configurations", "phase1_configurations"), ("phase2_iterations", "phase2_configurations"),
-           ("palm_contact", "palm_contact"), ("palm_gap_m", "palm_gap_m"), ("links_in_contact", "links_in_contact"),
-           ("links", "links"), ("fingers_done", "fingers_done"), ("first_contact_iteration", "first_contact_iteration"))
+#: The summary's figures hashed, in the order and under the names of the digests quoted since
+#: they began, so that the same plans keep their digests ...
+SUMMARY = ("status", "configurations", "phase1_configurations", "phase2_iterations", "palm_contact", "palm_gap_m",
+           "links_in_contact", "links", "fingers_done", "first_contact_iteration")
+#: ... where ``phase2_iterations`` was the count of Phase 2 configurations, the summary's
+#: ``phase2_configurations`` since a8fba36.
+RENAMED = {"phase2_iterations": "phase2_configurations"}
 
 
 def update(h: Any, traj: hugger.Trajectory) -> None:
@@ -41,7 +40,7 @@ def update(h: Any, traj: hugger.Trajectory) -> None:
         for field in FIELDS:
             h.update(np.ascontiguousarray(getattr(c, field)).tobytes())
     s = traj.summary()
-    h.update(repr({name: s[key] for name, key in SUMMARY}).encode())
+    h.update(repr({name: s[RENAMED.get(name, name)] for name in SUMMARY}).encode())
 
 
 def digest(skin: str, rules: list[str], objects: list[str]) -> str:

@@ -6,6 +6,8 @@ import numbers
 import os
 from typing import Any
 
+import numpy as np
+
 
 def positive(name: str, value: Any, allow_zero: bool = False) -> float:
     """``value`` as a float, which must be finite and positive (or zero, with ``allow_zero``);
@@ -35,6 +37,19 @@ def whole(name: str, value: Any, lo: int | None = None, hi: int | None = None) -
     else:
         rule = "a whole number"
     raise ValueError(f"{name} must be {rule}, got {value!r}")
+
+
+def flag(name: str, value: Any) -> bool:
+    """``value`` as a bool: True or False (a NumPy bool too); otherwise a ValueError naming ``name``."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+def callback(name: str, value: Any, call: str) -> None:
+    """A ValueError naming ``name`` unless ``value`` is None or callable (as ``call`` shows)."""
+    if value is not None and not callable(value):
+        raise ValueError(f"{name} must be callable as {call}, or None, got {value!r}")
 
 
 def cpus() -> int:

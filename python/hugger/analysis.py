@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any, Callable, cast
 import numpy as np
 
 from . import _core, _stable
-from ._checks import positive, whole
+from ._checks import flag, positive, whole
 from ._types import CONTACT_DISTANCE
 
 if TYPE_CHECKING:
@@ -559,8 +559,7 @@ def grasp_quality(contacts: Contacts, center: Any, mu: float = 0.5, cone_edges: 
         raise ValueError(f"center must be a finite 3-vector (m), got {center!r}")
     mu_f = positive("mu", mu, allow_zero=True)
     cone_edges = whole("cone_edges", cone_edges, 3, 64)
-    if not isinstance(volume, (bool, np.bool_)):
-        raise ValueError(f"volume must be True or False, got {volume!r}")
+    volume = flag("volume", volume)
     if torque_scale is None:
         if obj is not None:
             torque_scale = _stable.farthest(obj.vertices, c)

@@ -13,11 +13,9 @@ import numpy as np
 
 from . import _checks, _core
 from .hand import Hand
-from .planner import PARAMS as _PARAMS
-from .planner import Planner, _timeout, check_params
+from .planner import PARAMS, Planner, _timeout, check_params
 from .trajectory import Trajectory
 from .world import Object
-
 
 
 @dataclass(frozen=True)
@@ -61,13 +59,13 @@ def _job(index: int, case: Any, hand: Hand | None, params: dict[str, Any], timeo
     object with ``obj``, ``target`` and ``palm_pose`` attributes (like ``hugger.scenarios.Case``)."""
     own: dict[str, Any] = {}
     if isinstance(case, Mapping):
-        unknown = set(case) - {"hand", "obj", "target", "palm_pose", "timeout", *_PARAMS}
+        unknown = set(case) - {"hand", "obj", "target", "palm_pose", "timeout", *PARAMS}
         if unknown:
             hint = " (the object's key is 'obj')" if "object" in unknown else ""
             raise ValueError(f"case {index}: unknown keys {sorted(unknown)}{hint}")
         c_hand, obj = case.get("hand", hand), case.get("obj")
         target, pose = case.get("target"), case.get("palm_pose")
-        own = {k: case[k] for k in _PARAMS if k in case}
+        own = {k: case[k] for k in PARAMS if k in case}
         if "timeout" in case:
             timeout = _timeout(case["timeout"])
     elif isinstance(case, tuple):
@@ -128,8 +126,7 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
     if errors not in ("raise", "return"):
         raise ValueError(f"errors must be 'raise' or 'return', got {errors!r}")
     threads = _checks.workers("threads", threads)
-    if progress is not None and not callable(progress):
-        raise ValueError("progress must be callable as progress(done, total), or None")
+    _checks.callback("progress", progress, "progress(done, total)")
     if hand is not None and not isinstance(hand, Hand):
         raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
     check_params(params)

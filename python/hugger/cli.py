@@ -153,9 +153,9 @@ def _hand(args: argparse.Namespace) -> Hand:
 
 
 def _params(args: argparse.Namespace) -> dict[str, Any]:
-    from .planner import PARAMS as _PARAMS
+    from .planner import PARAMS
 
-    return {k: v for k in _PARAMS if (v := getattr(args, k, None)) is not None}
+    return {k: v for k in PARAMS if (v := getattr(args, k, None)) is not None}
 
 
 def _load(path: str) -> Trajectory:

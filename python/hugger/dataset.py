@@ -319,18 +319,15 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         raise ValueError("give at least one object")
     if not hands:
         raise ValueError("give at least one hand")
-    if not isinstance(validate, bool):
-        raise ValueError(f"validate must be True or False, got {validate!r}")
-    for name, fn in (("log", log), ("progress", progress)):
-        if fn is not None and not callable(fn):
-            raise ValueError(f"{name} must be callable or None, got {fn!r}")
+    validate = _checks.flag("validate", validate)
+    _checks.callback("log", log, "log(line)")
+    _checks.callback("progress", progress, "progress(done, total)")
     if Path(out).exists() and not Path(out).is_dir():
         raise NotADirectoryError(f"{out} is a file; a dataset is a folder (give a new folder, or the folder of a "
                                  f"dataset to finish)")
     workers = _checks.workers("workers", workers)
     ray: Any = _ray() if backend == "ray" else None
-    from .planner import PARAMS as _PARAMS
-    from .planner import check_params
+    from .planner import PARAMS, check_params
 
     params = dict(params or {})
     check_params(params)
@@ -342,7 +339,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
 
     if rules is not None and rules not in RULES:
         raise ValueError(f"rules must be one of {list(RULES)}, got {rules!r}")
-    params = {k: params.get(k) for k in _PARAMS}
+    params = {k: params.get(k) for k in PARAMS}
     params["rules"] = None  # the rule set is the task's own "rules" (as in the keys of earlier datasets)
     hand_list = [parse_hand(h) for h in hands]
     if len({label for label, _ in hand_list}) != len(hand_list):

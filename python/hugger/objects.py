@@ -26,10 +26,6 @@ MAX_SUBDIVISIONS = 8
 MAX_TRIANGLES = 4_000_000
 
 
-def _subdivisions(value: Any) -> int:
-    return whole("subdivisions", value, 0, MAX_SUBDIVISIONS)
-
-
 def _triangles(what: str, count: int) -> None:
     """A ValueError when a generator's counts would give more than MAX_TRIANGLES triangles."""
     if count > MAX_TRIANGLES:
@@ -53,7 +49,7 @@ def icosphere(subdivisions: int = 3) -> tuple[np.ndarray, np.ndarray]:
         x, y, z = (float(c) for c in p)
         return p / math.sqrt(x * x + y * y + z * z)
 
-    levels = _subdivisions(subdivisions)
+    levels = whole("subdivisions", subdivisions, 0, MAX_SUBDIVISIONS)
     verts = [unit(np.array(p, dtype=float)) for p in v]
     faces = f
     for _ in range(levels):

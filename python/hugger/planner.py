@@ -123,9 +123,9 @@ class Planner:
                                      max_iterations=max_iterations, rules=rules)
         from .skins.sensor import SensorModel
 
-        if isinstance(sensing, SensorModel) and obj is None:
-            obj = sensing.object  # a sensor model of an Object records that Object (None: none)
         if isinstance(sensing, SensorModel):  # (the engine would find every part touching at the start)
+            if obj is None:
+                obj = sensing.object  # a sensor model of an Object records that Object (None: none)
             given = params.contact_tolerance
             tolerance = _core.DEFAULT_CONTACT_TOLERANCE if given is None else given
             if not sensing.range > tolerance:

@@ -358,20 +358,16 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
         raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
     if not isinstance(obj, Object):
         raise ValueError(f"obj must be a hugger.Object, got {type(obj).__name__}")
-    check_params(params if rules is None else {**params, "rules": rules})  # before any planning
-    if progress is not None and not callable(progress):
-        raise ValueError("progress must be callable as progress(done, total), or None")
+    if rules is not None:
+        params = {**params, "rules": rules}
+    check_params(params)  # before any planning
+    _checks.callback("progress", progress, "progress(done, total)")
     _checks.whole("verify", verify, 0)
-    for name, flag in (("robust", robust), ("keep_all", keep_all)):
-        if not isinstance(flag, bool):
-            raise ValueError(f"{name} must be True or False, got {flag!r}")
+    robust, keep_all = _checks.flag("robust", robust), _checks.flag("keep_all", keep_all)
     if robust and not verify:
         raise ValueError("robust=True checks the verify=V best-ranked candidates: give verify >= 1")
     procs = _checks.workers("workers", workers)
-    if score is not None and not callable(score):
-        raise ValueError("score must be callable as score(candidate) -> float, or None")
-    if rules is not None:
-        params = {**params, "rules": rules}
+    _checks.callback("score", score, "score(candidate) -> float")
     limit = _timeout(timeout)
     workers = _checks.workers("threads", threads)
     t = interior_target(obj) if target is None else np.asarray(target, dtype=np.float64).reshape(3)

@@ -40,6 +40,8 @@ _ARRAYS = {
     "phase": (1, "iu"),
 }
 _STRINGS = ("hand_json", "params_json", "status")
+#: Why a trajectory of no configuration is refused: by load(), save() and summary().
+EMPTY = "the trajectory holds no configuration (a plan starts with C_init)"
 
 
 @dataclass(frozen=True)
@@ -122,7 +124,7 @@ class Trajectory:
         ``object_sha256`` when it lacks them. ``ValueError`` for a trajectory of no configuration
         (``Planner.trajectory()`` before the first ``step()``), which no file may hold."""
         if len(self) == 0:
-            raise ValueError("the trajectory holds no configuration (a plan starts with C_init): nothing to save")
+            raise ValueError(f"{EMPTY}: nothing to save")
         prov = dict(self.provenance)
         prov.setdefault("hugger_version", VERSION)
         if "object_sha256" not in prov:  # hashing the mesh only when the provenance lacks it
@@ -220,7 +222,7 @@ class Trajectory:
         _check_hand_sizes(hand, m, n, source)
         k = arrays["palm_pose"].shape[0]
         if k < 1:
-            raise ValueError(f"{source}: the trajectory holds no configuration (a plan starts with C_init)")
+            raise ValueError(f"{source}: {EMPTY}")
         expect = {"palm_pose": (k, 4, 4), "joints": (k, m, n + 1, 3), "angles": (k, m, n), "tip_state": (k, m),
                   "phase": (k,), "target": (3,)}
         for key, shape in expect.items():
@@ -295,7 +297,7 @@ class Trajectory:
         where the trajectory's stats lack them)."""
         contact_distance = positive("contact_distance", contact_distance, allow_zero=True)
         if len(self) == 0:
-            raise ValueError("the trajectory holds no configuration (a plan starts with C_init): no grasp to sum up")
+            raise ValueError(f"{EMPTY}: no grasp to sum up")
         obj = obj if obj is not None else self.object()
         gaps = self.link_gaps(-1, obj)
         palm = self.palm_gap(-1, obj)

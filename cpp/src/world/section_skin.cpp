@@ -1342,10 +1342,11 @@ bool PlaneRegion::visit_segments(Skip&& skip, Visit&& visit, bool root_kept) con
   int stack[96];
   int top = 0;
   stack[top++] = 0;
+  bool ask = !root_kept;  // the root is the first node taken
   while (top > 0) {
-    const int at = stack[--top];
-    const Node& nd = nodes_[at];
-    if (!(at == 0 && root_kept) && skip(nd)) continue;
+    const Node& nd = nodes_[stack[--top]];
+    if (ask && skip(nd)) continue;
+    ask = true;
     if (nd.left >= 0) {
       stack[top++] = nd.right;
       stack[top++] = nd.left;
