@@ -767,15 +767,10 @@ void Planner::phase2_iteration() {
     if (sigma > 0.0) {
       double free = palm_gap;
       const double cap = s + delta;
-      for (int m = 0; m < M; ++m) {
-        if (states_[m] == TipState::kFrozen) {
-          // Bounds above the cap change nothing: sigma <= s < cap - level.
-          for (int n = 0; n <= N; ++n) free = std::min(free, frozen_gap(m, n, cap));
-        } else {
-          const Vec2 rm = root2d(m, eta_);
-          free = std::min(free, link_gap(m, rm, rm, cap));
-        }
-      }
+      // Bounds above the cap change nothing: sigma <= s < cap - level. A root moves rigidly with
+      // the palm whatever its finger's state, so its bound lasts in every state.
+      for (int m = 0; m < M; ++m)
+        for (int n = states_[m] == TipState::kFrozen ? 0 : N; n <= N; ++n) free = std::min(free, frozen_gap(m, n, cap));
       if (hug && free - level < sigma) {
         // Hug rule H4: each part may move its free distance along p, not only its gap (a part
         // beside O, moving nearly parallel to its surface, would otherwise crawl).

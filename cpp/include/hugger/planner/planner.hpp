@@ -199,8 +199,8 @@ class Planner {
   /// tolerance exactly when the link touches O.
   double contact_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
   /// A lower bound of the gap (`contact`: of the contact gap) of FROZEN finger m's link n (n == N:
-  /// its root, as a sphere), exact when at most `need`: from the bound kept since the last query
-  /// when that exceeds `need`.
+  /// its root, as a sphere, of a finger in any state), exact when at most `need`: from the bound
+  /// kept since the last query when that exceeds `need`.
   double frozen_gap(int m, int n, double need, bool contact = false);
   /// A part's lasting gap bound `lb` (a FROZEN link's, the palm's: parts that move rigidly with
   /// the palm): `lb` while above `need`, else `ask(cap)` with a cap of kGapFarSteps steps (at
@@ -230,9 +230,9 @@ class Planner {
   std::vector<std::vector<Chain>> recent_chains_;  ///< note_chain: per finger, its last chains, the palm still
   std::vector<std::size_t> recent_next_;           ///< note_chain: per finger, the oldest once full
   std::vector<int> cycle_repeats_;                 ///< note_chain: per finger, returns running
-  /// Per finger, N + 1 lower bounds of the gaps of its links and root while it is FROZEN (they
-  /// move rigidly with the palm: each palm step sigma lowers them by sigma), then as many of
-  /// their contact gaps. -inf: unknown.
+  /// Per finger, N + 1 lower bounds of the gaps of its links while it is FROZEN and of its root
+  /// in every state (they move rigidly with the palm: each palm step sigma lowers them by sigma),
+  /// then as many of their contact gaps. -inf: unknown.
   std::vector<double> frozen_lb_;
   /// A lower bound of the palm's gap, lowered by each palm step as frozen_lb_ (-inf: unknown).
   double palm_lb_ = -kInf;
