@@ -321,3 +321,37 @@ def test_urdf_grasp_comment_gives_plain_joint_values():
             write(hand, np.full(angles.shape, np.nan))
         with pytest.raises(ValueError, match=r"angles\[0, 0\] = 10 rad is outside that joint's limits"):
             write(hand, np.full(angles.shape, 10.0))
+
+
+def test_robot_files_are_told_apart_by_their_root_element(tmp_path, capfd):
+    """A file that is not well-formed XML, or a URDF read as MJCF and the reverse, is refused in
+    one line and nothing else is printed (yourdfpy would log its strict parser's complaint and read
+    on leniently; MuJoCo would compile the URDF and miss its geometry). hands.load, and so
+    ``--hand``, reads either kind by its root element, whatever the file's name."""
+    pytest.importorskip("yourdfpy")
+    pytest.importorskip("mujoco")
+    hand = hands.preset("barrett_bh8")
+    urdf, mjcf = tmp_path / "hand.urdf", tmp_path / "hand.xml"
+    urdf.write_text(hands.to_urdf(hand))
+    mjcf.write_text(hands.to_mjcf(hand))
+    bad = tmp_path / "bad.urdf"
+    bad.write_text('<robot name="x"><link name="a"></robot')
+    other = tmp_path / "other.xml"
+    other.write_text("<sdf/>")
+    for read, f, match in ((hugger.Hand.from_urdf, bad, "not well-formed XML"),
+                           (hugger.Hand.from_mjcf, urdf, r"a URDF file \(<robot> at its root\), not MJCF"),
+                           (hugger.Hand.from_urdf, mjcf, r"an MJCF file \(<mujoco> at its root\), not URDF"),
+                           (hugger.Hand.from_urdf, other, "its root element is <sdf>, not <robot>"),
+                           (hands.load, other, "neither URDF")):
+        with pytest.raises(ValueError, match=match) as info:
+            read(f)
+        assert "\n" not in str(info.value)
+    captured = capfd.readouterr()
+    assert captured.out == "" and captured.err == ""
+    named_xml = tmp_path / "urdf_named.xml"
+    named_xml.write_text(urdf.read_text())
+    assert hands.load(named_xml).same_as(hand) and hands.load(mjcf).same_as(hand)
+    r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--hand", str(bad), "--out",
+                        str(tmp_path / "x.npz")], capture_output=True, text=True)
+    assert r.returncode == 2 and r.stderr.startswith("hugger: error:") and "not well-formed XML" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1

@@ -12,16 +12,18 @@ from typing import Any
 
 from ..hand import Hand
 from .presets import PRESETS, Preset, preset
-from .robot import from_mjcf, from_urdf, grasp_joint_values, to_mjcf, to_urdf
+from .robot import ROOTS, from_mjcf, from_urdf, grasp_joint_values, to_mjcf, to_urdf, xml_root
 
 __all__ = ["PRESETS", "Preset", "preset", "from_urdf", "from_mjcf", "to_urdf", "to_mjcf", "grasp_joint_values",
            "load"]
 
 
 def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = None, **kwargs: Any) -> Hand:
-    """A hand from a preset name, or a ``.urdf``, ``.xml``/``.mjcf`` (MJCF) or ``.json`` file.
-    ``fixed_joints`` and other keywords go to :func:`from_urdf` / :func:`from_mjcf`.
-    ``ValueError`` for an unknown preset, a missing file or an unknown extension."""
+    """A hand from a preset name, or a ``.urdf``, ``.xml``/``.mjcf`` or ``.json`` file. An XML
+    file is read as URDF or MJCF by its root element (``<robot>`` or ``<mujoco>``), whatever its
+    extension. ``fixed_joints`` and other keywords go to :func:`from_urdf` / :func:`from_mjcf`.
+    ``ValueError`` for an unknown preset, a missing, malformed or unknown file, or an unknown
+    extension."""
     text = os.fspath(spec)
     if text in PRESETS:
         if fixed_joints:
@@ -33,10 +35,13 @@ def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = N
                          f".json file")
     if not os.path.isfile(text):
         raise ValueError(f"hand file {text!r} does not exist")
-    if ext == ".urdf":
-        return from_urdf(text, fixed_joints=fixed_joints, **kwargs)
-    if ext in (".xml", ".mjcf"):
-        return from_mjcf(text, fixed_joints=fixed_joints, **kwargs)
+    if ext in (".urdf", ".xml", ".mjcf"):
+        # The root element says which (a URDF may well be called .xml).
+        kind = {root: kind for kind, root in ROOTS.items()}.get(xml_root(text))
+        if kind is None:
+            raise ValueError(f"hand file {text!r} is neither URDF (<robot> at its root) nor MJCF (<mujoco>)")
+        read = from_urdf if kind == "URDF" else from_mjcf
+        return read(text, fixed_joints=fixed_joints, **kwargs)
     try:
         with open(text, encoding="utf-8") as fh:
             d = json.load(fh)

@@ -43,6 +43,37 @@ def _need(module: str) -> Any:
         raise ImportError(f"reading robot files needs {module}: pip install 'hugger[hands]'") from None
 
 
+#: The root element of each kind of robot file this module reads.
+ROOTS = {"URDF": "robot", "MJCF": "mujoco"}
+
+
+def xml_root(source: str, kind: str = "hand file") -> str:
+    """The root element's tag of the XML file ``source``; ValueError, in one line, where it cannot
+    be read or is not well-formed XML (``kind`` names the file in the message)."""
+    import xml.etree.ElementTree as ElementTree
+    try:
+        return str(ElementTree.parse(source).getroot().tag)
+    except OSError as exc:
+        raise ValueError(f"{source}: cannot read the {kind} ({exc})") from None
+    except ElementTree.ParseError as exc:
+        raise ValueError(f"{source}: not well-formed XML ({exc})") from None
+
+
+def _check_root(source: str, kind: str) -> None:
+    """Refuse a file that is not well-formed XML or not of ``kind`` (URDF or MJCF) by its root
+    element. yourdfpy reads a malformed URDF by a lenient parser, after logging the strict
+    parser's complaint, and MuJoCo compiles a URDF as well as an MJCF: either would then report
+    some missing part, not the file's trouble."""
+    tag = xml_root(source, kind)
+    if tag == ROOTS[kind]:
+        return
+    other = next((k for k, root in ROOTS.items() if root == tag), None)
+    if other is None:
+        raise ValueError(f"{source}: not a {kind} file: its root element is <{tag}>, not <{ROOTS[kind]}>")
+    raise ValueError(f"{source}: {'an' if other == 'MJCF' else 'a'} {other} file (<{tag}> at its root), not "
+                     f"{kind}: read it with hugger.Hand.from_{other.lower()} or hugger.hands.load")
+
+
 _EMBED = "hugger-hand "
 
 
@@ -185,6 +216,7 @@ def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_
     """
     yourdfpy = _need("yourdfpy")
     source = os.fspath(path)
+    _check_root(source, "URDF")
     try:
         urdf = yourdfpy.URDF.load(source, build_scene_graph=False, load_meshes=False, load_collision_meshes=False)
     except (OSError, ValueError, KeyError, AttributeError, TypeError) as exc:
@@ -410,6 +442,7 @@ def from_mjcf(path: str | os.PathLike[str], palm_body: str | None = None, fixed_
     ``limited``. Free, ball and slide joints are refused with their names."""
     mujoco = _need("mujoco")
     source = os.fspath(path)
+    _check_root(source, "MJCF")
     try:
         model = mujoco.MjModel.from_xml_path(source)
     except (ValueError, OSError) as exc:
