@@ -568,16 +568,13 @@ double Planner::free_along_p(const Pose& palm, double palm_gap, double sigma) {
     return sensing_->palm(q, hand_.palm_radius(), hand_.palm_thickness(), cap);
   });
   const Vec2 up(0.0, 1.0);
+  // A FROZEN finger's links and every finger's root move rigidly with the palm: their lasting
+  // bounds (frozen_gap) stand for gaps beyond the cap.
   for (int m = 0; m < M && sigma > 0.0; ++m) {
     const Chain& c = chains_[m];
-    if (states_[m] == TipState::kFrozen) {
-      for (int n = 0; n <= N && sigma > 0.0; ++n) {
-        const Vec2 a = n < N ? c[n] : c[0], b = n < N ? c[n + 1] : c[0];
-        along(frozen_gap(m, n, cap), [&](double t) { return link_gap(m, a + t * up, b + t * up, cap); });
-      }
-    } else {
-      const Vec2 rm = root2d(m, eta_);
-      along(link_gap(m, rm, rm, cap), [&](double t) { return link_gap(m, rm + t * up, rm + t * up, cap); });
+    for (int n = states_[m] == TipState::kFrozen ? 0 : N; n <= N && sigma > 0.0; ++n) {
+      const Vec2 a = n < N ? c[n] : c[0], b = n < N ? c[n + 1] : c[0];
+      along(frozen_gap(m, n, cap), [&](double t) { return link_gap(m, a + t * up, b + t * up, cap); });
     }
   }
   return sigma;
