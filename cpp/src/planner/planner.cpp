@@ -176,7 +176,7 @@ void Planner::plan_phase1(const Pose& start) {
   recent_next_.assign(hand_.fingers(), 0);
   cycle_repeats_.assign(hand_.fingers(), 0);
   stalled_.assign(hand_.fingers(), 0);
-  frozen_lb_.assign(2 * static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1), -kInf);
+  rigid_lb_.assign(2 * static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1), -kInf);
   palm_lb_ = -kInf;
   closing_.assign(hand_.fingers(), 0);
   angle_memo_.assign(hand_.fingers(), AngleMemo());
@@ -305,13 +305,13 @@ double Planner::lasting_gap(double& lb, double need, Ask&& ask) const {
 }
 
 void Planner::lower_lasting_gaps(double moved) {
-  for (double& lb : frozen_lb_) lb -= moved + 1e-12;  // a picometre for rounding
+  for (double& lb : rigid_lb_) lb -= moved + 1e-12;  // a picometre for rounding
   palm_lb_ -= moved + 1e-12;
 }
 
-double Planner::frozen_gap(int m, int n, double need, bool contact) {
+double Planner::rigid_gap(int m, int n, double need, bool contact) {
   const std::size_t parts = static_cast<std::size_t>(hand_.fingers()) * (hand_.links() + 1);
-  double& lb = frozen_lb_[(contact ? parts : 0) + static_cast<std::size_t>(m) * (hand_.links() + 1) + n];
+  double& lb = rigid_lb_[(contact ? parts : 0) + static_cast<std::size_t>(m) * (hand_.links() + 1) + n];
   if (lb > need) return lb;
   const Chain& c = chains_[m];
   const Vec2 &a = n < hand_.links() ? c[n] : c[0], &b = n < hand_.links() ? c[n + 1] : c[0];
@@ -340,7 +340,8 @@ SnakeRequest Planner::snake_request(int m, double front, bool stop_folding) cons
   req.max_rotation = std::min(kPi, kMaxClingSteps * params_.step / shortest);
   // Both chains start outside O: the head is a point whose gap was sensed (follow_boundary,
   // rotate_until_touch) or the old tip; the root is the old root or one moved by sigma, which
-  // is clipped to the root's sensed free distance.
+  // is clipped to the root's free distance (its lasting bound: for an object that holds still
+  // between queries, as the palm's and the FROZEN fingers' bounds assume).
   req.start_outside = true;
   if (hand_.has_limits()) {
     req.lower = hand_.lower().row(m).data();
@@ -569,12 +570,12 @@ double Planner::free_along_p(const Pose& palm, double palm_gap, double sigma) {
   });
   const Vec2 up(0.0, 1.0);
   // A FROZEN finger's links and every finger's root move rigidly with the palm: their lasting
-  // bounds (frozen_gap) stand for gaps beyond the cap.
+  // bounds (rigid_gap) stand for gaps beyond the cap.
   for (int m = 0; m < M && sigma > 0.0; ++m) {
     const Chain& c = chains_[m];
     for (int n = states_[m] == TipState::kFrozen ? 0 : N; n <= N && sigma > 0.0; ++n) {
       const Vec2 a = n < N ? c[n] : c[0], b = n < N ? c[n + 1] : c[0];
-      along(frozen_gap(m, n, cap), [&](double t) { return link_gap(m, a + t * up, b + t * up, cap); });
+      along(rigid_gap(m, n, cap), [&](double t) { return link_gap(m, a + t * up, b + t * up, cap); });
     }
   }
   return sigma;
@@ -648,7 +649,7 @@ void Planner::phase2_iteration() {
   for (int m = 0; m < M; ++m) {
     if (states_[m] != TipState::kFrozen) continue;
     for (int n = 0; n < N; ++n)
-      if (frozen_gap(m, n, delta, true) <= delta) {
+      if (rigid_gap(m, n, delta, true) <= delta) {
         states_[m] = TipState::kContact;
         felt_ = true;
         break;
@@ -767,7 +768,7 @@ void Planner::phase2_iteration() {
       // Bounds above the cap change nothing: sigma <= s < cap - level. A root moves rigidly with
       // the palm whatever its finger's state, so its bound lasts in every state.
       for (int m = 0; m < M; ++m)
-        for (int n = states_[m] == TipState::kFrozen ? 0 : N; n <= N; ++n) free = std::min(free, frozen_gap(m, n, cap));
+        for (int n = states_[m] == TipState::kFrozen ? 0 : N; n <= N; ++n) free = std::min(free, rigid_gap(m, n, cap));
       if (hug && free - level < sigma) {
         // Hug rule H4: each part may move its free distance along p, not only its gap (a part
         // beside O, moving nearly parallel to its surface, would otherwise crawl).

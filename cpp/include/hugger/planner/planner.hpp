@@ -198,17 +198,17 @@ class Planner {
   /// Sensing::contact_gap of finger m's link [a, b] at the contact tolerance: at most that
   /// tolerance exactly when the link touches O.
   double contact_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
-  /// A lower bound of the gap (`contact`: of the contact gap) of FROZEN finger m's link n (n == N:
-  /// its root, as a sphere, of a finger in any state), exact when at most `need`: from the bound
-  /// kept since the last query when that exceeds `need`.
-  double frozen_gap(int m, int n, double need, bool contact = false);
-  /// A part's lasting gap bound `lb` (a FROZEN link's, the palm's: parts that move rigidly with
-  /// the palm): `lb` while above `need`, else `ask(cap)` with a cap of kGapFarSteps steps (at
+  /// A lower bound of the gap (`contact`: of the contact gap) of a part that moves rigidly with the
+  /// palm: FROZEN finger m's link n, or (n == N) finger m's root, as a sphere, in any state; exact
+  /// when at most `need`: from the bound kept since the last query when that exceeds `need`.
+  double rigid_gap(int m, int n, double need, bool contact = false);
+  /// A part's lasting gap bound `lb` (a FROZEN link's, a root's, the palm's: parts that move
+  /// rigidly with the palm): `lb` while above `need`, else `ask(cap)` with a cap of kGapFarSteps steps (at
   /// least `need`), kept as the new bound (capped: above the cap only a value above it is known).
   template <class Ask>
   double lasting_gap(double& lb, double need, Ask&& ask) const;
-  /// The palm (and the FROZEN fingers with it) moved `moved` along p: every lasting bound drops
-  /// by as much.
+  /// The palm (and the FROZEN fingers and the roots with it) moved `moved` along p: every lasting
+  /// bound drops by as much.
   void lower_lasting_gaps(double moved);
 
   HandModel hand_;
@@ -233,8 +233,8 @@ class Planner {
   /// Per finger, N + 1 lower bounds of the gaps of its links while it is FROZEN and of its root
   /// in every state (they move rigidly with the palm: each palm step sigma lowers them by sigma),
   /// then as many of their contact gaps. -inf: unknown.
-  std::vector<double> frozen_lb_;
-  /// A lower bound of the palm's gap, lowered by each palm step as frozen_lb_ (-inf: unknown).
+  std::vector<double> rigid_lb_;
+  /// A lower bound of the palm's gap, lowered by each palm step as rigid_lb_ (-inf: unknown).
   double palm_lb_ = -kInf;
   double eta_ = 0.0;
   /// How far the palm may advance along p before anything is felt: until its front plane reaches
