@@ -324,33 +324,48 @@ def test_urdf_grasp_comment_gives_plain_joint_values():
 
 
 def test_robot_files_are_told_apart_by_their_root_element(tmp_path, capfd):
-    """A file that is not well-formed XML, or a URDF read as MJCF and the reverse, is refused in
-    one line and nothing else is printed (yourdfpy would log its strict parser's complaint and read
-    on leniently; MuJoCo would compile the URDF and miss its geometry). hands.load, and so
-    ``--hand``, reads either kind by its root element, whatever the file's name."""
+    """A URDF read as MJCF and the reverse, a file of neither kind or one that declares XML
+    entities are refused in one line; so is a URDF that yourdfpy reads only with its lenient
+    parser and then reads wrong (with the strict parser's complaint, not the part found missing),
+    and nothing else is printed (yourdfpy logs that complaint). hands.load, and so ``--hand``,
+    reads either kind by its root element, whatever the file's name; files the readers took
+    before (a URDF with text after its root, an undeclared prefix, a truncated end tag) still load."""
     pytest.importorskip("yourdfpy")
     pytest.importorskip("mujoco")
     hand = hands.preset("barrett_bh8")
     urdf, mjcf = tmp_path / "hand.urdf", tmp_path / "hand.xml"
     urdf.write_text(hands.to_urdf(hand))
     mjcf.write_text(hands.to_mjcf(hand))
-    bad = tmp_path / "bad.urdf"
-    bad.write_text('<robot name="x"><link name="a"></robot')
-    other = tmp_path / "other.xml"
-    other.write_text("<sdf/>")
-    for read, f, match in ((hugger.Hand.from_urdf, bad, "not well-formed XML"),
+
+    def file(name: str, text: str) -> Path:
+        f = tmp_path / name
+        f.write_text(text)
+        return f
+
+    bad = file("bad.urdf", '<robot name="x"><link name="a"></robot')
+    other = file("other.xml", "<sdf/>")
+    entity = file("entity.urdf", '<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aa">]><robot name="x">&a;</robot>')
+    for read, f, match in ((hugger.Hand.from_urdf, bad, r"not well-formed XML \(expected '>'"),
+                           (hugger.Hand.from_mjcf, file("bad.xml", "<mujoco><worldbody></mujoco"), "cannot read the MJCF"),
                            (hugger.Hand.from_mjcf, urdf, r"a URDF file \(<robot> at its root\), not MJCF"),
                            (hugger.Hand.from_urdf, mjcf, r"an MJCF file \(<mujoco> at its root\), not URDF"),
                            (hugger.Hand.from_urdf, other, "its root element is <sdf>, not <robot>"),
-                           (hands.load, other, "neither URDF")):
+                           (hands.load, other, "neither URDF nor MJCF: its root element is <sdf>"),
+                           (hands.load, entity, "declares the XML entity 'a'")):
         with pytest.raises(ValueError, match=match) as info:
             read(f)
         assert "\n" not in str(info.value)
+    with pytest.raises(ValueError, match="is URDF, whose palm is chosen by palm_link, not palm_body"):
+        hands.load(urdf, palm_body="palm")
     captured = capfd.readouterr()
     assert captured.out == "" and captured.err == ""
-    named_xml = tmp_path / "urdf_named.xml"
-    named_xml.write_text(urdf.read_text())
-    assert hands.load(named_xml).same_as(hand) and hands.load(mjcf).same_as(hand)
+    text = urdf.read_text()
+    for name, variant in (("urdf_named.xml", text), ("tail.urdf", text + "tail"),
+                          ("prefix.urdf", text.replace("</robot>", '<xacro:property name="a" value="1"/></robot>')),
+                          ("truncated.urdf", text.rstrip()[:-1])):
+        assert hands.load(file(name, variant)).same_as(hand), name
+    assert hands.load(mjcf).same_as(hand) and hands.load(file("hand.mjcf", mjcf.read_text())).same_as(hand)
+    assert capfd.readouterr().err == ""
     r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--hand", str(bad), "--out",
                         str(tmp_path / "x.npz")], capture_output=True, text=True)
     assert r.returncode == 2 and r.stderr.startswith("hugger: error:") and "not well-formed XML" in r.stderr

@@ -76,8 +76,9 @@ def _hand_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--palm-radius", type=float, help="palm radius, m (default 0.03)")
     g.add_argument("--palm-thickness", type=float, help="palm thickness, m (default 0.01)")
     g.add_argument("--hand", metavar="FILE|PRESET",
-                   help="a preset hand (see 'hugger hands'), a URDF (.urdf), MJCF (.xml) or hand JSON file; "
-                        "replaces the options above, which are refused beside it (URDF/MJCF need hugger[hands])")
+                   help="a preset hand (see 'hugger hands'), a URDF or MJCF file (.urdf, .xml, .mjcf: told apart by "
+                        "the root element) or a hand JSON file; replaces the options above, which are refused "
+                        "beside it (URDF/MJCF need hugger[hands])")
     g.add_argument("--fixed-joint", action="append", default=[], metavar="NAME=RAD",
                    help="with --hand FILE: hold this joint at RAD (repeatable; e.g. a spread joint)")
 

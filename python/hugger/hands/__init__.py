@@ -1,8 +1,8 @@
 """Real hands: presets with manufacturers' dimensions, URDF and MJCF import and export.
 
 ``hugger.hands.load("barrett_bh8")`` (a preset), ``load("hand.urdf")``, ``load("hand.xml")``
-(MJCF) or ``load("hand.json")`` (a hand as in a trajectory file's ``hand_json``) give a
-:class:`hugger.Hand`; see docs/hands.md.
+(URDF or MJCF, told apart by the file's root element) or ``load("hand.json")`` (a hand as in a
+trajectory file's ``hand_json``) give a :class:`hugger.Hand`; see docs/hands.md.
 """
 from __future__ import annotations
 
@@ -36,10 +36,18 @@ def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = N
     if not os.path.isfile(text):
         raise ValueError(f"hand file {text!r} does not exist")
     if ext in (".urdf", ".xml", ".mjcf"):
-        # The root element says which (a URDF may well be called .xml).
-        kind = {root: kind for kind, root in ROOTS.items()}.get(xml_root(text))
-        if kind is None:
-            raise ValueError(f"hand file {text!r} is neither URDF (<robot> at its root) nor MJCF (<mujoco>)")
+        # The root element says which (a URDF may well be called .xml); a file not well-formed
+        # before it goes by its extension, to the reader's own message.
+        tag = xml_root(text)
+        kinds = {root: kind for kind, root in ROOTS.items()}
+        if tag is not None and tag not in kinds:
+            raise ValueError(f"hand file {text!r} is neither URDF nor MJCF: its root element is <{tag}>, not "
+                             f"<robot> or <mujoco>")
+        kind = kinds[tag] if tag is not None else ("URDF" if ext == ".urdf" else "MJCF")
+        palm = {"URDF": "palm_link", "MJCF": "palm_body"}
+        wrong = palm["MJCF" if kind == "URDF" else "URDF"]
+        if wrong in kwargs:
+            raise ValueError(f"hand file {text!r} is {kind}, whose palm is chosen by {palm[kind]}, not {wrong}")
         read = from_urdf if kind == "URDF" else from_mjcf
         return read(text, fixed_joints=fixed_joints, **kwargs)
     try:

@@ -11,6 +11,7 @@ finger's rest (FROZEN) pose; a joint value q maps to the hugger angle theta = re
 """
 from __future__ import annotations
 
+import logging
 import math
 import os
 from dataclasses import dataclass, field
@@ -47,31 +48,78 @@ def _need(module: str) -> Any:
 ROOTS = {"URDF": "robot", "MJCF": "mujoco"}
 
 
-def xml_root(source: str, kind: str = "hand file") -> str:
-    """The root element's tag of the XML file ``source``; ValueError, in one line, where it cannot
-    be read or is not well-formed XML (``kind`` names the file in the message)."""
-    import xml.etree.ElementTree as ElementTree
+class _Found(Exception):
+    """The root element's start: the end of xml_root's reading."""
+
+
+def xml_root(source: str, kind: str = "hand file") -> str | None:
+    """The root element's tag of the XML file ``source``, read only up to that element's start;
+    None where the file is not well-formed before it. ValueError, in one line, where the file
+    cannot be read or declares entities (robot files have no use for them; refused before any is
+    expanded). ``kind`` names the file in the messages."""
+    import xml.parsers.expat as expat
+
+    tag: list[str] = []
+
+    def start(name: str, _attributes: Any) -> None:
+        tag.append(name)
+        raise _Found
+
+    def entity(name: str, *_rest: Any) -> None:
+        raise ValueError(f"{source}: declares the XML entity {name!r}; a {kind} needs none")
+
+    parser = expat.ParserCreate()
+    parser.StartElementHandler = start
+    parser.EntityDeclHandler = entity
     try:
-        return str(ElementTree.parse(source).getroot().tag)
+        with open(source, "rb") as fh:
+            while True:
+                chunk = fh.read(1 << 16)
+                parser.Parse(chunk, not chunk)
+                if not chunk:
+                    return None
+    except _Found:
+        return tag[0]
     except OSError as exc:
         raise ValueError(f"{source}: cannot read the {kind} ({exc})") from None
-    except ElementTree.ParseError as exc:
-        raise ValueError(f"{source}: not well-formed XML ({exc})") from None
+    except expat.ExpatError:
+        return None
 
 
 def _check_root(source: str, kind: str) -> None:
-    """Refuse a file that is not well-formed XML or not of ``kind`` (URDF or MJCF) by its root
-    element. yourdfpy reads a malformed URDF by a lenient parser, after logging the strict
-    parser's complaint, and MuJoCo compiles a URDF as well as an MJCF: either would then report
-    some missing part, not the file's trouble."""
+    """Refuse a file of the other kind (URDF or MJCF) or of neither, by its root element: MuJoCo
+    compiles a URDF as well as an MJCF, and would then report some missing part, not the file's
+    kind. A file that is not well-formed before its root element is left to the reader."""
     tag = xml_root(source, kind)
-    if tag == ROOTS[kind]:
+    if tag is None or tag == ROOTS[kind]:
         return
     other = next((k for k, root in ROOTS.items() if root == tag), None)
     if other is None:
         raise ValueError(f"{source}: not a {kind} file: its root element is <{tag}>, not <{ROOTS[kind]}>")
     raise ValueError(f"{source}: {'an' if other == 'MJCF' else 'a'} {other} file (<{tag}> at its root), not "
                      f"{kind}: read it with hugger.Hand.from_{other.lower()} or hugger.hands.load")
+
+
+class _Complaints(logging.Handler):
+    """The error messages a library logs while it reads a file, held instead of printed."""
+
+    def __init__(self, logger: str) -> None:
+        super().__init__(logging.ERROR)
+        self.messages: list[str] = []
+        self._logger = logging.getLogger(logger)
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.messages.append(" ".join(record.getMessage().split()))
+
+    def __enter__(self) -> _Complaints:
+        self._propagate = self._logger.propagate
+        self._logger.addHandler(self)
+        self._logger.propagate = False
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self._logger.removeHandler(self)
+        self._logger.propagate = self._propagate
 
 
 _EMBED = "hugger-hand "
@@ -217,13 +265,29 @@ def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_
     yourdfpy = _need("yourdfpy")
     source = os.fspath(path)
     _check_root(source, "URDF")
+    # yourdfpy reads a file that is not well-formed XML with a lenient parser, after logging the
+    # strict parser's complaint: a file it reads so whole is taken (as it always was), one it then
+    # reads wrong is refused with that complaint, not with the part found missing.
+    with _Complaints("yourdfpy") as complaints:
+        try:
+            urdf = yourdfpy.URDF.load(source, build_scene_graph=False, load_meshes=False, load_collision_meshes=False)
+        except Exception as exc:  # noqa: BLE001 - lxml and yourdfpy raise their own error types
+            urdf, failure = None, f"{type(exc).__name__}: {exc}"
+    xml_error = complaints.messages[0] if complaints.messages else None
+    if urdf is None:
+        raise ValueError(f"{source}: " + (f"not well-formed XML ({xml_error})" if xml_error else
+                                          f"cannot read the URDF ({failure})")) from None
     try:
-        urdf = yourdfpy.URDF.load(source, build_scene_graph=False, load_meshes=False, load_collision_meshes=False)
-    except (OSError, ValueError, KeyError, AttributeError, TypeError) as exc:
-        raise ValueError(f"{source}: cannot read the URDF ({exc})") from None
-    except Exception as exc:  # noqa: BLE001 - lxml and yourdfpy raise their own error types
-        raise ValueError(f"{source}: cannot read the URDF ({type(exc).__name__}: {exc})") from None
-    robot = urdf.robot
+        return _urdf_hand(urdf.robot, source, palm_link, fixed_joints, link_radius)
+    except ValueError:
+        if xml_error is None:
+            raise
+        raise ValueError(f"{source}: not well-formed XML ({xml_error})") from None
+
+
+def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dict[str, float] | None,
+               link_radius: float | None) -> Hand:
+    """from_urdf's hand of the robot yourdfpy read from ``source``."""
     fixed = _fixed_joints(fixed_joints)
     names = {j.name for j in robot.joints}
     unknown = sorted(set(fixed) - names)
@@ -445,8 +509,8 @@ def from_mjcf(path: str | os.PathLike[str], palm_body: str | None = None, fixed_
     _check_root(source, "MJCF")
     try:
         model = mujoco.MjModel.from_xml_path(source)
-    except (ValueError, OSError) as exc:
-        raise ValueError(f"{source}: cannot read the MJCF ({exc})") from None
+    except (ValueError, OSError) as exc:  # MuJoCo's parse errors run over several lines: one here
+        raise ValueError(f"{source}: cannot read the MJCF ({' '.join(str(exc).split())})") from None
     data = mujoco.MjData(model)
     fixed = _fixed_joints(fixed_joints)
     jname: Callable[[int], str] = lambda j: mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)  # noqa: E731
