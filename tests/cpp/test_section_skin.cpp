@@ -992,6 +992,32 @@ TEST(SectionSkin, PseudoAngleOfAnswersToTheBit) {
   for (double x : asked) EXPECT_EQ(bits_of(PlaneRegion::pseudo_angle_of(x)), bits_of(formula(x))) << x;
 }
 
+// pseudo_angles_of(v) is pseudo_angle(UnitX, v) and pseudo_angle(UnitX, -v) but for the sign of a
+// zero, so that every AngleIndex lookup of either is the same: random directions, the axes and
+// diagonals, zero and signed-zero components, tiny and huge ones.
+TEST(SectionSkin, PseudoAnglesOfBothWaysAreTheSingleOnes) {
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  std::vector<Vec2> vs;
+  for (double x : {0.0, -0.0, 1.0, -1.0, 1e-300, -1e-300, 3e300, -3e300})
+    for (double y : {0.0, -0.0, 1.0, -1.0, 1e-300, -1e-300, 3e300, -3e300})
+      if (x != 0.0 || y != 0.0) vs.emplace_back(x, y);
+  for (int i = 0; i < 5000; ++i) vs.push_back(Vec2(U(rng), U(rng)) * std::pow(10.0, U(rng) * 6.0));
+  std::vector<double> angles;
+  for (int i = 0; i < 41; ++i) angles.push_back(-2.0 + 0.1 * i);
+  PlaneRegion::AngleIndex index;
+  index.build(angles);
+  for (const Vec2& v : vs) {
+    const auto [along, against] = PlaneRegion::pseudo_angles_of(v);
+    const double p = PlaneRegion::pseudo_angle(Vec2::UnitX(), v), q = PlaneRegion::pseudo_angle(Vec2::UnitX(), -v);
+    ASSERT_TRUE(along == p && against == q) << v.transpose();  // == : +0 and -0 alike
+    if (p != 0.0) ASSERT_EQ(bits_of(along), bits_of(p)) << v.transpose();
+    if (q != 0.0) ASSERT_EQ(bits_of(against), bits_of(q)) << v.transpose();
+    ASSERT_EQ(index.first_at_least(along), index.first_at_least(p));
+    ASSERT_EQ(index.first_at_least(against), index.first_at_least(q));
+  }
+}
+
 // clear() against every segment and a parity test of them, on convex regions (one loop:
 // clear() asks the loop, PlaneRegion::convex_clear) and others (the tree): segments along the
 // boundary a hair to millimetres off it either side, chords across R and segments wholly inside

@@ -1330,10 +1330,9 @@ bool PlaneRegion::hull_apart(const Q& q, double limit) const {
   // The hull's vertex farthest along a direction v starts its first edge turned a right angle
   // counter-clockwise from v, or past it (v = n: the edge along -u; v = -n: along u).
   // Found by the angles' index (AngleIndex::first_at_least).
-  auto extreme = [&](const Vec2& edge) -> const Vec2& {
-    return hull_[hull_index_.first_at_least(pseudo_angle(Vec2::UnitX(), edge))];
-  };
-  return q.n.dot(extreme(q.u) - q.a) > limit || q.n.dot(extreme(-q.u) - q.a) < -limit;
+  const auto [along, against] = pseudo_angles_of(q.u);
+  auto extreme = [&](double edge) -> const Vec2& { return hull_[hull_index_.first_at_least(edge)]; };
+  return q.n.dot(extreme(along) - q.a) > limit || q.n.dot(extreme(against) - q.a) < -limit;
 }
 
 template <class Skip, class Visit>
@@ -1495,6 +1494,25 @@ bool capsule_interval(const Vec2& a, const Vec2& d, const Vec2& p, const Vec2& q
   return *t0 <= *t1;
 }
 
+/// rotate_planar(v, angle) and rotate_planar(v, -angle), bit for bit. The cosines and sines of the
+/// last angle asked are kept per thread: spans asks a rotation's narrow wedge again and again.
+inline std::pair<Vec2, Vec2> turned_both_ways(const Vec2& v, double angle) {
+  thread_local bool known = false;
+  thread_local std::uint64_t last_bits = 0;
+  thread_local double c = 1.0, s = 0.0, c_neg = 1.0, s_neg = 0.0;
+  const std::uint64_t bits = bits_of(angle);
+  if (!known || bits != last_bits) {
+    c = std::cos(angle);
+    s = std::sin(angle);
+    c_neg = std::cos(-angle);
+    s_neg = std::sin(-angle);
+    last_bits = bits;
+    known = true;
+  }
+  return {Vec2(c * v.x() - s * v.y(), s * v.x() + c * v.y()),
+          Vec2(c_neg * v.x() - s_neg * v.y(), s_neg * v.x() + c_neg * v.y())};
+}
+
 /// The part of segment [sa, sb] within the disk of squared radius l2 about the pivot, for
 /// PlaneRegion::spans: its ends minus the pivot (ends inside the disk kept exactly) in q0, q1.
 enum class DiskPart : std::uint8_t { kNone, kPiece, kTouching };
@@ -1524,9 +1542,9 @@ inline DiskPart disk_part(const Vec2& sa, const Vec2& sb, const Vec2& pivot, dou
 
 }  // namespace
 
-int PlaneRegion::loop_extreme(const Vec2& edge) const {
+int PlaneRegion::loop_extreme(double edge) const {
   // As hull_apart's search: the tail of the first edge turned at least as far as `edge`.
-  const int i = loop_edge_first_ + loop_edges_.first_at_least(pseudo_angle(Vec2::UnitX(), edge));
+  const int i = loop_edge_first_ + loop_edges_.first_at_least(edge);
   const int n = static_cast<int>(loop_tail_.size());
   return i >= n ? i - n : i;
 }
@@ -1573,10 +1591,11 @@ int PlaneRegion::convex_clear(const Vec2& a, const Vec2& b, bool a_outside) cons
   auto h = [&](int i) { return q.n.dot(loop_tail_[i] - a); };  // height above the segment's line
   // The line passes R where R's lowest point lies above it or its highest below (each asked
   // only where the other does not settle it).
-  const int bottom = loop_extreme(q.u);
+  const auto [along, against] = pseudo_angles_of(q.u);
+  const int bottom = loop_extreme(along);
   const double h_bottom = h(bottom);
   if (h_bottom > kSureApart) return 1;
-  const int top = loop_extreme(-q.u);
+  const int top = loop_extreme(against);
   const double h_top = h(top);
   if (h_top < -kSureApart) return 1;
   if (!(h_top > kSureApart && h_bottom < -kSureApart)) return -1;
@@ -1611,11 +1630,12 @@ int PlaneRegion::convex_within(const Vec2& a, const Vec2& b, double distance) co
     const Vec2 p = t <= 0.0 ? a : (t >= q.len ? b : Vec2(a + t * q.u));
     return (x - p).squaredNorm() < near * near;
   };
-  const int bottom = loop_extreme(q.u);
+  const auto [along, against] = pseudo_angles_of(q.u);
+  const int bottom = loop_extreme(along);
   const double h_bottom = h(bottom);
   if (h_bottom > far) return 0;  // all of R farther above the line
   if (h_bottom > kSureApart) return near > 0.0 && witness(loop_tail_[bottom]) ? 1 : -1;  // R above, its lowest point near
-  const int top = loop_extreme(-q.u);
+  const int top = loop_extreme(against);
   const double h_top = h(top);
   if (h_top < -far) return 0;
   if (h_top < -kSureApart) return near > 0.0 && witness(loop_tail_[top]) ? 1 : -1;
@@ -1690,12 +1710,13 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
     return !touching_loop;
   const double slack = 1e-12 * (extent_ + pivot.cwiseAbs().maxCoeff());
   const double reach = length + slack, l2 = length * length;
+  const double margin = slack + kTouch;  // beyond a wedge's side by this: no piece touching the pivot
   const Vec2 behind = -length * u;  // the point at pseudo-angle +-2, for spans cut there
   // The wedge of directions within `within` of u: spans wholly outside it are left out, and
   // where it is convex (within <= pi/2) so are nodes wholly outside one of its two sides.
   const double pm = pseudo_angle_of(within);
   const bool wedge = within <= 0.5 * kPi;
-  const Vec2 e_plus = rotate_planar(u, within), e_minus = rotate_planar(u, -within);
+  const auto [e_plus, e_minus] = turned_both_ways(u, within);
   Vec2 last_q(kInf, kInf);  // the last end point seen and its pseudo-angle (neighbours share ends)
   double last_p = 0.0;
   auto add = [&](const Vec2& q0, const Vec2& q1) {
@@ -1742,13 +1763,19 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
     const double cx = nd.c[0] - pivot.x(), cy = nd.c[1] - pivot.y();
     const double r_plus = std::abs(e_plus.x()) * nd.h[1] + std::abs(e_plus.y()) * nd.h[0];
     const double r_minus = std::abs(e_minus.x()) * nd.h[1] + std::abs(e_minus.y()) * nd.h[0];
-    const double margin = slack + kTouch;
     return e_plus.x() * cy - e_plus.y() * cx - r_plus > margin ||   // beyond +within
            e_minus.x() * cy - e_minus.y() * cx + r_minus < -margin;  // beyond -within
   };
-  // Stops (true) at a segment touching the pivot.
+  // Stops (true) at a segment touching the pivot. A segment wholly beyond a side of a convex
+  // wedge (as the nodes above) spans no direction within it: its span would be left out.
   const bool touching = visit_segments(skip, [&](int i) {
     const Segment& s = segments_[i];
+    if (wedge) {
+      const Vec2 a = s.a - pivot, b = s.b - pivot;
+      if ((cross2(e_plus, a) > margin && cross2(e_plus, b) > margin) ||
+          (cross2(e_minus, a) < -margin && cross2(e_minus, b) < -margin))
+        return false;
+    }
     Vec2 q0, q1;
     const DiskPart part = disk_part(s.a, s.b, pivot, l2, &q0, &q1);
     if (part == DiskPart::kPiece) add(q0, q1);

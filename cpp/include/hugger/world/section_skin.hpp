@@ -134,6 +134,14 @@ class PlaneRegion {
     if (x >= 0.0) return r;
     return y >= 0.0 ? 2.0 - r : -2.0 - r;
   }
+  /// pseudo_angle(UnitX, v) and pseudo_angle(UnitX, -v) (v non-zero) from one division: the same
+  /// values but for the sign of a zero, which no lookup of an AngleIndex tells apart (-r is -y
+  /// over the same sum, 2 - (-r) is 2 + r).
+  static std::pair<double, double> pseudo_angles_of(const Vec2& v) {
+    const double x = v.x(), y = v.y();
+    const double r = y / (std::abs(x) + std::abs(y));
+    return {x >= 0.0 ? r : (y >= 0.0 ? 2.0 - r : -2.0 - r), -x >= 0.0 ? -r : (-y >= 0.0 ? 2.0 + r : -2.0 + r)};
+  }
   /// Non-decreasing pseudo-angles in [-2, 2] (a convex chain's edge directions, from the edge
   /// after they wrap round), with where each of 2n equal parts of [-2, 2] starts among them: the
   /// first angle at or past t is then a lookup and a step or two, where a binary search took
@@ -303,8 +311,9 @@ class PlaneRegion {
   /// that no point of the segment lies deeper in R than that; false where neither does
   /// (depth_within then decides).
   bool convex_shallow(const Vec2& a, const Vec2& b, double allow) const;
-  /// The loop's tail farthest along the direction `edge` turned a right angle clockwise.
-  int loop_extreme(const Vec2& edge) const;
+  /// The loop's tail farthest along the direction of an edge turned a right angle clockwise, for
+  /// the edge direction's pseudo-angle (pseudo_angles_of).
+  int loop_extreme(double edge) const;
   /// Adds the arcs of x(t) = centre + U cos t + V sin t over the allowed intervals of `allowed`
   /// ([0, 2 pi), sorted, disjoint) as tangent polygons; `out3(t)`: the in-plane outward direction.
   template <class Outward>
