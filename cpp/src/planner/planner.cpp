@@ -569,11 +569,11 @@ double Planner::free_along_p(const Pose& palm, double palm_gap, double sigma) {
     return sensing_->palm(q, hand_.palm_radius(), hand_.palm_thickness(), cap);
   });
   const Vec2 up(0.0, 1.0);
-  // A FROZEN finger's links and every finger's root move rigidly with the palm: their lasting
-  // bounds (rigid_gap) stand for gaps beyond the cap.
+  // The parts that move rigidly with the palm: their lasting bounds (rigid_gap) stand for gaps
+  // beyond the cap.
   for (int m = 0; m < M && sigma > 0.0; ++m) {
     const Chain& c = chains_[m];
-    for (int n = states_[m] == TipState::kFrozen ? 0 : N; n <= N && sigma > 0.0; ++n) {
+    for (int n = first_rigid_part(m); n <= N && sigma > 0.0; ++n) {
       const Vec2 a = n < N ? c[n] : c[0], b = n < N ? c[n + 1] : c[0];
       along(rigid_gap(m, n, cap), [&](double t) { return link_gap(m, a + t * up, b + t * up, cap); });
     }
@@ -765,10 +765,9 @@ void Planner::phase2_iteration() {
     if (sigma > 0.0) {
       double free = palm_gap;
       const double cap = s + delta;
-      // Bounds above the cap change nothing: sigma <= s < cap - level. A root moves rigidly with
-      // the palm whatever its finger's state, so its bound lasts in every state.
+      // Bounds above the cap change nothing: sigma <= s < cap - level.
       for (int m = 0; m < M; ++m)
-        for (int n = states_[m] == TipState::kFrozen ? 0 : N; n <= N; ++n) free = std::min(free, rigid_gap(m, n, cap));
+        for (int n = first_rigid_part(m); n <= N; ++n) free = std::min(free, rigid_gap(m, n, cap));
       if (hug && free - level < sigma) {
         // Hug rule H4: each part may move its free distance along p, not only its gap (a part
         // beside O, moving nearly parallel to its surface, would otherwise crawl).

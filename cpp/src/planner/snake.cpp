@@ -41,9 +41,7 @@ bool angle_within_limits(double lo, double hi, const Vec2& base, Vec2& dir, bool
   if (q >= lo - kLimitSlack && q <= hi + kLimitSlack) return true;
   if (!clamp) return false;
   const double target = q < lo ? lo : hi;
-  const Vec2 b = base.normalized();
-  const double c = std::cos(target), s = std::sin(target);
-  dir = dir.norm() * Vec2(c * b.x() - s * b.y(), s * b.x() + c * b.y());
+  dir = dir.norm() * rotate_planar(base.normalized(), target);
   return true;
 }
 

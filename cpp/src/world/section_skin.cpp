@@ -1509,8 +1509,7 @@ inline std::pair<Vec2, Vec2> turned_both_ways(const Vec2& v, double angle) {
     last_bits = bits;
     known = true;
   }
-  return {Vec2(c * v.x() - s * v.y(), s * v.x() + c * v.y()),
-          Vec2(c_neg * v.x() - s_neg * v.y(), s_neg * v.x() + c_neg * v.y())};
+  return {rotate_planar(v, c, s), rotate_planar(v, c_neg, s_neg)};
 }
 
 /// The part of segment [sa, sb] within the disk of squared radius l2 about the pivot, for

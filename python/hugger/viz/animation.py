@@ -7,7 +7,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .._checks import positive, whole
+from .._checks import callback, positive, whole
 from ..trajectory import Trajectory
 from .backend import _MOVIE_EXTENSIONS, _check_faces, _check_traj, _ffmpeg, _pyplot, _suffix
 from .scene import _Scene, _camera, _legend, _phase_name, _subsample, draw_configuration
@@ -37,8 +37,7 @@ def animate(traj: Trajectory, path: str | os.PathLike[str], fps: float = 30, max
     fps = positive("fps", fps)
     hold = positive("hold", hold, allow_zero=True)
     max_frames = whole("max_frames", max_frames, 1)
-    if progress is not None and not callable(progress):
-        raise ValueError("progress must be callable as progress(i, n)")
+    callback("progress", progress, "progress(i, n)")
     dpi = positive("dpi", dpi)
     max_faces = _check_faces(max_faces)
     _camera(view)

@@ -7,7 +7,6 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-
 from .._checks import whole
 from ..trajectory import Trajectory
 

@@ -9,7 +9,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .._checks import positive, whole
+from .._checks import callback, positive, whole
 from .._types import CONTACT_DISTANCE
 from ..trajectory import Trajectory
 from .animation import animate
@@ -189,7 +189,7 @@ def tipstate_plot(traj: Trajectory, path: str | os.PathLike[str] | None = None, 
     max_samples = whole("max_samples", max_samples, 1)
     count, fingers = traj.tip_state.shape
     obj = traj.object()
-    ks = _subsample(count, int(max_samples))
+    ks = _subsample(count, max_samples)
     touching = np.array([int(np.sum(traj.link_gaps(k, obj) <= CONTACT_DISTANCE)) for k in ks])
     palm = np.array([traj.palm_gap(k, obj) <= CONTACT_DISTANCE for k in ks])
 
@@ -288,8 +288,7 @@ def render(traj: Trajectory, path: str | os.PathLike[str], *, figure: str | None
     any other extension (:data:`RENDER_SUFFIXES` lists those accepted) or a figure that does not
     write it (see :func:`pick_figure`)."""
     traj = _check_traj(traj)
-    if progress is not None and not callable(progress):
-        raise ValueError("progress must be callable as progress(i, n)")
+    callback("progress", progress, "progress(i, n)")
     name = pick_figure(path, figure)
     draw = FIGURES[name][0]
     if name == "animation":

@@ -202,6 +202,10 @@ class Planner {
   /// palm: FROZEN finger m's link n, or (n == N) finger m's root, as a sphere, in any state; exact
   /// when at most `need`: from the bound kept since the last query when that exceeds `need`.
   double rigid_gap(int m, int n, double need, bool contact = false);
+  /// The first of finger m's parts n (as rigid_gap's) that move rigidly with the palm, to N: every
+  /// link and the root while the finger is FROZEN, else its root alone (a root moves with the palm
+  /// whatever its finger's state).
+  int first_rigid_part(int m) const { return states_[m] == TipState::kFrozen ? 0 : hand_.links(); }
   /// A part's lasting gap bound `lb` (a FROZEN link's, a root's, the palm's: parts that move
   /// rigidly with the palm): `lb` while above `need`, else `ask(cap)` with a cap of kGapFarSteps steps (at
   /// least `need`), kept as the new bound (capped: above the cap only a value above it is known).

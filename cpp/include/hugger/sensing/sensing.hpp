@@ -28,11 +28,11 @@ struct Touch {
 /// it (rounding of positions computed in the plane).
 constexpr double kFrontSlack = 1e-12;
 
+/// v turned counter-clockwise by the angle of cosine c and sine s, in a finger plane.
+inline Vec2 rotate_planar(const Vec2& v, double c, double s) { return Vec2(c * v.x() - s * v.y(), s * v.x() + c * v.y()); }
+
 /// v turned counter-clockwise by `angle` (radians), in a finger plane.
-inline Vec2 rotate_planar(const Vec2& v, double angle) {
-  const double c = std::cos(angle), s = std::sin(angle);
-  return Vec2(c * v.x() - s * v.y(), s * v.x() + c * v.y());
-}
+inline Vec2 rotate_planar(const Vec2& v, double angle) { return rotate_planar(v, std::cos(angle), std::sin(angle)); }
 
 /// The generic boundary following (Sensing::follow_boundary) marches at most kFollowSteps steps
 /// of step / kFollowDivisions along the level curve.

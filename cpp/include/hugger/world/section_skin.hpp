@@ -130,17 +130,19 @@ class PlaneRegion {
     // it is reflected onto (1, 2] and [-2, -1). Monotone in the true angle, and v and -v differ
     // by exactly 2: a span shorter than pi is shorter than 2.
     const double x = u.x() * v.x() + u.y() * v.y(), y = u.x() * v.y() - u.y() * v.x();
-    const double r = y / (std::abs(x) + std::abs(y));
-    if (x >= 0.0) return r;
-    return y >= 0.0 ? 2.0 - r : -2.0 - r;
+    return pseudo_from(x, y, y / (std::abs(x) + std::abs(y)));
   }
   /// pseudo_angle(UnitX, v) and pseudo_angle(UnitX, -v) (v non-zero) from one division: the same
   /// values but for the sign of a zero, which no lookup of an AngleIndex tells apart (-r is -y
   /// over the same sum, 2 - (-r) is 2 + r).
   static std::pair<double, double> pseudo_angles_of(const Vec2& v) {
-    const double x = v.x(), y = v.y();
-    const double r = y / (std::abs(x) + std::abs(y));
-    return {x >= 0.0 ? r : (y >= 0.0 ? 2.0 - r : -2.0 - r), -x >= 0.0 ? -r : (-y >= 0.0 ? 2.0 + r : -2.0 + r)};
+    const double x = v.x(), y = v.y(), r = y / (std::abs(x) + std::abs(y));
+    return {pseudo_from(x, y, r), pseudo_from(-x, -y, -r)};
+  }
+  /// The pseudo-angle of the direction (x, y) in u's frame, r = y / (|x| + |y|).
+  static double pseudo_from(double x, double y, double r) {
+    if (x >= 0.0) return r;
+    return y >= 0.0 ? 2.0 - r : -2.0 - r;
   }
   /// Non-decreasing pseudo-angles in [-2, 2] (a convex chain's edge directions, from the edge
   /// after they wrap round), with where each of 2n equal parts of [-2, 2] starts among them: the
