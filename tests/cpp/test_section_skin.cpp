@@ -893,7 +893,7 @@ TEST(SectionSkin, SpansAreTheUnionOfTheSegmentsParts) {
       const Vec2 u(std::cos(t), std::sin(t));
       const double within = q % 3 == 0 ? kPi : (q % 3 == 1 ? 0.5 : 0.05);
       std::vector<PlaneRegion::Span> got;
-      const bool free_pivot = R->spans(pivot, u, len, within, &got);
+      const bool free_pivot = R->spans(pivot, u, len, PlaneRegion::wedge(within), &got);
       bool touch = false;
       const auto want = pieces_of(*R, pivot, u, len, &touch);
       ++(R->convex() ? convex_queries : tree_queries);
@@ -977,7 +977,8 @@ TEST(SectionSkin, AngleIndexFindsTheFirstAngleAtOrPast) {
 
 // pseudo_angle_of keeps its last answer: asked again, and asked in turn for angles of other bits
 // (+0 after -0, a neighbour, beyond pi), it answers as the formula does, to the bit.
-TEST(SectionSkin, PseudoAngleOfAnswersToTheBit) {
+// The wedge kept per thread answers as computed afresh, to the bit (-0 is not +0).
+TEST(SectionSkin, WedgeAnswersToTheBit) {
   auto formula = [](double angle) {
     return std::abs(angle) >= kPi ? (angle < 0.0 ? -2.0 : 2.0)
                                   : PlaneRegion::pseudo_angle(Vec2::UnitX(), Vec2(std::cos(angle), std::sin(angle)));
@@ -989,7 +990,15 @@ TEST(SectionSkin, PseudoAngleOfAnswersToTheBit) {
     const double x = U(rng);
     asked.insert(asked.end(), {x, x, -x, x});
   }
-  for (double x : asked) EXPECT_EQ(bits_of(PlaneRegion::pseudo_angle_of(x)), bits_of(formula(x))) << x;
+  for (double x : asked) {
+    const PlaneRegion::Wedge w = PlaneRegion::wedge(x);
+    EXPECT_EQ(bits_of(w.within), bits_of(x)) << x;
+    EXPECT_EQ(bits_of(w.pm), bits_of(formula(x))) << x;
+    EXPECT_EQ(bits_of(w.c), bits_of(std::cos(x))) << x;
+    EXPECT_EQ(bits_of(w.s), bits_of(std::sin(x))) << x;
+    EXPECT_EQ(bits_of(w.c_neg), bits_of(std::cos(-x))) << x;
+    EXPECT_EQ(bits_of(w.s_neg), bits_of(std::sin(-x))) << x;
+  }
 }
 
 // pseudo_angles_of(v) is pseudo_angle(UnitX, v) and pseudo_angle(UnitX, -v) but for the sign of a

@@ -1494,24 +1494,6 @@ bool capsule_interval(const Vec2& a, const Vec2& d, const Vec2& p, const Vec2& q
   return *t0 <= *t1;
 }
 
-/// rotate_planar(v, angle) and rotate_planar(v, -angle), bit for bit. The cosines and sines of the
-/// last angle asked are kept per thread: spans asks a rotation's narrow wedge again and again.
-inline std::pair<Vec2, Vec2> turned_both_ways(const Vec2& v, double angle) {
-  thread_local bool known = false;
-  thread_local std::uint64_t last_bits = 0;
-  thread_local double c = 1.0, s = 0.0, c_neg = 1.0, s_neg = 0.0;
-  const std::uint64_t bits = bits_of(angle);
-  if (!known || bits != last_bits) {
-    c = std::cos(angle);
-    s = std::sin(angle);
-    c_neg = std::cos(-angle);
-    s_neg = std::sin(-angle);
-    last_bits = bits;
-    known = true;
-  }
-  return {rotate_planar(v, c, s), rotate_planar(v, c_neg, s_neg)};
-}
-
 /// The part of segment [sa, sb] within the disk of squared radius l2 about the pivot, for
 /// PlaneRegion::spans: its ends minus the pivot (ends inside the disk kept exactly) in q0, q1.
 enum class DiskPart : std::uint8_t { kNone, kPiece, kTouching };
@@ -1701,11 +1683,35 @@ bool PlaneRegion::depth_within(const Vec2& a, const Vec2& b, double allow) const
   return !(covered < 1.0 && inside(a + 0.5 * (covered + 1.0) * d));
 }
 
-bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double within,
+PlaneRegion::Wedge PlaneRegion::wedge(double within) {
+  // One thread-local (in a shared library each reaching of one is a call).
+  struct Kept {
+    bool known = false;
+    std::uint64_t bits = 0;
+    Wedge w;
+  };
+  thread_local Kept kept;
+  Kept& k = kept;
+  const std::uint64_t bits = bits_of(within);
+  if (!k.known || bits != k.bits) {
+    k.w.within = within;
+    k.w.pm = pseudo_angle_of(within);
+    k.w.c = std::cos(within);
+    k.w.s = std::sin(within);
+    k.w.c_neg = std::cos(-within);
+    k.w.s_neg = std::sin(-within);
+    k.bits = bits;
+    k.known = true;
+  }
+  return k.w;
+}
+
+bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, const Wedge& w,
                         std::vector<Span>* out) const {
   if (nodes_.empty()) return true;
+  const double within = w.within;
   bool touching_loop = false;
-  if (loop_answers(pivot, pivot, length) && convex_spans(pivot, u, length, within, &touching_loop, out))
+  if (loop_answers(pivot, pivot, length) && convex_spans(pivot, u, length, w.pm, &touching_loop, out))
     return !touching_loop;
   const double slack = 1e-12 * (extent_ + pivot.cwiseAbs().maxCoeff());
   const double reach = length + slack, l2 = length * length;
@@ -1713,9 +1719,10 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
   const Vec2 behind = -length * u;  // the point at pseudo-angle +-2, for spans cut there
   // The wedge of directions within `within` of u: spans wholly outside it are left out, and
   // where it is convex (within <= pi/2) so are nodes wholly outside one of its two sides.
-  const double pm = pseudo_angle_of(within);
+  const double pm = w.pm;
   const bool wedge = within <= 0.5 * kPi;
-  const auto [e_plus, e_minus] = turned_both_ways(u, within);
+  // The wedge's sides: u turned by +-within (rotate_planar(u, +-within), bit for bit).
+  const Vec2 e_plus = rotate_planar(u, w.c, w.s), e_minus = rotate_planar(u, w.c_neg, w.s_neg);
   Vec2 last_q(kInf, kInf);  // the last end point seen and its pseudo-angle (neighbours share ends)
   double last_p = 0.0;
   auto add = [&](const Vec2& q0, const Vec2& q1) {
@@ -1783,7 +1790,7 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, double 
   return !touching;
 }
 
-bool PlaneRegion::convex_spans(const Vec2& pivot, const Vec2& u, double length, double within, bool* touching,
+bool PlaneRegion::convex_spans(const Vec2& pivot, const Vec2& u, double length, double pm, bool* touching,
                                std::vector<Span>* out) const {
   const int n = static_cast<int>(loop_tail_.size());
   const Vec2* T = loop_tail_.data();
@@ -1858,8 +1865,7 @@ bool PlaneRegion::convex_spans(const Vec2& pivot, const Vec2& u, double length, 
   }
   const double p_lo = pseudo_angle(u, v_lo), p_hi = pseudo_angle(u, v_hi);
   // As the tree's visit gives them: one span, or two where it crosses +-2; none wholly outside
-  // the wedge.
-  const double pm = pseudo_angle_of(within);
+  // the wedge (pm: its bound).
   if (p_lo <= p_hi) {
     if (p_hi >= -pm && p_lo <= pm) out->push_back({p_lo, p_hi, v_lo, v_hi});
   } else {
@@ -2297,6 +2303,21 @@ double angle_between(const Vec2& u, const Vec2& v) { return std::atan2(cross2(u,
 
 }  // namespace
 
+namespace {
+
+/// This thread's list of spans for rotate_until_free. Out of line: a thread-local's address in a
+/// shared library is a call, which the compiler repeats at each use rather than keep it; the
+/// reference returned is kept.
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+std::vector<PlaneRegion::Span>& span_scratch() {
+  thread_local std::vector<PlaneRegion::Span> spans;
+  return spans;
+}
+
+}  // namespace
+
 RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
   const Vec2 arm = req.end - req.pivot;
   const double len = arm.norm();
@@ -2315,12 +2336,13 @@ RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
   // Most links free within a few sample angles: the spans of a narrow wedge about the link are
   // asked first, and those of the whole search range only where a run leaves that wedge.
   const double narrow = std::min(req.max_angle, 4.0 * req.sample_angle);
-  thread_local std::vector<PlaneRegion::Span> spans;
+  std::vector<PlaneRegion::Span>& spans = span_scratch();
   bool unsure = false;
   for (int pass = 0; pass < 2; ++pass) {
     const double within = pass == 0 ? narrow : req.max_angle;
+    const PlaneRegion::Wedge wedge = PlaneRegion::wedge(within);
     spans.clear();
-    if (!R->spans(req.pivot, u, len, within, &spans)) return out;  // touches the pivot: all blocked
+    if (!R->spans(req.pivot, u, len, wedge, &spans)) return out;  // touches the pivot: all blocked
     if (pass == 0 && !req.pivot_outside && R->inside(req.pivot)) return out;
     if (k > -1.0) {
       const double p0 = PlaneRegion::pseudo_angle(u, f0), p1 = PlaneRegion::pseudo_angle(u, f1);
@@ -2369,7 +2391,7 @@ RotateResult SectionSkin::rotate_until_free(const RotateRequest& req) const {
     // reaches its edge may go on. Each final end gives a candidate: its true angle plus a margin
     // that moves the link's end half the tolerance on (at most half the free window beyond),
     // within max_angle.
-    const double pm = PlaneRegion::pseudo_angle_of(within);
+    const double pm = wedge.pm;
     const bool plus_final = plus.reach < pm - kSpanJoin, minus_final = minus.reach > -pm + kSpanJoin;
     struct Candidate {
       double angle = 0.0;

@@ -106,23 +106,26 @@ class PlaneRegion {
     double lo = 0.0, hi = 0.0;                 ///< pseudo-angles, lo <= hi
     Vec2 v_lo = Vec2::Zero(), v_hi = Vec2::Zero();  ///< the piece's points at lo and hi, minus the pivot
   };
+  /// The wedge of directions within `within` radians of a direction, as spans and the rotations
+  /// use it: its bound in pseudo-angle and the cosines and sines of its two sides' turns.
+  struct Wedge {
+    double within = 0.0;
+    double pm = 0.0;                          ///< pseudo_angle_of(within)
+    double c = 1.0, s = 0.0;                  ///< cos(within), sin(within)
+    double c_neg = 1.0, s_neg = 0.0;          ///< cos(-within), sin(-within)
+  };
+  /// The wedge of `within`. The angles asked are few (a rotation's search ranges): the last one
+  /// is kept per thread, for the angle of the same bits (-0 is not +0).
+  static Wedge wedge(double within);
   /// Appends to `out` the spans of the boundary pieces within `length` of `pivot` (u: a unit
-  /// direction) that reach directions within `within` radians of u (others may be left out).
-  /// False when a piece comes within touching distance of the pivot (every direction is blocked;
-  /// `out` is then incomplete).
-  bool spans(const Vec2& pivot, const Vec2& u, double length, double within, std::vector<Span>* out) const;
+  /// direction) that reach directions within the wedge `w` about u, `w.within` radians either
+  /// side (others may be left out). False when a piece comes within touching distance of the
+  /// pivot (every direction is blocked; `out` is then incomplete).
+  bool spans(const Vec2& pivot, const Vec2& u, double length, const Wedge& w, std::vector<Span>* out) const;
   /// The pseudo-angle of the direction at `angle` radians from u (|angle| <= pi; +-2 beyond).
   static double pseudo_angle_of(double angle) {
-    // The angles asked are few (a rotation's search ranges): the last answer is kept per thread,
-    // for the angle of the same bits (-0 is not +0).
-    thread_local std::uint64_t last_bits = 0;
-    thread_local double last = 0.0;
-    const std::uint64_t bits = bits_of(angle);
-    if (bits == last_bits) return last;
-    last = std::abs(angle) >= kPi ? (angle < 0.0 ? -2.0 : 2.0)
+    return std::abs(angle) >= kPi ? (angle < 0.0 ? -2.0 : 2.0)
                                   : pseudo_angle(Vec2::UnitX(), Vec2(std::cos(angle), std::sin(angle)));
-    last_bits = bits;
-    return last;
   }
   /// The pseudo-angle of v (non-zero) relative to the unit direction u (see Span).
   static double pseudo_angle(const Vec2& u, const Vec2& v) {
@@ -275,7 +278,7 @@ class PlaneRegion {
   /// the loop facing it, and the span of their union is settled by the few segments at its two
   /// ends (found by walking the loop), each by the same formula as in the tree's visit. False
   /// where the pivot is not outside R: the tree decides.
-  bool convex_spans(const Vec2& pivot, const Vec2& u, double length, double within, bool* touching,
+  bool convex_spans(const Vec2& pivot, const Vec2& u, double length, double pm, bool* touching,
                     std::vector<Span>* out) const;
   /// clear() where R is one convex loop: 1 (clear) or 0 (not) where the loop settles it surely,
   /// -1 where the segment passes within kSureApart of R without meeting it, or lies wholly in R
