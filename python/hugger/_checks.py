@@ -9,9 +9,9 @@ from typing import Any
 import numpy as np
 
 
-def positive(name: str, value: Any, allow_zero: bool = False) -> float:
-    """``value`` as a float, which must be finite and positive (or zero, with ``allow_zero``);
-    otherwise a ValueError naming ``name``."""
+def positive(name: str, value: Any, allow_zero: bool = False, most: float | None = None) -> float:
+    """``value`` as a float, which must be finite and positive (or zero, with ``allow_zero``) and
+    at most ``most`` (if given); otherwise a ValueError naming ``name``."""
     try:
         x = float(value)
     except (TypeError, ValueError, OverflowError):
@@ -19,6 +19,8 @@ def positive(name: str, value: Any, allow_zero: bool = False) -> float:
     if not math.isfinite(x) or x < 0 or (x == 0 and not allow_zero):
         kind = "non-negative" if allow_zero else "positive"
         raise ValueError(f"{name} must be a {kind} finite number, got {value!r}")
+    if most is not None and x > most:
+        raise ValueError(f"{name} must be at most {most:g}, got {value!r}")
     return x
 
 

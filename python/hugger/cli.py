@@ -404,9 +404,12 @@ def cmd_render(args: argparse.Namespace) -> int:
         for option, value in (("--fps", args.fps), ("--frames", args.frames), ("--view", args.view)):
             if value is not None:
                 raise UsageError(f"{option} applies to animations only (--figure animation, .gif or .mp4)")
-    for option, value in (("--fps", args.fps), ("--dpi", args.dpi)):
-        if value is not None and not (value > 0 and value < float("inf")):
-            raise UsageError(f"{option} must be a positive number, got {value}")
+    for value, check in ((args.fps, viz.check_fps), (args.dpi, viz.check_dpi)):
+        if value is not None:
+            try:
+                check(value)
+            except ValueError as exc:  # "fps must be ..."
+                raise UsageError(f"--{exc}") from None
     if args.frames is not None and args.frames < 1:
         raise UsageError(f"--frames must be at least 1, got {args.frames}")
     traj = _load(args.file)
@@ -706,8 +709,9 @@ def build_parser() -> _Parser:
     p.add_argument("--figure", choices=tuple(FIGURES),
                    help="what to draw: " + "; ".join(f"{k}: {what}" for k, (_, what) in FIGURES.items())
                         + " (default: sheet for .png/.pdf/.svg, animation for .gif/.mp4)")
-    p.add_argument("--dpi", type=float, help="resolution, dots per inch (default 100 sheet and animation, 120 others)")
-    p.add_argument("--fps", type=float, help="animation: frames per second (default 30)")
+    p.add_argument("--dpi", type=float, help="resolution, dots per inch (default 100 sheet and animation, 120 others; "
+                                             "at most 1200)")
+    p.add_argument("--fps", type=float, help="animation: frames per second (default 30, at most 120)")
     p.add_argument("--frames", type=int, help="animation: at most this many frames, evenly spread (default 300)")
     p.add_argument("--view", choices=("oblique", "side", "normal"), help="animation: the camera (default oblique)")
     p.set_defaults(func=cmd_render)

@@ -9,7 +9,8 @@ import numpy as np
 
 from .._checks import callback, positive, whole
 from ..trajectory import Trajectory
-from .backend import _MOVIE_EXTENSIONS, _check_faces, _check_traj, _ffmpeg, _pyplot, _suffix
+from .backend import MAX_HOLD, _MOVIE_EXTENSIONS, _check_faces, _check_traj, _ffmpeg, _pyplot, _suffix, check_dpi
+from .backend import check_fps
 from .scene import _Scene, _camera, _legend, _phase_name, _subsample, draw_configuration
 
 MOVIE_SIZE = (6.4, 4.8)
@@ -25,7 +26,8 @@ def animate(traj: Trajectory, path: str | os.PathLike[str], fps: float = 30, max
     axis limits over the plan. ``progress(i, n)`` is called after frame i of n (1-based) is
     written. The object is simplified to ``max_faces`` triangles for speed. ``hold`` (s) shows the
     final grasp that much longer (repeated frames, not counted). Returns the number of
-    configurations drawn. ``ValueError`` for another extension or bad numbers; ``ImportError`` (naming
+    configurations drawn. ``ValueError`` for another extension or bad numbers (``fps`` at most
+    :data:`MAX_FPS`, ``dpi`` at most :data:`MAX_DPI`, ``hold`` at most :data:`MAX_HOLD`); ``ImportError`` (naming
     what to install) when an MP4 is asked for and no ffmpeg is found (see :func:`ffmpeg_path`)."""
     plt = _pyplot()
     from matplotlib import animation, rc_context
@@ -34,11 +36,11 @@ def animate(traj: Trajectory, path: str | os.PathLike[str], fps: float = 30, max
     ext = _suffix(path)
     if ext not in _MOVIE_EXTENSIONS:
         raise ValueError(f"cannot animate to {Path(os.fspath(path)).name!r}: use .gif or .mp4")
-    fps = positive("fps", fps)
-    hold = positive("hold", hold, allow_zero=True)
+    fps = check_fps(fps)
+    hold = positive("hold", hold, allow_zero=True, most=MAX_HOLD)
     max_frames = whole("max_frames", max_frames, 1)
     callback("progress", progress, "progress(i, n)")
-    dpi = positive("dpi", dpi)
+    dpi = check_dpi(dpi)
     max_faces = _check_faces(max_faces)
     _camera(view)
     rc: dict[Any, Any] = {}

@@ -7,7 +7,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-from .._checks import whole
+from .._checks import positive, whole
 from ..trajectory import Trajectory
 
 _STILL_EXTENSIONS = (".png", ".pdf", ".svg")
@@ -15,6 +15,13 @@ _MOVIE_EXTENSIONS = (".gif", ".mp4")
 #: The extensions :func:`render` writes.
 RENDER_SUFFIXES = _STILL_EXTENSIONS + _MOVIE_EXTENSIONS
 _VIZ_EXTRA = "pip install 'hugger[viz]'"
+#: The largest resolution a figure or animation is drawn at (dots per inch): print needs 300-600,
+#: and a page-wide figure at this resolution is already about 20,000 pixels wide.
+MAX_DPI = 1200.0
+#: The highest frame rate of an animation (a GIF's frame delays are whole hundredths of a second).
+MAX_FPS = 120.0
+#: The longest pause on an animation's final grasp (s): its frames are written out one by one.
+MAX_HOLD = 10.0
 
 
 # --- optional dependencies ---------------------------------------------------------------------
@@ -86,6 +93,16 @@ def _check_traj(traj: Any) -> Trajectory:
 
 def _check_faces(max_faces: Any) -> int:
     return whole("max_faces", max_faces, 100)
+
+
+def check_dpi(dpi: Any) -> float:
+    """``dpi`` as a float: positive and at most :data:`MAX_DPI`; otherwise a ValueError."""
+    return positive("dpi", dpi, most=MAX_DPI)
+
+
+def check_fps(fps: Any) -> float:
+    """``fps`` as a float: positive and at most :data:`MAX_FPS`; otherwise a ValueError."""
+    return positive("fps", fps, most=MAX_FPS)
 
 
 def _suffix(path: Any) -> str:

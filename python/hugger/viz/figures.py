@@ -9,11 +9,11 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .._checks import callback, positive, whole
+from .._checks import callback, whole
 from .._types import CONTACT_DISTANCE
 from ..trajectory import Trajectory
 from .animation import animate
-from .backend import (_MOVIE_EXTENSIONS, RENDER_SUFFIXES, _check_faces, _check_still, _check_traj,
+from .backend import (_MOVIE_EXTENSIONS, RENDER_SUFFIXES, _check_faces, _check_still, _check_traj, check_dpi,
                       _pyplot, _save, _suffix)
 from .scene import STATE_COLORS, _STATE_NAMES, _Scene, _legend, _phase_name, _subsample, draw_configuration
 
@@ -85,7 +85,7 @@ def _still(traj: Any, path: Any, dpi: Any, max_faces: Any) -> tuple[Any, Traject
     plt = _pyplot()
     traj = _check_traj(traj)
     _check_still(path)
-    return plt, traj, positive("dpi", dpi), _Scene(traj, _check_faces(max_faces))
+    return plt, traj, check_dpi(dpi), _Scene(traj, _check_faces(max_faces))
 
 
 def fig4(traj: Trajectory, path: str | os.PathLike[str] | None = None, *, dpi: float = 120,
@@ -185,7 +185,7 @@ def tipstate_plot(traj: Trajectory, path: str | os.PathLike[str] | None = None, 
 
     traj = _check_traj(traj)
     _check_still(path)
-    dpi = positive("dpi", dpi)
+    dpi = check_dpi(dpi)
     max_samples = whole("max_samples", max_samples, 1)
     count, fingers = traj.tip_state.shape
     obj = traj.object()
