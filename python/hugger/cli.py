@@ -540,7 +540,7 @@ def cmd_generate(args: argparse.Namespace) -> int:
         index = dataset.generate(args.objects, args.out, approaches=args.approaches, hands=args.hands or ["5x5"],
                                  validate=args.validate, workers=args.workers, backend=args.backend,
                                  address=args.address, scale=args.scale, params=_params(args),
-                                 command=["hugger", *argv], log=log, progress=p.update)
+                                 command=["hugger", *argv], log=log, progress=p.update, force=args.force)
     grasps = len(index["shards"]) * int(index["parameters"]["approaches"])
     print(f"wrote {args.out}/index.json: {len(index['shards'])} shards, {grasps} grasps")
     return EXIT_OK
@@ -765,6 +765,8 @@ def build_parser() -> _Parser:
                    help="local: a process pool (default); ray: one Ray task per shard (hugger[cluster])")
     p.add_argument("--address", default=None, help="Ray cluster address for --backend ray (default: start a local Ray)")
     p.add_argument("--scale", type=float, default=1.0, help="multiply mesh coordinates (0.001 for millimetres)")
+    p.add_argument("--force", action="store_true",
+                   help="make the shards of a mesh whose size is implausible for a hand (millimetres read as metres)")
     g = p.add_argument_group("planner (defaults as hugger.Planner; no timeout: datasets are deterministic)")
     _planner_params(g)
     g.add_argument("--rules", choices=RULES, default=None, help="Phase 2 rule set (default hug)")

@@ -90,9 +90,18 @@ def _sha256_file(path: str) -> str:
     return h.hexdigest()
 
 
-def _object_entry(spec: str, scale: float) -> dict[str, Any]:
-    """Index entry of one object: name, path (as given, or the built-in name) and content hash."""
+#: The warning of an object whose size is implausible for a hand (hugger.hand.implausible_size).
+_IMPLAUSIBLE = r".*implausibly"
+
+
+def _object_entry(spec: str, scale: float, force: bool = False) -> dict[str, Any]:
+    """Index entry of one object: name, path (as given, or the built-in name) and content hash.
+    A mesh file of an implausible size for a hand is refused unless ``force``; its repairs are
+    told (as warnings)."""
+    import warnings
+
     from . import objects
+    from .hand import implausible_size
     from .scenarios import default_case, load_object
 
     if spec in objects.BUILTINS:
@@ -104,8 +113,18 @@ def _object_entry(spec: str, scale: float) -> dict[str, Any]:
         raise ValueError(f"{spec!r} is neither a built-in object nor a mesh file")
     # Refuses what a worker would, before any shard is made: a mesh the planner cannot take, or
     # one whose natural target T is not inside it (the start pose depends on the hand; T does not).
-    default_case(spec, scale=scale)
-    return {"name": Path(spec).stem, "path": spec, "builtin": False, "sha256": _sha256_file(spec), "scale": scale}
+    with warnings.catch_warnings():  # the size is judged below, with force
+        warnings.filterwarnings("ignore", message=_IMPLAUSIBLE, category=UserWarning)
+        case = default_case(spec, scale=scale)
+    name = Path(spec).stem
+    message = implausible_size(name, float(np.ptp(case.obj.bounds, axis=0).max()))
+    if message and not force:
+        raise ValueError(f"{message}; refused (give a scale: --scale, scale=; or force it: --force, force=True)")
+    if message:
+        warnings.warn(f"{message} (making its shards anyway: force)", UserWarning, stacklevel=3)
+    for r in case.repairs:
+        warnings.warn(f"repaired {name}: {r}", UserWarning, stacklevel=3)
+    return {"name": name, "path": spec, "builtin": False, "sha256": _sha256_file(spec), "scale": scale}
 
 
 def _task_key(task: dict[str, Any]) -> str:
@@ -141,9 +160,13 @@ def make_shard(task: dict[str, Any]) -> bytes:
     from .analysis import escape
     from .search import search
 
+    import warnings
+
     ob = task["object"]
     hand = Hand(**task["hand"]["kwargs"])
-    case = default_case(ob["path"], hand, scale=ob["scale"])
+    with warnings.catch_warnings():  # judged by generate, which refuses such a size unless forced
+        warnings.filterwarnings("ignore", message=_IMPLAUSIBLE, category=UserWarning)
+        case = default_case(ob["path"], hand, scale=ob["scale"])
     if ob["builtin"] is False and _sha256_file(ob["path"]) != ob["sha256"]:
         raise ValueError(f"{ob['path']} changed since the dataset was started (content hash differs)")
     pole = case.palm_pose[:3, 3] - case.target
@@ -297,7 +320,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
              validate: bool = False, workers: int | None = None, backend: str = "local", address: str | None = None,
              scale: float = 1.0, rules: str | None = None, params: dict[str, Any] | None = None,
              command: Sequence[str] | None = None, log: Callable[[str], Any] | None = None,
-             progress: Callable[[int, int], Any] | None = None) -> dict[str, Any]:
+             progress: Callable[[int, int], Any] | None = None, force: bool = False) -> dict[str, Any]:
     """Make (or finish) the dataset in ``out``: one shard per (object, hand); returns the index.
 
     ``objects``: built-in names or mesh files; ``hands``: specs of :func:`parse_hand`;
@@ -305,7 +328,9 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     every grasp. ``workers``: processes (``local``, default the CPUs available) or the Ray tasks
     in flight (``ray``). ``backend="ray"`` runs one Ray task per shard on ``ray.init(address)``
     (a local Ray when ``address`` is None). Shards already present are kept; the index is written
-    last. ``command``: the command line recorded in the index.
+    last. ``command``: the command line recorded in the index. A mesh file whose size is
+    implausible for a hand (millimetres read as metres: :data:`hugger.hand.PLAUSIBLE_SIZE`) is
+    refused (``ValueError``) unless ``force``.
     """
     from .search import approach_directions
 
@@ -320,6 +345,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     if not hands:
         raise ValueError("give at least one hand")
     validate = _checks.flag("validate", validate)
+    force = _checks.flag("force", force)
     _checks.callback("log", log, "log(line)")
     _checks.callback("progress", progress, "progress(done, total)")
     if Path(out).exists() and not Path(out).is_dir():
@@ -344,7 +370,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     hand_list = [parse_hand(h) for h in hands]
     if len({label for label, _ in hand_list}) != len(hand_list):
         raise ValueError("the same hand is given twice")
-    obj_list = [_object_entry(os.fspath(o), float(scale)) for o in objects]
+    obj_list = [_object_entry(os.fspath(o), float(scale), force) for o in objects]
     names = [_safe(o["name"]) for o in obj_list]
     if len(set(names)) != len(names):
         raise ValueError(f"two objects share a name: {sorted(x for x in names if names.count(x) > 1)}")
