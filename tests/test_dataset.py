@@ -236,6 +236,14 @@ def test_bad_input(tmp_path, capsys):
     assert not (tmp_path / "ds").exists()
     assert main(["generate", "nothing.stl", "--out", str(tmp_path)]) == 2
     assert main(["generate", "box", "--out", str(tmp_path), "--address", "x:1"]) == 2
+    assert "applies to the Ray backend" in capsys.readouterr().err
+    # An address where nothing answers is refused at once, not retried for minutes by ray.init.
+    for address, message in (("nonsense", "HOST:PORT"), ("127.0.0.1:1", "no Ray cluster answers at 127.0.0.1:1"),
+                             ("ray://127.0.0.1:1", "no Ray cluster answers"), ("host:99999", "HOST:PORT")):
+        assert main(["generate", "box", "--out", str(tmp_path / "r"), "--backend", "ray", "--address", address]) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, err
+        assert not (tmp_path / "r").exists()
     with pytest.raises(ValueError, match="twice"):
         dataset.generate(["box"], tmp_path, hands=["5x5", "5x5"])
     for kwargs, message in (({"objects": "box"}, "objects must be a list of names"),

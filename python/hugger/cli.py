@@ -530,8 +530,6 @@ def cmd_validate(args: argparse.Namespace) -> int:
 def cmd_generate(args: argparse.Namespace) -> int:
     from . import dataset
 
-    if args.address is not None and args.backend != "ray":
-        raise UsageError("--address applies to --backend ray only")
     _parent_exists(Path(args.out))  # the dataset's folder is made by dataset.generate
     interactive = sys.stderr.isatty()
     log = None if interactive else _note  # plain lines in logs, a bar on a terminal

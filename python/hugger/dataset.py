@@ -308,6 +308,32 @@ def _check_index(root: Path, tasks: list[dict[str, Any]]) -> None:
 # the run
 
 
+#: How long a Ray address is given to accept a connection before it is refused (s).
+RAY_CONNECT_TIMEOUT = 10.0
+
+
+def _check_ray_address(address: Any) -> str:
+    """``address`` for ``ray.init``: 'auto', 'local', HOST:PORT or ray://HOST:PORT, where something
+    accepts a connection within :data:`RAY_CONNECT_TIMEOUT` (``ray.init`` would retry for
+    minutes); otherwise a ValueError."""
+    import socket
+
+    if not isinstance(address, str):
+        raise ValueError(f"address must be a string, got {address!r}")
+    if address in ("auto", "local"):
+        return address
+    rest = address[len("ray://"):] if address.startswith("ray://") else address
+    host, sep, port = rest.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ValueError(f"address must be 'auto', 'local', HOST:PORT or ray://HOST:PORT, got {address!r}")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=RAY_CONNECT_TIMEOUT):
+            pass
+    except OSError as exc:
+        raise ValueError(f"no Ray cluster answers at {address}: {exc.strerror or exc}") from None
+    return address
+
+
 def _ray() -> Any:
     try:
         import ray
@@ -327,7 +353,8 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     ``approaches``: K of :func:`hugger.search`; ``validate``: run :func:`hugger.physics.validate` on
     every grasp. ``workers``: processes (``local``, default the CPUs available) or the Ray tasks
     in flight (``ray``). ``backend="ray"`` runs one Ray task per shard on ``ray.init(address)``
-    (a local Ray when ``address`` is None). Shards already present are kept; the index is written
+    (a local Ray when ``address`` is None; an address where nothing answers within
+    :data:`RAY_CONNECT_TIMEOUT` is refused). Shards already present are kept; the index is written
     last. ``command``: the command line recorded in the index. A mesh file whose size is
     implausible for a hand (millimetres read as metres: :data:`hugger.hand.PLAUSIBLE_SIZE`) is
     refused (``ValueError``) unless ``force``.
@@ -352,6 +379,10 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         raise NotADirectoryError(f"{out} is a file; a dataset is a folder (give a new folder, or the folder of a "
                                  f"dataset to finish)")
     workers = _checks.workers("workers", workers)
+    if address is not None:
+        if backend != "ray":
+            raise ValueError("an address (--address) applies to the Ray backend (--backend ray) only")
+        _check_ray_address(address)
     ray: Any = _ray() if backend == "ray" else None
     from .planner import PARAMS, check_params
 
