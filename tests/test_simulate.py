@@ -66,6 +66,7 @@ def test_hugger_simulate_closed_loop_holds_with_t_off(tmp_path, capsys):
     assert closed["links_in_contact"] >= 10
     traj = hugger.Trajectory.load(out)
     assert traj.has_object and len(traj) == closed["configurations"]
+    assert traj.provenance["object"] == "sphere" and traj.provenance["command"][:2] == ["hugger", "simulate"]
 
 
 def test_hugger_simulate_bad_input(capsys):
@@ -74,6 +75,23 @@ def test_hugger_simulate_bad_input(capsys):
     assert main(["simulate", "sphere", "--push", "-1"]) == 2
     assert "hugger: error:" in capsys.readouterr().err
     assert main(["simulate", "sphere", "--latency", "-1"]) == 2
+    capsys.readouterr()
+    # A skin chooses how the open loop's plan senses the static mesh; the closed loop's is MuJoCo.
+    assert main(["simulate", "sphere", "--skin", "mesh"]) == 2
+    err = capsys.readouterr().err
+    assert "--skin chooses the sensing of the --open-loop plan" in err and err.count("\n") == 1
+
+
+def test_hugger_simulate_skin_applies_to_the_open_loop_plan(capsys):
+    from hugger.cli import main
+
+    reports = {}
+    for skin in ("section", "mesh"):
+        assert main(["simulate", "sphere", "--open-loop", "--skin", skin, "--json"]) == 0
+        reports[skin] = json.loads(capsys.readouterr().out)
+    assert reports["section"]["closed"] == reports["mesh"]["closed"]  # the closed loop: MuJoCo either way
+    for skin, report in reports.items():
+        assert report["open"]["status"] == "done", (skin, report)
 
 
 @pytest.mark.slow

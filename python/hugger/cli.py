@@ -641,6 +641,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if not np.all(np.isfinite(offset)):
         raise UsageError("--offset must be finite (m)")
     params = _params(args)
+    # The closed loop senses through MuJoCo; a skin chooses how the open loop's plan senses the mesh.
+    skin = params.pop("skin", None)
+    if skin is not None and not args.open_loop:
+        raise UsageError("--skin chooses the sensing of the --open-loop plan on the static mesh; the closed "
+                         "loop senses through MuJoCo")
     runs = {}
     with Progress(f"closed-loop hugging of {case.name} in MuJoCo"):
         runs["closed"] = mujoco_skin.simulate(hand, case.obj, case.target, case.palm_pose, offset=offset,
@@ -648,9 +653,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.open_loop:
         with Progress(f"open-loop replay on {case.name}"):
             runs["open"] = mujoco_skin.replay(hand, case.obj, case.target, case.palm_pose, offset=offset,
-                                              push=args.push, **params)
+                                              push=args.push, **params, **({"skin": skin} if skin else {}))
     if out is not None:
-        runs["closed"].trajectory.save(out)  # atomically
+        runs["closed"].trajectory.with_provenance(**_provenance(args)).save(out)  # atomically
     report = {"object": case.name, "offset_m": offset.tolist(), "push_N": args.push, "latency": args.latency,
               **{mode: r.as_dict() for mode, r in runs.items()}}
     if args.json:
@@ -743,7 +748,9 @@ def build_parser() -> _Parser:
                    help="push the object with N newtons across the approach for 0.1 s at the first touch")
     p.add_argument("--latency", type=int, default=0, help="the skin reads the object as it was this many control periods ago")
     p.add_argument("--open-loop", action="store_true", help="also replay a plan made on the static mesh, for comparison")
-    p.add_argument("--out", help="write the closed-loop trajectory here (.npz, the object where the simulation left it)")
+    p.add_argument("--out", help="write the closed-loop trajectory here (.npz, the object where the simulation left it: "
+                                 "the configurations before it moved may overlap it there, so the file is for viewing "
+                                 "and the hold test, not for check_trajectory.py)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     _hand_options(p)
     _planner_options(p)
