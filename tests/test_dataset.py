@@ -2,6 +2,7 @@
 the loader, the MJCF export, and the independent checker on every saved grasp."""
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -100,6 +101,47 @@ def test_a_killed_run_resumes_to_the_same_dataset(reference, tmp_path, sig):
     assert not any(p.name.startswith(".") for p in (out / "shards").iterdir())  # no temporary files left
     for p in finished:  # done shards were kept, not made again
         assert (out / "shards" / p.name).stat().st_mtime_ns == before[p.name]
+
+
+def _children(pid: int) -> set[int]:
+    """The processes whose parent is ``pid`` (Linux /proc)."""
+    found = set()
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:  # gone meanwhile
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                found.add(int(entry.name))
+    return found
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers end with their parent through Linux's prctl")
+def test_workers_end_when_their_run_is_killed_outright(tmp_path):
+    # SIGKILL to the run alone (not its process group): it cannot shut its pool down.
+    cmd = [sys.executable, "-m", "hugger", "generate", *OBJECTS, "--approaches", "3", "--out", str(tmp_path / "ds"),
+           "--workers", "2"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        workers: set[int] = set()
+        while time.monotonic() < deadline and proc.poll() is None and len(workers) < 2:
+            workers = {p for p in _children(proc.pid) if "spawn_main" in Path(f"/proc/{p}/cmdline").read_text(
+                errors="replace")} if Path(f"/proc/{proc.pid}").exists() else set()
+            time.sleep(0.05)
+        assert len(workers) == 2, "the run ended before its workers started"
+        proc.kill()
+        proc.wait(timeout=60)
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and any(Path(f"/proc/{p}").exists() for p in workers):
+            time.sleep(0.05)
+        left = [p for p in workers if Path(f"/proc/{p}").exists() and "Z" not in
+                Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()[0]]
+        assert not left, f"workers {left} outlived their run"
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
 
 
 def test_other_settings_in_the_same_folder_are_refused(reference, tmp_path):

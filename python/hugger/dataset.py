@@ -444,11 +444,11 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
             for t in todo:
                 finished(t, make_shard(t))
         else:
-            import multiprocessing
-            from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+            from concurrent.futures import FIRST_COMPLETED, wait
 
-            ctx = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx) as pool:
+            from ._pool import process_pool
+
+            with process_pool(workers, len(todo)) as pool:
                 pending = {pool.submit(make_shard, t): t for t in todo}
                 try:
                     while pending:

@@ -259,8 +259,9 @@ def _verify(order: Sequence[Candidate], trajs: Sequence[Trajectory | None], coun
     checked candidates (in the order checked), each with ``held`` (and ``robust``,
     ``held_fraction`` when ``robust``) filled in."""
     from . import physics
+    from ._pool import process_pool
     from .physics.hold import NOMINAL_FORCE as force
-    from .physics.hold import PERTURBATIONS, _process_pool, _validate_job
+    from .physics.hold import PERTURBATIONS, _validate_job
 
     physics._mujoco()  # fail early when MuJoCo is missing
     others = [n for n in PERTURBATIONS if n != "nominal"]
@@ -284,7 +285,7 @@ def _verify(order: Sequence[Candidate], trajs: Sequence[Trajectory | None], coun
                     jobs: list[tuple[Trajectory, int, dict[str, Any]]] = [
                         (traj, -1, {**PERTURBATIONS[n], "force": force}) for n in others]
                     if workers > 1 and pool is None:  # one pool for every candidate checked
-                        pool = _process_pool(workers, len(jobs))
+                        pool = process_pool(workers, len(jobs))
                     found = (pool.map(_validate_job, jobs) if pool is not None
                              else (physics.validate(replace(j[0]), j[1], **j[2]) for j in jobs))
                     for r in found:

@@ -10,6 +10,7 @@ from typing import Any, cast
 import numpy as np
 
 from .._checks import positive as _positive, workers as _workers
+from .._pool import process_pool
 from .._types import CONTACT_DISTANCE
 from ._common import _index, _mujoco, _trajectory
 from .decompose import COACD_SETTINGS, CONVEX_RATIO, convex_pieces
@@ -162,20 +163,12 @@ def _validate_job(job: tuple[Any, int, dict[str, Any]]) -> dict[str, Any]:
     return validate(traj, k, **kwargs)
 
 
-def _process_pool(workers: int, jobs: int) -> Any:
-    """The process pool simulations run in (spawned: MuJoCo holds the GIL through a whole mj_step
-    batch, so threads would not help)."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
-    return ProcessPoolExecutor(max_workers=min(workers, jobs), mp_context=multiprocessing.get_context("spawn"))
-
-
 def _run_jobs(jobs: list[tuple[Any, int, dict[str, Any]]], workers: int) -> list[dict[str, Any]]:
     """validate() over many (traj, k, kwargs) jobs, in order: in a process pool when workers > 1."""
     if workers <= 1 or len(jobs) <= 1:
         return [_validate_job(j) for j in jobs]
-    with _process_pool(workers, len(jobs)) as pool:
+    # Processes, not threads: MuJoCo holds the GIL through a whole mj_step batch.
+    with process_pool(workers, len(jobs)) as pool:
         return list(pool.map(_validate_job, jobs))
 
 
