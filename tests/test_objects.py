@@ -1,6 +1,8 @@
 """Built-in objects, mesh files and default scenarios."""
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -134,6 +136,13 @@ def test_scale_turns_millimetres_into_metres(tmp_path):
     assert np.allclose(obj.bounds[1] - obj.bounds[0], [0.06, 0.05, 0.04])
     with pytest.raises(ValueError, match="scale"):
         objects.load(path, scale=0)
+    # A scale that shrinks it below what vertices can be told apart at: refused in one message,
+    # without trimesh's warnings on the collapsed mesh.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for scale in (1e-300, 1e-9):
+            with pytest.raises(ValueError, match=r"box_mm.stl is .* m across \(scale .*\): too small to read"):
+                objects.load(path, scale=scale)
 
 
 def test_safe_repairs_are_made_and_reported(tmp_path):

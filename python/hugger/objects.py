@@ -288,6 +288,11 @@ def load(path: str | os.PathLike[str], scale: float = 1.0) -> Object:
     return load_mesh(path, scale)[0]
 
 
+#: The smallest mesh read (m across, after scaling): coincident vertices are merged at trimesh's
+#: tolerance (1e-8 m), which would collapse a smaller one. (A plausible object is 1 mm or more.)
+_SMALLEST_READ = 1e-6
+
+
 def load_mesh(path: str | os.PathLike[str], scale: float = 1.0) -> tuple[Object, list[str]]:
     """Like :func:`load`, and also say what was repaired.
 
@@ -316,7 +321,12 @@ def load_mesh(path: str | os.PathLike[str], scale: float = 1.0) -> tuple[Object,
         raise ValueError(f"{path!r} holds no triangles")
     vertices = np.asarray(mesh.vertices, dtype=np.float64) * scale
     faces = np.asarray(mesh.faces, dtype=np.int64)
-    vertices, faces, repairs = _repair(vertices, faces)
+    size = float(np.ptp(vertices, axis=0).max()) if len(vertices) else 0.0
+    if np.isfinite(size) and size < _SMALLEST_READ:
+        raise ValueError(f"{os.path.basename(path)} is {size:g} m across (scale {scale:g}): too small to read, its "
+                         f"vertices would merge; hugger works in metres")
+    with np.errstate(divide="ignore", invalid="ignore"):  # trimesh's mass properties of a flat part
+        vertices, faces, repairs = _repair(vertices, faces)
     try:
         return Object(vertices, faces), repairs
     except ValueError as exc:
