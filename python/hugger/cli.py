@@ -144,6 +144,8 @@ def _hand(args: argparse.Namespace) -> Hand:
                 sep = ""
             if not sep or not name:
                 raise UsageError(f"--fixed-joint must be NAME=RAD, got {item!r}")
+            if sum(other.partition("=")[0] == name for other in args.fixed_joint) > 1:
+                raise UsageError(f"--fixed-joint holds {name!r} more than once")
         return hands.load(args.hand, fixed_joints=fixed or None)
     if getattr(args, "fixed_joint", None):
         raise UsageError("--fixed-joint needs --hand FILE")
