@@ -111,7 +111,8 @@ def _case_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--target", type=float, nargs=3, metavar=("X", "Y", "Z"), help="T, a point inside the object, m")
     g.add_argument("--start", type=float, nargs=3, metavar=("X", "Y", "Z"), help="initial palm centre, m")
     g.add_argument("--normal", type=float, nargs=3, metavar=("NX", "NY", "NZ"),
-                   help="initial palm normal (default: towards T)")
+                   help="initial palm normal (default: towards T); without --start the palm starts at the safe "
+                        "distance from T against it, facing T along it")
     g.add_argument("--turn", type=float, default=0.0, metavar="DEG",
                    help="turn the default start away from T by DEG about the palm's y axis (default 0; "
                         "not with --start or --normal)")
@@ -326,6 +327,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
     searched = None
     if args.approaches == 1 and (args.verify or args.robust_verify or args.workers is not None):
         raise UsageError("--verify, --robust-verify and --workers choose among the grasps of --approaches K > 1")
+    if args.approaches == 1 and args.threads is not None:
+        raise UsageError("--threads plans the approaches of --approaches K > 1 in parallel; one plan is one thread")
     if args.approaches != 1:
         traj, elapsed, searched = _search(case, hand, args)
     else:
@@ -504,6 +507,8 @@ def cmd_validate(args: argparse.Namespace) -> int:
     """Exit 0 when the grasp is held in all six directions, 1 when it is not, 2 for bad input."""
     from . import physics
 
+    if args.workers is not None and not args.robust:
+        raise UsageError("--workers runs the perturbations of --robust in parallel; give --robust")
     traj = _load(args.file)
     if args.robust:
         with Progress("simulating the perturbations"):
@@ -787,7 +792,9 @@ def build_parser() -> _Parser:
 
     p = sub.add_parser("view", help="interactive 3D view of one or more plans in the browser (needs hugger[view])")
     p.add_argument("files", nargs="+", metavar="FILE", help="trajectory files (.npz), shown side by side")
-    p.add_argument("--port", type=int, default=8080, help="HTTP port (default 8080; 0 picks a free one)")
+    p.add_argument("--port", type=int, default=8080,
+                   help="HTTP port (default 8080; 0 picks a free one; a port in use gives the next free one, "
+                        "as the printed address says)")
     p.add_argument("--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1, this machine only)")
     p.add_argument("--no-browser", action="store_true", help="do not open a web browser, just serve")
     p.add_argument("--fps", type=float, help="playback frames per second (default 20)")

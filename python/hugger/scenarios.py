@@ -129,7 +129,8 @@ def default_case(spec: str | os.PathLike[str], hand: Hand | None = None, scale: 
     ``hand`` (default ``Hand()``, the 5 x 5 hand) recorded in the case so that
     ``plan_many([default_case(...), ...])`` plans it as the command would.
 
-    ``target`` overrides T; ``start`` the palm centre; ``normal`` the palm normal (default: towards T).
+    ``target`` overrides T; ``start`` the palm centre; ``normal`` the palm normal (default: towards T;
+    given without ``start``, the palm starts at the safe distance from T against it, facing T).
     """
     hand = hand if hand is not None else Hand()
     name, obj, repairs = load_object(spec, scale)
