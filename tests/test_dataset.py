@@ -103,18 +103,28 @@ def test_a_killed_run_resumes_to_the_same_dataset(reference, tmp_path, sig):
         assert (out / "shards" / p.name).stat().st_mtime_ns == before[p.name]
 
 
+def _proc(pid: int, name: str) -> str:
+    """/proc/PID/NAME, or "" once the process is gone."""
+    try:
+        return Path(f"/proc/{pid}/{name}").read_text(errors="replace")
+    except OSError:
+        return ""
+
+
 def _children(pid: int) -> set[int]:
     """The processes whose parent is ``pid`` (Linux /proc)."""
     found = set()
     for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                stat = (entry / "stat").read_text()
-            except OSError:  # gone meanwhile
-                continue
-            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
-                found.add(int(entry.name))
+        stat = _proc(int(entry.name), "stat") if entry.name.isdigit() else ""
+        if stat and int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+            found.add(int(entry.name))
     return found
+
+
+def _running(pid: int) -> bool:
+    """The process exists and is not a zombie (one left unreaped by a container's first process)."""
+    stat = _proc(pid, "stat")
+    return bool(stat) and stat.rsplit(")", 1)[1].split()[0] != "Z"
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers end with their parent through Linux's prctl")
@@ -127,17 +137,15 @@ def test_workers_end_when_their_run_is_killed_outright(tmp_path):
         deadline = time.monotonic() + 120
         workers: set[int] = set()
         while time.monotonic() < deadline and proc.poll() is None and len(workers) < 2:
-            workers = {p for p in _children(proc.pid) if "spawn_main" in Path(f"/proc/{p}/cmdline").read_text(
-                errors="replace")} if Path(f"/proc/{proc.pid}").exists() else set()
+            workers = {p for p in _children(proc.pid) if "spawn_main" in _proc(p, "cmdline")}
             time.sleep(0.05)
         assert len(workers) == 2, "the run ended before its workers started"
         proc.kill()
         proc.wait(timeout=60)
         deadline = time.monotonic() + 30
-        while time.monotonic() < deadline and any(Path(f"/proc/{p}").exists() for p in workers):
+        while time.monotonic() < deadline and any(_running(p) for p in workers):
             time.sleep(0.05)
-        left = [p for p in workers if Path(f"/proc/{p}").exists() and "Z" not in
-                Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()[0]]
+        left = [p for p in workers if _running(p)]
         assert not left, f"workers {left} outlived their run"
     finally:
         with contextlib.suppress(ProcessLookupError):
@@ -281,7 +289,9 @@ def test_bad_input(tmp_path, capsys):
     assert "applies to the Ray backend" in capsys.readouterr().err
     # An address where nothing answers is refused at once, not retried for minutes by ray.init.
     for address, message in (("nonsense", "HOST:PORT"), ("127.0.0.1:1", "no Ray cluster answers at 127.0.0.1:1"),
-                             ("ray://127.0.0.1:1", "no Ray cluster answers"), ("host:99999", "HOST:PORT")):
+                             ("ray://127.0.0.1:1", "no Ray cluster answers"), ("host:99999", "HOST:PORT"),
+                             ("http://127.0.0.1:1", "HOST:PORT"), ("a:b:1", "HOST:PORT"),
+                             ("[::1]:1", "no Ray cluster answers at [::1]:1")):
         assert main(["generate", "box", "--out", str(tmp_path / "r"), "--backend", "ray", "--address", address]) == 2
         err = capsys.readouterr().err
         assert message in err and err.count("\n") == 1, err
@@ -316,20 +326,21 @@ def test_an_implausible_size_is_refused_unless_forced_and_repairs_are_told(tmp_p
     mm = write_obj(tmp_path / "box_mm.obj", box.vertices * 1000.0, box.faces)  # millimetres read as metres
     assert main(["generate", str(mm), "--out", str(tmp_path / "ds")]) == 2
     err = capsys.readouterr().err
-    assert "box_mm is" in err and "implausibly large" in err and "--force" in err and err.count("\n") == 1
+    assert "box_mm.obj is" in err and "implausibly large" in err and err.count("\n") == 1
+    assert "(give --scale, or --force to make its shards anyway)" in err and "force=True" not in err
     assert not (tmp_path / "ds").exists()  # refused before anything is made
     assert main(["generate", str(mm), "--scale", "1e-6", "--out", str(tmp_path / "ds")]) == 2
     assert "implausibly small" in capsys.readouterr().err
-    with pytest.raises(ValueError, match="implausibly large"):
+    with pytest.raises(ValueError, match=r"implausibly large.*refused \(give a scale, or force=True"):
         dataset.generate([str(mm)], tmp_path / "ds")
-    with pytest.warns(UserWarning, match="box_mm is .*making its shards anyway"):
+    with pytest.warns(UserWarning, match="box_mm.obj is .*making its shards anyway"):
         entry = dataset._object_entry(str(mm), 1.0, force=True)
     assert entry["name"] == "box_mm"
     with pytest.raises(ValueError, match="force must be True or False"):
         dataset.generate([str(mm)], tmp_path / "ds", force="yes")
     # An inside-out mesh is repaired, and the repair told, as hugger plan tells it.
     inverted = write_obj(tmp_path / "inside_out.obj", box.vertices, box.faces[:, ::-1])
-    with pytest.warns(UserWarning, match="repaired inside_out: flipped"):
+    with pytest.warns(UserWarning, match="repaired inside_out.obj: flipped"):
         dataset._object_entry(str(inverted), 1.0)
 
 

@@ -297,22 +297,17 @@ def _provenance(args: argparse.Namespace) -> dict[str, Any]:
 def _case(args: argparse.Namespace, hand: Hand) -> Case:
     """The scene of ``plan`` and ``simulate``: the object (built-in or mesh file, --scale only for
     files, an implausible size refused unless --force), T and the start pose."""
-    import warnings
-
-    from .hand import implausible_size
     from .objects import BUILTINS
-    from .scenarios import default_case
+    from .scenarios import ImplausibleSize, judged_case
 
     if args.scale is not None and os.fspath(args.object) in BUILTINS:
         raise UsageError(f"--scale applies to mesh files only; {args.object!r} is a built-in object, sized in metres")
-    with warnings.catch_warnings():  # the size is judged below, with --force
-        warnings.filterwarnings("ignore", message=r".*implausibly", category=UserWarning)
-        case = default_case(args.object, hand, scale=1.0 if args.scale is None else args.scale, target=args.target,
-                            start=args.start, normal=args.normal, turn_deg=args.turn)
-    size = float((case.obj.bounds[1] - case.obj.bounds[0]).max())
-    message = implausible_size(case.name, size)
-    if message and not args.force:
-        raise UsageError(f"{message}; refused (give --scale, or --force to plan it anyway)")
+    try:
+        case, message = judged_case(args.object, hand, scale=1.0 if args.scale is None else args.scale,
+                                    force=args.force, target=args.target, start=args.start, normal=args.normal,
+                                    turn_deg=args.turn)
+    except ImplausibleSize as exc:
+        raise UsageError(f"{exc.what}; refused (give --scale, or --force to plan it anyway)") from None
     if message:
         _note(f"warning: {message} (planning it anyway: --force)")
     for r in case.repairs:
@@ -329,6 +324,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
         raise UsageError("--verify, --robust-verify and --workers choose among the grasps of --approaches K > 1")
     if args.approaches == 1 and args.threads is not None:
         raise UsageError("--threads plans the approaches of --approaches K > 1 in parallel; one plan is one thread")
+    if args.workers is not None and not args.robust_verify:
+        raise UsageError("--workers runs the simulations of --robust-verify in parallel; give --robust-verify")
     if args.approaches != 1:
         traj, elapsed, searched = _search(case, hand, args)
     else:
@@ -541,11 +538,16 @@ def cmd_generate(args: argparse.Namespace) -> int:
     interactive = sys.stderr.isatty()
     log = None if interactive else _note  # plain lines in logs, a bar on a terminal
     argv = args._argv
-    with Progress("generating shards", total=1, delay=0.0) as p:
-        index = dataset.generate(args.objects, args.out, approaches=args.approaches, hands=args.hands or ["5x5"],
-                                 validate=args.validate, workers=args.workers, backend=args.backend,
-                                 address=args.address, scale=args.scale, params=_params(args),
-                                 command=["hugger", *argv], log=log, progress=p.update, force=args.force)
+    from .scenarios import ImplausibleSize
+
+    try:
+        with Progress("generating shards", total=1, delay=0.0) as p:
+            index = dataset.generate(args.objects, args.out, approaches=args.approaches, hands=args.hands or ["5x5"],
+                                     validate=args.validate, workers=args.workers, backend=args.backend,
+                                     address=args.address, scale=args.scale, params=_params(args),
+                                     command=["hugger", *argv], log=log, progress=p.update, force=args.force)
+    except ImplausibleSize as exc:
+        raise UsageError(f"{exc.what}; refused (give --scale, or --force to make its shards anyway)") from None
     grasps = len(index["shards"]) * int(index["parameters"]["approaches"])
     print(f"wrote {args.out}/index.json: {len(index['shards'])} shards, {grasps} grasps")
     return EXIT_OK
@@ -761,6 +763,10 @@ def build_parser() -> _Parser:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     _hand_options(p)
     _planner_options(p)
+    for action in p._actions:  # the closed loop senses through MuJoCo
+        if action.dest == "skin":
+            action.help = ("sensing skin of the --open-loop plan on the static mesh: section (the default) or mesh; "
+                           "the closed loop senses through MuJoCo")
     _case_options(p)
     p.set_defaults(func=cmd_simulate)
 

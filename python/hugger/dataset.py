@@ -90,10 +90,6 @@ def _sha256_file(path: str) -> str:
     return h.hexdigest()
 
 
-#: The warning of an object whose size is implausible for a hand (hugger.hand.implausible_size).
-_IMPLAUSIBLE = r".*implausibly"
-
-
 def _object_entry(spec: str, scale: float, force: bool = False) -> dict[str, Any]:
     """Index entry of one object: name, path (as given, or the built-in name) and content hash.
     A mesh file of an implausible size for a hand is refused unless ``force``; its repairs are
@@ -101,8 +97,7 @@ def _object_entry(spec: str, scale: float, force: bool = False) -> dict[str, Any
     import warnings
 
     from . import objects
-    from .hand import implausible_size
-    from .scenarios import default_case, load_object
+    from .scenarios import judged_case, load_object
 
     if spec in objects.BUILTINS:
         _, obj, _ = load_object(spec, scale)
@@ -113,18 +108,12 @@ def _object_entry(spec: str, scale: float, force: bool = False) -> dict[str, Any
         raise ValueError(f"{spec!r} is neither a built-in object nor a mesh file")
     # Refuses what a worker would, before any shard is made: a mesh the planner cannot take, or
     # one whose natural target T is not inside it (the start pose depends on the hand; T does not).
-    with warnings.catch_warnings():  # the size is judged below, with force
-        warnings.filterwarnings("ignore", message=_IMPLAUSIBLE, category=UserWarning)
-        case = default_case(spec, scale=scale)
-    name = Path(spec).stem
-    message = implausible_size(name, float(np.ptp(case.obj.bounds, axis=0).max()))
-    if message and not force:
-        raise ValueError(f"{message}; refused (give a scale: --scale, scale=; or force it: --force, force=True)")
+    case, message = judged_case(spec, scale=scale, force=force)
     if message:
         warnings.warn(f"{message} (making its shards anyway: force)", UserWarning, stacklevel=3)
     for r in case.repairs:
-        warnings.warn(f"repaired {name}: {r}", UserWarning, stacklevel=3)
-    return {"name": name, "path": spec, "builtin": False, "sha256": _sha256_file(spec), "scale": scale}
+        warnings.warn(f"repaired {case.name}: {r}", UserWarning, stacklevel=3)
+    return {"name": Path(spec).stem, "path": spec, "builtin": False, "sha256": _sha256_file(spec), "scale": scale}
 
 
 def _task_key(task: dict[str, Any]) -> str:
@@ -156,17 +145,13 @@ def make_shard(task: dict[str, Any]) -> bytes:
     """The shard of one (object, hand) task, as the bytes of its .npz file. Pure: the same task
     gives the same bytes in any process."""
     from .hand import Hand
-    from .scenarios import default_case
+    from .scenarios import judged_case
     from .analysis import escape
     from .search import search
 
-    import warnings
-
     ob = task["object"]
     hand = Hand(**task["hand"]["kwargs"])
-    with warnings.catch_warnings():  # judged by generate, which refuses such a size unless forced
-        warnings.filterwarnings("ignore", message=_IMPLAUSIBLE, category=UserWarning)
-        case = default_case(ob["path"], hand, scale=ob["scale"])
+    case, _ = judged_case(ob["path"], hand, scale=ob["scale"], force=True)  # judged by generate
     if ob["builtin"] is False and _sha256_file(ob["path"]) != ob["sha256"]:
         raise ValueError(f"{ob['path']} changed since the dataset was started (content hash differs)")
     pole = case.palm_pose[:3, 3] - case.target
@@ -313,9 +298,10 @@ RAY_CONNECT_TIMEOUT = 10.0
 
 
 def _check_ray_address(address: Any) -> str:
-    """``address`` for ``ray.init``: 'auto', 'local', HOST:PORT or ray://HOST:PORT, where something
-    accepts a connection within :data:`RAY_CONNECT_TIMEOUT` (``ray.init`` would retry for
-    minutes); otherwise a ValueError."""
+    """``address`` for ``ray.init``: 'auto', 'local', HOST:PORT or ray://HOST:PORT (HOST a name or
+    an address, IPv6 in brackets), where something accepts a connection within
+    :data:`RAY_CONNECT_TIMEOUT` once the name is resolved (``ray.init`` would retry for minutes);
+    otherwise a ValueError. Ray's other address schemes are not taken."""
     import socket
 
     if not isinstance(address, str):
@@ -324,10 +310,15 @@ def _check_ray_address(address: Any) -> str:
         return address
     rest = address[len("ray://"):] if address.startswith("ray://") else address
     host, sep, port = rest.rpartition(":")
-    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+    if host.startswith("[") and host.endswith("]"):  # an IPv6 address, bracketed
+        host = host[1:-1]
+    elif ":" in host:
+        host = ""
+    if (not sep or not host or "/" in host or any(c.isspace() for c in host) or not port.isdigit()
+            or not 0 < int(port) < 65536):
         raise ValueError(f"address must be 'auto', 'local', HOST:PORT or ray://HOST:PORT, got {address!r}")
     try:
-        with socket.create_connection((host.strip("[]"), int(port)), timeout=RAY_CONNECT_TIMEOUT):
+        with socket.create_connection((host, int(port)), timeout=RAY_CONNECT_TIMEOUT):
             pass
     except OSError as exc:
         raise ValueError(f"no Ray cluster answers at {address}: {exc.strerror or exc}") from None

@@ -157,6 +157,34 @@ def default_case(spec: str | os.PathLike[str], hand: Hand | None = None, scale: 
     return Case(name=name, obj=obj, target=t, palm_pose=pose, repairs=repairs, hand=hand)
 
 
+class ImplausibleSize(ValueError):
+    """A case refused for its object's size, implausible for a hand (millimetres read as metres:
+    :data:`hugger.hand.PLAUSIBLE_SIZE`). ``what`` names the object and its size."""
+
+    def __init__(self, what: str) -> None:
+        super().__init__(f"{what}; refused (give a scale, or force=True to take it anyway)")
+        self.what = what
+
+
+def judged_case(spec: str | os.PathLike[str], hand: Hand | None = None, scale: float = 1.0, force: bool = False,
+                **kwargs: Any) -> tuple[Case, str | None]:
+    """:func:`default_case` (``kwargs``: target, start, normal, turn_deg) with its object's size
+    judged: a size implausible for a hand raises :class:`ImplausibleSize` unless ``force``.
+    Returns the case and the size's warning (None for a plausible size), for the caller to tell,
+    as it tells the case's repairs."""
+    import warnings
+
+    from .hand import implausible_size
+
+    with warnings.catch_warnings():  # the object's own warning of its size: judged here
+        warnings.filterwarnings("ignore", message=r".*implausibly", category=UserWarning)
+        case = default_case(spec, hand, scale=scale, **kwargs)
+    message = implausible_size(case.name, float(np.ptp(case.obj.bounds, axis=0).max()))
+    if message and not force:
+        raise ImplausibleSize(message)
+    return case, message
+
+
 def _finite(name: str, value: Any) -> np.ndarray:
     try:
         a = np.asarray(value, dtype=np.float64).reshape(3)
