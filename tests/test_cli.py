@@ -179,6 +179,8 @@ def test_mesh_files_are_read_once_per_process(tmp_path, monkeypatch):
     (["validate", "no/such/plan.npz"], "no such trajectory file"),
     (["validate", "p.npz", "--workers", "2"], "--workers runs the perturbations of --robust in parallel"),
     (["plan", "sphere", "--out", "x.npz", "--threads", "2"], "--threads plans the approaches of --approaches K > 1"),
+    (["plan", "sphere", "--out", "x.npz", "--approaches", "4", "--verify", "2", "--workers", "2"],
+     "--workers runs the simulations of --robust-verify in parallel"),
     (["plan", "sphere", "--out", "x.npz", "--fingers", "two"], "invalid int value"),
     (["plan", "no/such/file.stl", "--out", "x.npz"], "no such mesh file"),
     (["info", "no/such/plan.npz"], "no such trajectory file"),

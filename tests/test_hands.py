@@ -251,14 +251,14 @@ def test_urdf_with_fixed_spread_joints_imports_and_plans(tmp_path, checker):
                          ({**fixed, "f0_spread": "x"}, r"fixed_joints\['f0_spread'\] must be an angle"),
                          (list(fixed), "fixed_joints must map joint names to angles"),
                          ({**fixed, "f0_spread": 5.0},
-                          r"fixed_joints\['f0_spread'\] = 5 is outside that joint's limits \[-0.3, 0.3\]")):
+                          r"joint 'f0_spread' held at 5 rad is outside its limits \[-0.3, 0.3\] rad")):
         with pytest.raises(ValueError, match=message):
             hugger.Hand.from_urdf(f, fixed_joints=bad)
     # On the command line: a joint held twice, or beyond its limits, in one line.
     holds = [a for p in ("f1", "f2", "thumb") for a in ("--fixed-joint", f"{p}_spread=0")]
     for extra, message in ((["--fixed-joint", "f0_spread=0", "--fixed-joint", "f0_spread=0.1"],
                             "--fixed-joint holds 'f0_spread' more than once"),
-                           (["--fixed-joint", "f0_spread=5"], "outside that joint's limits")):
+                           (["--fixed-joint", "f0_spread=5"], "joint 'f0_spread' held at 5 rad is outside its limits")):
         r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--hand", str(f), *holds, *extra,
                             "--out", str(tmp_path / "x.npz")], capture_output=True, text=True)
         assert r.returncode == 2 and message in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
@@ -322,7 +322,7 @@ def test_mjcf_joint_held_beyond_its_range_is_refused(tmp_path):
     pytest.importorskip("mujoco")
     f = tmp_path / "hand.xml"
     f.write_text(hands.to_mjcf(hands.preset("parallel_3link")))
-    with pytest.raises(ValueError, match=r"fixed_joints\['f0_j1'\] = 10 is outside that joint's limits"):
+    with pytest.raises(ValueError, match=r"joint 'f0_j1' held at 10 rad is outside its limits"):
         hugger.Hand.from_mjcf(f, fixed_joints={"f0_j1": 10.0})
 
 

@@ -82,16 +82,24 @@ def test_hugger_simulate_bad_input(capsys):
     assert "--skin chooses the sensing of the --open-loop plan" in err and err.count("\n") == 1
 
 
-def test_hugger_simulate_skin_applies_to_the_open_loop_plan(capsys):
+def test_hugger_simulate_skin_applies_to_the_open_loop_plan(monkeypatch, capsys):
     from hugger.cli import main
 
-    reports = {}
-    for skin in ("section", "mesh"):
-        assert main(["simulate", "sphere", "--open-loop", "--skin", skin, "--json"]) == 0
-        reports[skin] = json.loads(capsys.readouterr().out)
-    assert reports["section"]["closed"] == reports["mesh"]["closed"]  # the closed loop: MuJoCo either way
-    for skin, report in reports.items():
-        assert report["open"]["status"] == "done", (skin, report)
+    asked = {}
+    replay, simulate = mujoco_skin.replay, mujoco_skin.simulate
+
+    def seen(mode, run):
+        def call(*args, **kwargs):
+            asked[mode] = kwargs.get("skin")
+            return run(*args, **kwargs)
+        return call
+
+    monkeypatch.setattr(mujoco_skin, "replay", seen("open", replay))
+    monkeypatch.setattr(mujoco_skin, "simulate", seen("closed", simulate))
+    assert main(["simulate", "sphere", "--open-loop", "--skin", "mesh", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert asked == {"open": "mesh", "closed": None}  # the closed loop senses through MuJoCo
+    assert report["open"]["status"] == "done" and report["closed"]["status"] == "done", report
 
 
 @pytest.mark.slow

@@ -1,4 +1,4 @@
-"""The package's process pools: spawned workers that end with the process that made them."""
+"""The package's process pools: spawned workers that end with the thread that made them."""
 from __future__ import annotations
 
 import os
@@ -11,16 +11,22 @@ _PR_SET_PDEATHSIG = 1
 
 def _end_with_parent(parent: int) -> None:
     """Worker initializer. A pool's owner killed outright (SIGKILL) cannot shut its pool down: on
-    Linux the kernel then sends each worker SIGTERM, as asked here; a parent already gone when
-    this runs ends the worker at once."""
+    Linux the kernel then sends each worker SIGTERM, as asked here (when the thread that started
+    the worker ends: the pools here live within one call of the thread that made them); a parent
+    already gone when this runs ends the worker at once. Elsewhere, or without prctl, the pool's
+    own shutdown only."""
     if not sys.platform.startswith("linux"):
         return
-    import ctypes
-    import signal
-
     try:
-        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
-    except (OSError, AttributeError):  # no prctl in this C library: the pool's own shutdown only
+        import ctypes
+        import signal
+
+        prctl = ctypes.CDLL(None, use_errno=True).prctl
+        prctl.argtypes = [ctypes.c_int, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong]
+        prctl.restype = ctypes.c_int
+        if prctl(_PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0) != 0:
+            return
+    except (ImportError, OSError, AttributeError):
         return
     if os.getppid() != parent:
         os._exit(1)
@@ -28,7 +34,7 @@ def _end_with_parent(parent: int) -> None:
 
 def process_pool(workers: int, jobs: int) -> Any:
     """A ``ProcessPoolExecutor`` of min(workers, jobs) spawned processes (not forked: MuJoCo and
-    the planner's threads do not survive a fork), which end with this process."""
+    the planner's threads do not survive a fork), which end with the thread that made them."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 

@@ -975,9 +975,8 @@ TEST(SectionSkin, AngleIndexFindsTheFirstAngleAtOrPast) {
   EXPECT_GE(checked, 30000);
 }
 
-// pseudo_angle_of keeps its last answer: asked again, and asked in turn for angles of other bits
-// (+0 after -0, a neighbour, beyond pi), it answers as the formula does, to the bit.
-// The wedge kept per thread answers as computed afresh, to the bit (-0 is not +0).
+// The wedge kept per thread: asked again, and asked in turn for angles of other bits (+0 after -0,
+// a neighbour, beyond pi), it answers as computed afresh, to the bit.
 TEST(SectionSkin, WedgeAnswersToTheBit) {
   auto formula = [](double angle) {
     return std::abs(angle) >= kPi ? (angle < 0.0 ? -2.0 : 2.0)

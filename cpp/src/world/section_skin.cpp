@@ -1720,7 +1720,7 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, const W
   // The wedge of directions within `within` of u: spans wholly outside it are left out, and
   // where it is convex (within <= pi/2) so are nodes wholly outside one of its two sides.
   const double pm = w.pm;
-  const bool wedge = within <= 0.5 * kPi;
+  const bool convex_wedge = within <= 0.5 * kPi;
   // The wedge's sides: u turned by +-within (rotate_planar(u, +-within), bit for bit).
   const Vec2 e_plus = rotate_planar(u, w.c, w.s), e_minus = rotate_planar(u, w.c_neg, w.s_neg);
   Vec2 last_q(kInf, kInf);  // the last end point seen and its pseudo-angle (neighbours share ends)
@@ -1763,7 +1763,7 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, const W
     const double dx = std::max({nd.lo[0] - pivot.x(), pivot.x() - nd.hi[0], 0.0});
     const double dy = std::max({nd.lo[1] - pivot.y(), pivot.y() - nd.hi[1], 0.0});
     if (dx * dx + dy * dy > reach * reach) return true;
-    if (!wedge) return false;
+    if (!convex_wedge) return false;
     // cross(e, x - pivot) over the box: its value at the centre -+ the box's half extent; a box
     // within touching distance of the pivot is kept (its segments may touch the pivot).
     const double cx = nd.c[0] - pivot.x(), cy = nd.c[1] - pivot.y();
@@ -1776,7 +1776,7 @@ bool PlaneRegion::spans(const Vec2& pivot, const Vec2& u, double length, const W
   // wedge (as the nodes above) spans no direction within it: its span would be left out.
   const bool touching = visit_segments(skip, [&](int i) {
     const Segment& s = segments_[i];
-    if (wedge) {
+    if (convex_wedge) {
       const Vec2 a = s.a - pivot, b = s.b - pivot;
       if ((cross2(e_plus, a) > margin && cross2(e_plus, b) > margin) ||
           (cross2(e_minus, a) < -margin && cross2(e_minus, b) < -margin))

@@ -248,13 +248,13 @@ def _fixed_joints(value: Any) -> dict[str, float]:
         out[str(name)] = x
     return out
 
-def _within_limits(source: str, name: str, value: float, lower: Any, upper: Any) -> None:
+def _within_limits(source: str, name: str, value: float, lower: Any, upper: Any, unit: str = "rad") -> None:
     """A joint held by fixed_joints must be held within its limits (rounding allowed)."""
     lo = -math.inf if lower is None else float(lower)
     hi = math.inf if upper is None else float(upper)
     if not lo - LIMIT_TOLERANCE <= value <= hi + LIMIT_TOLERANCE:
-        raise ValueError(f"{source}: fixed_joints[{name!r}] = {value:g} is outside that joint's limits "
-                         f"[{lo:g}, {hi:g}]")
+        raise ValueError(f"{source}: joint {name!r} held at {value:g} {unit} is outside its limits "
+                         f"[{lo:g}, {hi:g}] {unit}")
 
 
 def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_joints: dict[str, float] | None = None,
@@ -304,7 +304,8 @@ def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dic
         raise ValueError(f"{source}: fixed_joints names joints the file does not have: {unknown}")
     for j in robot.joints:
         if j.name in fixed and j.type in ("revolute", "prismatic") and j.limit is not None:
-            _within_limits(source, j.name, fixed[j.name], j.limit.lower, j.limit.upper)
+            _within_limits(source, j.name, fixed[j.name], j.limit.lower, j.limit.upper,
+                           "m" if j.type == "prismatic" else "rad")
     links = {lk.name: lk for lk in robot.links}
     child_links = {j.child for j in robot.joints}
     roots = [lk.name for lk in robot.links if lk.name not in child_links]
@@ -534,7 +535,8 @@ def from_mjcf(path: str | os.PathLike[str], palm_body: str | None = None, fixed_
     qpos = np.zeros(model.nq)
     for nm, v in fixed.items():
         if model.jnt_limited[names[nm]]:
-            _within_limits(source, nm, v, *model.jnt_range[names[nm]])
+            unit = "m" if model.jnt_type[names[nm]] == mujoco.mjtJoint.mjJNT_SLIDE else "rad"
+            _within_limits(source, nm, v, *model.jnt_range[names[nm]], unit)
         qpos[model.jnt_qposadr[names[nm]]] = v
     data.qpos[:] = qpos
     mujoco.mj_kinematics(model, data)

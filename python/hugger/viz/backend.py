@@ -18,7 +18,8 @@ _VIZ_EXTRA = "pip install 'hugger[viz]'"
 #: The largest resolution a figure or animation is drawn at (dots per inch): print needs 300-600,
 #: and a page-wide figure at this resolution is already about 20,000 pixels wide.
 MAX_DPI = 1200.0
-#: The highest frame rate of an animation (a GIF's frame delays are whole hundredths of a second).
+#: The highest frame rate of an animation (an MP4's; a GIF's frame delays are whole hundredths of a
+#: second, so it shows at most 100 frames a second).
 MAX_FPS = 120.0
 #: The longest pause on an animation's final grasp (s): its frames are written out one by one.
 MAX_HOLD = 10.0
