@@ -533,13 +533,12 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
 def cmd_generate(args: argparse.Namespace) -> int:
     from . import dataset
+    from .scenarios import ImplausibleSize
 
     _parent_exists(Path(args.out))  # the dataset's folder is made by dataset.generate
     interactive = sys.stderr.isatty()
     log = None if interactive else _note  # plain lines in logs, a bar on a terminal
     argv = args._argv
-    from .scenarios import ImplausibleSize
-
     try:
         with Progress("generating shards", total=1, delay=0.0) as p:
             index = dataset.generate(args.objects, args.out, approaches=args.approaches, hands=args.hands or ["5x5"],

@@ -372,7 +372,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     workers = _checks.workers("workers", workers)
     if address is not None:
         if backend != "ray":
-            raise ValueError("an address (--address) applies to the Ray backend (--backend ray) only")
+            raise ValueError("an address applies to the Ray backend only")
         _check_ray_address(address)
     ray: Any = _ray() if backend == "ray" else None
     from .planner import PARAMS, check_params
