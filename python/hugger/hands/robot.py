@@ -535,8 +535,9 @@ def from_mjcf(path: str | os.PathLike[str], palm_body: str | None = None, fixed_
     qpos = np.zeros(model.nq)
     for nm, v in fixed.items():
         if model.jnt_limited[names[nm]]:
+            lo, hi = model.jnt_range[names[nm]]
             unit = "m" if model.jnt_type[names[nm]] == mujoco.mjtJoint.mjJNT_SLIDE else "rad"
-            _within_limits(source, nm, v, *model.jnt_range[names[nm]], unit)
+            _within_limits(source, nm, v, lo, hi, unit)
         qpos[model.jnt_qposadr[names[nm]]] = v
     data.qpos[:] = qpos
     mujoco.mj_kinematics(model, data)
