@@ -170,12 +170,13 @@ def same(a: hugger.Trajectory, b: hugger.Trajectory, arrays=MOTION, fields=("sta
             and all(getattr(a, f) == getattr(b, f) for f in fields))
 
 
-def write_ball(path: Path, radius: float = 0.04, subdivisions: int = 2) -> Path:
+def write_ball(path: Path, radius: float = 0.04, subdivisions: int = 2, inside_out: bool = False) -> Path:
     """An icosphere of ``radius`` (in the file's units) written to the mesh file ``path`` (STL,
-    OBJ, ...: by its suffix) by trimesh, one vertex list as given; skips where trimesh is absent."""
+    OBJ, ...: by its suffix) by trimesh, one vertex list as given (``inside_out``: its faces facing
+    inward); skips where trimesh is absent."""
     trimesh = pytest.importorskip("trimesh")
     v, f = hugger.objects.icosphere(subdivisions)
-    trimesh.Trimesh(radius * v, f, process=False).export(path)
+    trimesh.Trimesh(radius * v, f[:, ::-1] if inside_out else f, process=False).export(path)
     return Path(path)
 
 

@@ -18,7 +18,7 @@ import hugger
 from hugger import analysis, dataset
 from hugger.cli import main
 
-from helpers import save_and_check
+from helpers import save_and_check, write_ball
 
 OBJECTS = ["box", "torus", "cylinder"]
 
@@ -315,31 +315,24 @@ def test_bad_input(tmp_path, capsys):
         {"fingers": 4, "links": 3, "link_length": 0.025, "palm_radius": 0.035})
 
 
-def write_obj(path: Path, vertices: np.ndarray, faces: np.ndarray) -> Path:
-    lines = [f"v {float(x)!r} {float(y)!r} {float(z)!r}" for x, y, z in vertices] + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces]
-    path.write_text("\n".join(lines) + "\n")
-    return path
-
-
 def test_an_implausible_size_is_refused_unless_forced_and_repairs_are_told(tmp_path, capsys):
-    box = hugger.objects.get("box")
-    mm = write_obj(tmp_path / "box_mm.obj", box.vertices * 1000.0, box.faces)  # millimetres read as metres
+    mm = write_ball(tmp_path / "ball_mm.obj", 40.0)  # a 4 cm ball in millimetres, read as metres
     assert main(["generate", str(mm), "--out", str(tmp_path / "ds")]) == 2
     err = capsys.readouterr().err
-    assert "box_mm.obj is" in err and "implausibly large" in err and err.count("\n") == 1
+    assert "ball_mm.obj is" in err and "implausibly large" in err and err.count("\n") == 1
     assert "(give --scale, or --force to make its shards anyway)" in err and "force=True" not in err
     assert not (tmp_path / "ds").exists()  # refused before anything is made
     assert main(["generate", str(mm), "--scale", "1e-6", "--out", str(tmp_path / "ds")]) == 2
     assert "implausibly small" in capsys.readouterr().err
     with pytest.raises(ValueError, match=r"implausibly large.*refused \(give a scale, or force=True"):
         dataset.generate([str(mm)], tmp_path / "ds")
-    with pytest.warns(UserWarning, match="box_mm.obj is .*making its shards anyway"):
+    with pytest.warns(UserWarning, match="ball_mm.obj is .*making its shards anyway"):
         entry = dataset._object_entry(str(mm), 1.0, force=True)
-    assert entry["name"] == "box_mm"
+    assert entry["name"] == "ball_mm"
     with pytest.raises(ValueError, match="force must be True or False"):
         dataset.generate([str(mm)], tmp_path / "ds", force="yes")
     # An inside-out mesh is repaired, and the repair told, as hugger plan tells it.
-    inverted = write_obj(tmp_path / "inside_out.obj", box.vertices, box.faces[:, ::-1])
+    inverted = write_ball(tmp_path / "inside_out.obj", inside_out=True)
     with pytest.warns(UserWarning, match="repaired inside_out.obj: flipped"):
         dataset._object_entry(str(inverted), 1.0)
 

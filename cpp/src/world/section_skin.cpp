@@ -1684,23 +1684,21 @@ bool PlaneRegion::depth_within(const Vec2& a, const Vec2& b, double allow) const
 }
 
 PlaneRegion::Wedge PlaneRegion::wedge(double within) {
-  // One thread-local (in a shared library each reaching of one is a call).
+  // One thread-local (in a shared library each reaching of one is a call), asked by the bits of
+  // the angle it holds.
   struct Kept {
     bool known = false;
-    std::uint64_t bits = 0;
     Wedge w;
   };
   thread_local Kept kept;
   Kept& k = kept;
-  const std::uint64_t bits = bits_of(within);
-  if (!k.known || bits != k.bits) {
+  if (!k.known || bits_of(within) != bits_of(k.w.within)) {
     k.w.within = within;
     k.w.pm = pseudo_angle_of(within);
     k.w.c = std::cos(within);
     k.w.s = std::sin(within);
     k.w.c_neg = std::cos(-within);
     k.w.s_neg = std::sin(-within);
-    k.bits = bits;
     k.known = true;
   }
   return k.w;
@@ -2300,10 +2298,6 @@ namespace {
 
 /// Signed angle from u to v (radians, in [-pi, pi]).
 double angle_between(const Vec2& u, const Vec2& v) { return std::atan2(cross2(u, v), u.dot(v)); }
-
-}  // namespace
-
-namespace {
 
 /// This thread's list of spans for rotate_until_free. Out of line: a thread-local's address in a
 /// shared library is a call, which the compiler repeats at each use rather than keep it; the

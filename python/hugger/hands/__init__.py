@@ -12,7 +12,7 @@ from typing import Any
 
 from ..hand import Hand
 from .presets import PRESETS, Preset, preset
-from .robot import ROOTS, from_mjcf, from_urdf, grasp_joint_values, to_mjcf, to_urdf, xml_root
+from .robot import PALM_KEYWORDS, from_mjcf, from_urdf, grasp_joint_values, kind_of_root, to_mjcf, to_urdf, xml_root
 
 __all__ = ["PRESETS", "Preset", "preset", "from_urdf", "from_mjcf", "to_urdf", "to_mjcf", "grasp_joint_values",
            "load"]
@@ -39,15 +39,14 @@ def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = N
         # The root element says which (a URDF may well be called .xml); a file not well-formed
         # before it goes by its extension, to the reader's own message.
         tag = xml_root(text)
-        kinds = {root: kind for kind, root in ROOTS.items()}
-        if tag is not None and tag not in kinds:
+        kind = ("URDF" if ext == ".urdf" else "MJCF") if tag is None else kind_of_root(tag)
+        if kind is None:
             raise ValueError(f"hand file {text!r} is neither URDF nor MJCF: its root element is <{tag}>, not "
                              f"<robot> or <mujoco>")
-        kind = kinds[tag] if tag is not None else ("URDF" if ext == ".urdf" else "MJCF")
-        palm = {"URDF": "palm_link", "MJCF": "palm_body"}
-        wrong = palm["MJCF" if kind == "URDF" else "URDF"]
+        wrong = next(keyword for other, keyword in PALM_KEYWORDS.items() if other != kind)
         if wrong in kwargs:
-            raise ValueError(f"hand file {text!r} is {kind}, whose palm is chosen by {palm[kind]}, not {wrong}")
+            raise ValueError(f"hand file {text!r} is {kind}, whose palm is chosen by {PALM_KEYWORDS[kind]}, not "
+                             f"{wrong}")
         read = from_urdf if kind == "URDF" else from_mjcf
         return read(text, fixed_joints=fixed_joints, **kwargs)
     try:

@@ -46,6 +46,13 @@ def _need(module: str) -> Any:
 
 #: The root element of each kind of robot file this module reads.
 ROOTS = {"URDF": "robot", "MJCF": "mujoco"}
+#: The keyword that chooses the palm, in each kind's reader.
+PALM_KEYWORDS = {"URDF": "palm_link", "MJCF": "palm_body"}
+
+
+def kind_of_root(tag: str) -> str | None:
+    """The kind of robot file (URDF or MJCF) whose root element is ``tag``, or None."""
+    return next((kind for kind, root in ROOTS.items() if root == tag), None)
 
 
 class _Found(Exception):
@@ -93,7 +100,7 @@ def _check_root(source: str, kind: str) -> None:
     tag = xml_root(source, kind)
     if tag is None or tag == ROOTS[kind]:
         return
-    other = next((k for k, root in ROOTS.items() if root == tag), None)
+    other = kind_of_root(tag)
     if other is None:
         raise ValueError(f"{source}: not a {kind} file: its root element is <{tag}>, not <{ROOTS[kind]}>")
     raise ValueError(f"{source}: {'an' if other == 'MJCF' else 'a'} {other} file (<{tag}> at its root), not "
@@ -247,6 +254,7 @@ def _fixed_joints(value: Any) -> dict[str, float]:
             raise ValueError(f"fixed_joints[{name!r}] must be a finite angle (rad), got {angle!r}")
         out[str(name)] = x
     return out
+
 
 def _within_limits(source: str, name: str, value: float, lower: Any, upper: Any, unit: str = "rad") -> None:
     """A joint held by fixed_joints must be held within its limits (rounding allowed)."""
