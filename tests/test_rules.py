@@ -113,3 +113,27 @@ def test_h5_fingers_close_again_at_rest_without_palm_contact():
     planner.plan()
     stats = planner.stats
     assert stats["palm_contact_iteration"] == -1 and stats["fingers_opened"] > 0 and stats["reclose_steps"] > 0, stats
+
+
+def _retries_while_blocked(planner):
+    """Step a plan to its end; per iteration whose palm stayed still although palm steps were
+    asked (retries rose): the number of steps refused."""
+    out, retries, palm = [], 0, None
+    while (c := planner.step()) is not None:
+        s = planner.stats
+        if c.phase == 2 and palm is not None and s["sigma_retries"] > retries and np.array_equal(c.palm_pose, palm):
+            out.append((s["phase2_iterations"], s["sigma_retries"] - retries))
+        retries, palm = s["sigma_retries"], c.palm_pose
+    return out
+
+
+def test_a_blocked_hand_asks_the_shortest_palm_step_first():
+    """The default cylinder case, whose fingers block the palm for many iterations: the first
+    blocked iteration refuses every palm step down to the shortest, each one after it only the
+    shortest (docs/algorithm.md, "Motion between configurations")."""
+    case = hugger.scenarios.default_case("cylinder")
+    blocked = _retries_while_blocked(hugger.Planner(case.hand, case.obj, case.target, case.palm_pose))
+    runs = [b for a, b in zip(blocked, blocked[1:]) if b[0] == a[0] + 1]  # blocked after a blocked one
+    assert len(runs) >= 10, blocked
+    assert all(n == 1 for _, n in runs), blocked
+    assert max(n for _, n in blocked) >= 4  # the whole ladder refused first: sigma, sigma/4, ...

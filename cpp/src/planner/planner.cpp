@@ -868,11 +868,25 @@ void Planner::phase2_iteration() {
   std::vector<Chain>& next = w.next;
   std::vector<TipState>& next_states = w.next_states;
   bool committed = false;
-  for (double sig = sigma; sig >= min_sigma && !committed; sig *= 0.25) {
+  // After an iteration that refused every palm step, the shortest step is asked first: refused
+  // again, the hand is still blocked and the longer ones are not asked (a longer step moves
+  // every finger farther; asked anyway, none passed on any object measured, docs/performance.md).
+  // Passed, the steps are asked from the longest as always.
+  bool still_blocked = false;
+  if (steps_refused_ && sigma >= min_sigma) {
+    double shortest = sigma;
+    while (shortest * 0.25 >= min_sigma) shortest *= 0.25;  // the last step of the loop below
+    if (shortest < sigma && !attempt(shortest, next, next_states)) {
+      ++stats_.sigma_retries;
+      still_blocked = true;
+    }
+  }
+  for (double sig = sigma; sig >= min_sigma && !committed && !still_blocked; sig *= 0.25) {
     committed = attempt(sig, next, next_states);
     if (committed) sigma = sig;
     else ++stats_.sigma_retries;
   }
+  steps_refused_ = !committed && sigma >= min_sigma;
   if (!committed) {
     sigma = 0.0;
     attempt(0.0, next, next_states);

@@ -247,6 +247,9 @@ class Planner {
   double eta_target_ = kInf;
   bool palm_touched_ = false;
   bool any_contact_ = false;
+  /// Every palm step of the last iteration was refused, down to the shortest (the hand blocked
+  /// by its fingers, not by O): the next iteration asks the shortest first.
+  bool steps_refused_ = false;
   bool felt_ = false;  ///< some part of the hand has sensed O (a FROZEN finger or the palm touched)
   std::vector<char> closing_;  ///< hug rule: per finger, closing until contact
   std::vector<char> closed_;   ///< hug rule: per finger, has closed (or is closing) once
