@@ -157,7 +157,7 @@ void bind_planner(py::module_& m) {
                     "Phase 2 iteration of the first touch (-1: none yet)")
       .def_readonly("palm_contact_iteration", &PlannerStats::palm_contact_iteration,
                     "Phase 2 iteration at which the palm touched (-1: none yet)")
-      .def_readonly("sigma_retries", &PlannerStats::sigma_retries, "Palm steps taken back (each shorter step retried counts)")
+      .def_readonly("sigma_retries", &PlannerStats::sigma_retries, "Palm steps refused (each step asked and refused counts)")
       .def_readonly("finger_collisions", &PlannerStats::finger_collisions,
                     "Fingers stopped by another finger or themselves")
       .def_readonly("clinging_failures", &PlannerStats::clinging_failures,

@@ -261,7 +261,7 @@ class PlannerStats:
     @property
     def sigma_retries(self) -> int:
         """
-        Palm steps taken back (each shorter step retried counts)
+        Palm steps refused (each step asked and refused counts)
         """
     @property
     def finger_collisions(self) -> int:

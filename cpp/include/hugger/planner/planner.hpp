@@ -75,7 +75,7 @@ struct PlannerStats {
   long phase2_iterations = 0;
   long first_contact_iteration = -1;  ///< Phase 2 iteration of the first touch (-1: none yet)
   long palm_contact_iteration = -1;   ///< Phase 2 iteration at which the palm touched
-  long sigma_retries = 0;             ///< palm steps taken back (each shorter step retried counts)
+  long sigma_retries = 0;             ///< palm steps refused (each step asked and refused counts)
   long finger_collisions = 0;         ///< fingers stopped by another finger or themselves
   long clinging_failures = 0;         ///< fingers stopped because no free link position was found
   long motion_rejections = 0;         ///< finger moves refused: a joint would move > 4 s, or the swept motion collides
@@ -247,8 +247,8 @@ class Planner {
   double eta_target_ = kInf;
   bool palm_touched_ = false;
   bool any_contact_ = false;
-  /// Every palm step of the last iteration was refused, down to the shortest (the hand blocked
-  /// by its fingers, not by O): the next iteration asks the shortest first.
+  /// The last iteration asked a palm step and took none (the hand blocked by its fingers): the
+  /// next iteration asks the shortest step first. An iteration that asks none clears it.
   bool steps_refused_ = false;
   bool felt_ = false;  ///< some part of the hand has sensed O (a FROZEN finger or the palm touched)
   std::vector<char> closing_;  ///< hug rule: per finger, closing until contact
