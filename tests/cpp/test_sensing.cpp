@@ -7,6 +7,7 @@
 #include "hugger/planner/snake.hpp"
 #include "hugger/world/simulated_world.hpp"
 #include "meshes.hpp"
+#include "scenes.hpp"
 
 using namespace hugger;
 
@@ -146,8 +147,8 @@ TEST(Snake, FollowTheLeaderInFreeSpace) {
 
 // A finger against itself, one link at a time (link_clear_of_chain), against every pair's exact
 // distance; and Tail2Head with a self-separation gives up exactly on the chains that fold onto
-// themselves, placing the others bit for bit as without it, and says so (`folded`). Chains in
-// free space with joints bent up to 2.9 rad, so that many fold.
+// themselves, placing the others bit for bit as without it, and says so (`folded`), with and
+// without fold_early. Chains in free space with joints bent up to 2.9 rad, so that many fold.
 TEST(Snake, SelfSeparationStopsExactlyTheChainsThatFold) {
   SphereWorld w;
   std::mt19937 rng(21);
@@ -181,8 +182,15 @@ TEST(Snake, SelfSeparationStopsExactlyTheChainsThatFold) {
     said_folded = clear;
     EXPECT_EQ(tail_to_head(*w.world, req, root, stopped, nullptr, &said_folded), clear) << "trial " << trial;
     EXPECT_EQ(said_folded, !clear) << "trial " << trial;
+    // With fold_early, the same answers (a joint that close only refuses what the link would).
+    req.fold_early = true;
+    Chain early = chain;
+    said_folded = clear;
+    EXPECT_EQ(tail_to_head(*w.world, req, root, early, nullptr, &said_folded), clear) << "trial " << trial;
+    EXPECT_EQ(said_folded, !clear) << "trial " << trial;
     if (clear) {
       EXPECT_TRUE(stopped == full) << "trial " << trial;
+      EXPECT_TRUE(early == full) << "trial " << trial;
       ++whole;
     } else {
       ++folded;
@@ -190,4 +198,48 @@ TEST(Snake, SelfSeparationStopsExactlyTheChainsThatFold) {
   }
   EXPECT_GE(folded, 50);
   EXPECT_GE(whole, 50);
+}
+
+// Tail2Head with a self-separation and fold_early refuses a chain whose next joint already lies
+// that close to the link before the last one placed, before it asks the skin about the next link:
+// every link from that joint comes as close (the joint is on it).
+TEST(Snake, AFoldAtAJointAsksNothingOfTheLinkFromIt) {
+  struct Counting final : test::EmptySkin {
+    mutable int asked = 0;
+    bool link_free(const FingerPlane&, const Vec2&, const Vec2&, double, double, bool) const override {
+      ++asked;
+      return true;
+    }
+  };
+  const Counting skin;
+  // Link 0 up the eta axis, link 1 turned back beside it: joint 2 lies 3 mm from link 0.
+  const std::vector<double> L(4, 0.02);
+  Chain chain(5);
+  chain[0] = Vec2(0.0, 0.0);
+  chain[1] = Vec2(0.0, 0.02);
+  chain[2] = chain[1] + 0.02 * Vec2(std::sin(0.15), -std::cos(0.15));
+  chain[3] = chain[2] + Vec2(0.02, 0.0);
+  chain[4] = chain[3] + Vec2(0.0, 0.02);
+  SnakeRequest req;
+  req.lengths = L.data();
+  req.self_separation = 0.008;
+  Chain c = chain;
+  bool folded = false;
+  EXPECT_FALSE(tail_to_head(skin, req, chain[0], c, nullptr, &folded));
+  EXPECT_TRUE(folded);
+  EXPECT_EQ(skin.asked, 3);  // without fold_early link 2 is placed, then found folding
+  req.fold_early = true;
+  c = chain;
+  skin.asked = 0;
+  folded = false;
+  EXPECT_FALSE(tail_to_head(skin, req, chain[0], c, nullptr, &folded));
+  EXPECT_TRUE(folded);
+  EXPECT_EQ(skin.asked, 2);  // links 0 and 1 only
+  // Apart by more than the separation, the same chain is placed whole.
+  req.self_separation = 0.002;
+  c = chain;
+  skin.asked = 0;
+  EXPECT_TRUE(tail_to_head(skin, req, chain[0], c, nullptr, &folded));
+  EXPECT_FALSE(folded);
+  EXPECT_EQ(skin.asked, 4);
 }

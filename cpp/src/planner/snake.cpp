@@ -97,6 +97,16 @@ bool place(const Sensing& sensing, const SnakeRequest& req, const Vec2* old, int
   return true;
 }
 
+/// True when joint `j` lies closer than sqrt(d2) to the link [a, b] that ends at `a`, the joint
+/// before it. Most chains bend less than a right angle at `a`, where the nearest point is `a`.
+inline bool joint_near_link(const Vec2& j, const Vec2& a, const Vec2& b, double d2) {
+  const Vec2 d = j - a, e = b - a;
+  const double de = d.dot(e);
+  if (!(de > 0.0)) return d.squaredNorm() < d2;
+  const double ee = e.squaredNorm();
+  return de >= ee ? (j - b).squaredNorm() < d2 : d.squaredNorm() - de * (de / ee) < d2;
+}
+
 /// The chain before a propagation, on the stack: the propagations run for every finger, every
 /// iteration.
 std::array<Vec2, kMaxLinks + 1> stack_copy(const Chain& chain) {
@@ -124,7 +134,16 @@ bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& r
   const auto old = stack_copy(chain);
   chain[0] = root;
   if (folded != nullptr) *folded = false;
+  const double sep2 = req.self_separation * req.self_separation;
   for (int n = 0; n < N; ++n) {
+    // A joint already that close to the link before the last (the others were tested against the
+    // link ending at it) folds every link from it: refused before the link is asked of the skin.
+    // The margin, far above rounding, leaves ties to the test of the placed link below.
+    if (n >= 2 && req.fold_early && req.self_separation > 0.0 &&
+        joint_near_link(chain[n], chain[n - 1], chain[n - 2], sep2 * (1.0 - 1e-9))) {
+      if (folded != nullptr) *folded = true;
+      return false;
+    }
     if (!place(sensing, req, old.data(), n, n + 1, req.lengths[n], req.start_outside || n > 0, chain,
                turned != nullptr ? turned + n : nullptr))
       return false;

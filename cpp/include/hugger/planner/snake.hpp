@@ -34,6 +34,11 @@ struct SnakeRequest {
   /// link of the chain not next to it (link_clear_of_chain), a chain the caller would refuse
   /// anyway. 0: the chain is placed whole.
   double self_separation = 0.0;
+  /// With self_separation > 0: Tail2Head also gives up before it asks the skin about a link whose
+  /// first joint already lies that close to the link before the last (every link from that joint
+  /// folds), with the same answer. Worth it where most chains fold (the hug rules' opening
+  /// steps); elsewhere the test costs more than the queries it spares.
+  bool fold_early = false;
 };
 
 /// True when link b of the chain (joints chain[b], chain[b + 1]) is at least `separation` from
