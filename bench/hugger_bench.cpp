@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -145,7 +146,7 @@ struct Result {
   long configurations = 0, phase1_configurations = 0, phase2_iterations = 0;
   double object_s = 0, planner_s = 0, phase2_s = 0, total_s = 0;  // medians
   double sections_s = 0;  // section skin: building the regions of every finger plane (median)
-  double configurations_per_s = 0;                                // Phase 2 iterations / Phase 2 time
+  double iterations_per_s = 0;                                    // Phase 2 iterations / Phase 2 time
   double p50_us = 0, p90_us = 0, p99_us = 0, max_us = 0;           // per Phase 2 iteration, pooled
   double max_rss_mib = 0;
   double object_faults = 0, faults = 0;  // minor page faults (mostly fresh pages) of the Object's build, of a whole plan (medians)
@@ -289,7 +290,7 @@ Result run(const Scenario& sc, const std::string& skin, int repeats) {
     r.sections_s = median(sections_s);
     r.object_faults = median(object_faults);
     r.faults = median(faults);
-    r.configurations_per_s = r.phase2_s > 0 ? static_cast<double>(r.phase2_iterations) / r.phase2_s : 0.0;
+    r.iterations_per_s = r.phase2_s > 0 ? static_cast<double>(r.phase2_iterations) / r.phase2_s : 0.0;
     std::sort(per_iteration.begin(), per_iteration.end());
     r.p50_us = percentile(per_iteration, 0.50);
     r.p90_us = percentile(per_iteration, 0.90);
@@ -365,13 +366,24 @@ std::string load_average() {
   return a + " " + b + " " + c;
 }
 
-void usage(const std::vector<Scenario>& all) {
-  std::printf("usage: hugger_bench [--scenario NAME]... [--skin mesh|section|both] [--repeat R] [--json] [--list]\n"
-              "                    [--no-fork] [--allow-debug]\n"
-              "       hugger_bench --dump-obj SCENARIO FILE   (write the scenario's object as OBJ)\n"
-              "scenarios:");
-  for (const auto& s : all) std::printf(" %s", s.name.c_str());
-  std::printf("\n");
+/// The usage, to `out`: stdout for --help, stderr after an error.
+void usage(const std::vector<Scenario>& all, FILE* out) {
+  std::fprintf(out,
+               "usage: hugger_bench [--scenario NAME]... [--skin mesh|section|both] [--repeat R] [--json] [--list]\n"
+               "                    [--no-fork] [--allow-debug]\n"
+               "       hugger_bench --dump-obj SCENARIO FILE   (write the scenario's object as OBJ)\n"
+               "scenarios:");
+  for (const auto& s : all) std::fprintf(out, " %s", s.name.c_str());
+  std::fprintf(out, "\n");
+}
+
+/// A positive count of repeats, or 0 for anything else (not a whole number, or beyond 1e6).
+int parse_repeats(const char* text) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text, &end, 10);
+  if (end == text || *end != '\0' || errno != 0 || v < 1 || v > 1000000) return 0;
+  return static_cast<int>(v);
 }
 
 }  // namespace
@@ -380,19 +392,26 @@ int main(int argc, char** argv) {
   const auto all = scenarios();
   std::vector<std::string> chosen;
   int repeats = 5;
-  bool json = false, fork_each = true, allow_debug = false;
+  bool json = false, fork_each = true, allow_debug = false, list = false;
   std::vector<std::string> skins = {"mesh", "section"};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--scenario" && i + 1 < argc) chosen.push_back(argv[++i]);
-    else if (a == "--repeat" && i + 1 < argc) repeats = std::atoi(argv[++i]);
+    const bool has_value = i + 1 < argc;
+    if (a == "--scenario" && has_value) chosen.push_back(argv[++i]);
+    else if (a == "--repeat" && has_value) {
+      repeats = parse_repeats(argv[++i]);
+      if (repeats == 0) {
+        std::fprintf(stderr, "hugger_bench: --repeat must be a whole number from 1 to 1000000, got '%s'\n", argv[i]);
+        return 2;
+      }
+    }
     else if (a == "--json") json = true;
     else if (a == "--skin" && i + 1 < argc) {
       const std::string k = argv[++i];
       if (k == "both") skins = {"mesh", "section"};
       else if (k == "mesh" || k == "section") skins = {k};
       else {
-        std::fprintf(stderr, "--skin must be mesh, section or both, got '%s'\n", k.c_str());
+        std::fprintf(stderr, "hugger_bench: --skin must be mesh, section or both, got '%s'\n", k.c_str());
         return 2;
       }
     }
@@ -404,7 +423,7 @@ int main(int argc, char** argv) {
       const std::string name = argv[++i], path = argv[++i];
       auto it = std::find_if(all.begin(), all.end(), [&](const Scenario& s) { return s.name == name; });
       if (it == all.end()) {
-        std::fprintf(stderr, "unknown scenario '%s'\n", name.c_str());
+        std::fprintf(stderr, "hugger_bench: unknown scenario '%s'\n", name.c_str());
         return 2;
       }
       const Mesh m = it->mesh();
@@ -421,30 +440,39 @@ int main(int argc, char** argv) {
       std::fclose(f);
       return 0;
     }
-    else if (a == "--list") {
-      for (const auto& s : all) std::printf("%-12s %-26s %s\n", s.name.c_str(), s.object.c_str(), s.hand.c_str());
+    else if (a == "--list") list = true; else if (a == "--help" || a == "-h") {
+      usage(all, stdout);
       return 0;
     } else {
-      usage(all);
-      return a == "--help" || a == "-h" ? 0 : 2;
+      const bool known = a == "--scenario" || a == "--repeat" || a == "--skin" || a == "--dump-obj";
+      std::fprintf(stderr, known ? "hugger_bench: %s needs %s\n" : "hugger_bench: unknown option '%s'%s\n", a.c_str(),
+                   known ? (a == "--dump-obj" ? "a scenario and a file" : "a value") : "");
+      usage(all, stderr);
+      return 2;
     }
   }
-  if (repeats < 1) {
-    std::fprintf(stderr, "--repeat must be at least 1\n");
-    return 2;
+  if (list) {  // the scenarios, as a table or (--json) as a JSON list
+    if (!json)
+      for (const auto& s : all) std::printf("%-12s %-26s %s\n", s.name.c_str(), s.object.c_str(), s.hand.c_str());
+    else
+      for (std::size_t k = 0; k < all.size(); ++k)
+        std::printf("%s{\"name\": %s, \"object\": %s, \"hand\": %s}%s\n", k == 0 ? "[" : " ",
+                    json_string(all[k].name).c_str(), json_string(all[k].object).c_str(),
+                    json_string(all[k].hand).c_str(), k + 1 == all.size() ? "]" : ",");
+    return 0;
   }
   if (!kReleaseBuild) {
     std::fprintf(stderr,
                  "\n*** hugger_bench was built WITHOUT NDEBUG (a debug build): its timings mean nothing. ***\n"
-                 "*** Configure with -DCMAKE_BUILD_TYPE=Release.                                        ***\n\n");
+                 "*** Configure with -DCMAKE_BUILD_TYPE=Release, or run with --allow-debug anyway.     ***\n\n");
     if (!allow_debug) return 3;
   }
   std::vector<const Scenario*> todo;
   for (const auto& name : chosen) {
     auto it = std::find_if(all.begin(), all.end(), [&](const Scenario& s) { return s.name == name; });
     if (it == all.end()) {
-      std::fprintf(stderr, "unknown scenario '%s'\n", name.c_str());
-      usage(all);
+      std::fprintf(stderr, "hugger_bench: unknown scenario '%s'\n", name.c_str());
+      usage(all, stderr);
       return 2;
     }
     todo.push_back(&*it);
@@ -457,7 +485,7 @@ int main(int argc, char** argv) {
                kReleaseBuild ? "Release" : "DEBUG", repeats, std::thread::hardware_concurrency(),
                load_average().c_str());
   std::fprintf(table, "%-11s %-7s %8s %5s %6s %6s %8s %8s %8s %8s %8s %9s %7s %7s %7s %7s %7s %7s %-14s\n", "scenario", "skin",
-               "tris", "MxN", "confs", "iters", "obj ms", "plan1 ms", "sect ms", "phase2ms", "total ms", "conf/s",
+               "tris", "MxN", "confs", "iters", "obj ms", "plan1 ms", "sect ms", "phase2ms", "total ms", "iter/s",
                "p50 us", "p90 us", "p99 us", "max us", "RSS MiB", "faults", "status");
   std::vector<Result> results;
   for (const Scenario* sc : todo) {
@@ -475,7 +503,7 @@ int main(int argc, char** argv) {
       std::fprintf(table,
                    "%-11s %-7s %8ld %5s %6ld %6ld %8.2f %8.2f %8.2f %8.2f %8.2f %9.0f %7.1f %7.1f %7.1f %7.1f %7.1f %7.0f %-14s%s\n",
                    r.name, r.skin, r.triangles, mxn, r.configurations, r.phase2_iterations, r.object_s * 1e3,
-                   r.planner_s * 1e3, r.sections_s * 1e3, r.phase2_s * 1e3, r.total_s * 1e3, r.configurations_per_s,
+                   r.planner_s * 1e3, r.sections_s * 1e3, r.phase2_s * 1e3, r.total_s * 1e3, r.iterations_per_s,
                    r.p50_us, r.p90_us, r.p99_us, r.max_us, r.max_rss_mib, r.faults, r.status,
                    r.deterministic ? "" : " NOT DETERMINISTIC");
       std::fflush(table);
@@ -484,7 +512,7 @@ int main(int argc, char** argv) {
       std::fprintf(table, "%-11s %-7s  mesh/section: Phase 2 time %.2fx, per-iteration p50 %.2fx, iterations/s %.2fx, "
                           "total %.2fx\n",
                    "", "ratio", mine[0].phase2_s / mine[1].phase2_s, mine[0].p50_us / mine[1].p50_us,
-                   mine[1].configurations_per_s / std::max(mine[0].configurations_per_s, 1e-300),
+                   mine[1].iterations_per_s / std::max(mine[0].iterations_per_s, 1e-300),
                    mine[0].total_s / mine[1].total_s);
   }
   if (json) {
@@ -505,7 +533,7 @@ int main(int argc, char** argv) {
          << ", \"phase1_configurations\": " << r.phase1_configurations
          << ", \"phase2_iterations\": " << r.phase2_iterations << ", \"object_setup_s\": " << r.object_s
          << ", \"planner_setup_and_phase1_s\": " << r.planner_s << ", \"sections_s\": " << r.sections_s << ", \"phase2_s\": " << r.phase2_s
-         << ", \"total_s\": " << r.total_s << ", \"phase2_configurations_per_s\": " << r.configurations_per_s
+         << ", \"total_s\": " << r.total_s << ", \"phase2_configurations_per_s\": " << r.iterations_per_s
          << ", \"iteration_us\": {\"p50\": " << r.p50_us << ", \"p90\": " << r.p90_us << ", \"p99\": " << r.p99_us
          << ", \"max\": " << r.max_us << "}, \"max_rss_mib\": " << r.max_rss_mib
          << ", \"minor_faults\": {\"object\": " << std::llround(r.object_faults)
