@@ -7,10 +7,12 @@ Figures (medians over R repeats, wall-clock seconds; inputs built before any clo
 
   plan            Planner(...) + .plan() end to end for the paper's 5x5 hand on ``curvy``
                   (20480 triangles), the palm 20 cm away along +z, turned 60 degrees about its y axis
-  core_plan       the same with the trajectory left in C++ (_core plan only): the cost of planning
+  core_plan       its C++ part (constructor and _core plan): the cost of planning; and
+                  trajectory_conversion, the trajectory handed to Python, timed apart in the same run
   step_loop       the same plan driven from Python one configuration at a time (Planner.step()),
                   i.e. what streaming to a robot costs; step_overhead_us is the per-configuration
-                  difference to core_plan; in a loop of its own, constructor_s the Planner's
+                  difference to core_plan within each repeat (its median; noise can make it
+                  negative where the overhead is small); in a loop of its own, constructor_s the Planner's
                   constructor (checks, Phase 1, the section skin's regions), step_p50_phase2_us and
                   step_max_ms one step() call's time
                   (the median over Phase 2's configurations, the largest over the plan's (the
@@ -68,23 +70,31 @@ def main(argv: list[str] | None = None) -> int:
     dirs = rng.normal(size=(args.cases, 3))
     cases = [{"hand": hand, "obj": obj, "target": target, "palm_pose": start_pose(obj, hand, d)} for d in dirs]
 
-    t_plan, traj = timed(lambda: hugger.Planner(hand, obj, target, pose).plan(), args.repeat)
-
-    def core_plan():
+    # Each repeat times one plan in its two parts (the C++ plan, then the trajectory handed to
+    # Python, as Planner.plan() makes it), then the same plan driven by step(): the parts are
+    # measured, not told apart by subtracting figures of other runs, and the step loop's overhead
+    # is the difference within one repeat (the median of those: noise can still make it negative).
+    core_t, conversion_t, step_t, overhead_t = [], [], [], []
+    for _ in range(args.repeat):
+        t0 = time.perf_counter()
+        planner = hugger.Planner(hand, obj, target, pose)
+        planner._core.plan(None)
+        t1 = time.perf_counter()
+        planner._emitted = None  # as plan() leaves it: the whole plan handed out
+        traj = planner.trajectory()
+        t2 = time.perf_counter()
         p = hugger.Planner(hand, obj, target, pose)
-        p._core.plan(None)
-        return p
-
-    t_core, planner = timed(core_plan, args.repeat)
-
-    def step_loop():
-        p = hugger.Planner(hand, obj, target, pose)
-        n = 0
+        n_steps = 0
         while p.step() is not None:
-            n += 1
-        return n
-
-    t_step, n_steps = timed(step_loop, args.repeat)
+            n_steps += 1
+        t3 = time.perf_counter()
+        core_t.append(t1 - t0)
+        conversion_t.append(t2 - t1)
+        step_t.append(t3 - t2)
+        overhead_t.append((t3 - t2 - (t1 - t0)) / max(n_steps, 1))
+    t_core = statistics.median(core_t)
+    t_plan = statistics.median(c + v for c, v in zip(core_t, conversion_t))
+    t_step = statistics.median(step_t)
 
     # Each step() timed, in a loop of its own (its clocks would weigh on step_loop's figure).
     constructor, step_p50, step_max = [], [], []
@@ -117,10 +127,10 @@ def main(argv: list[str] | None = None) -> int:
         "phase2_iterations": stats["phase2_iterations"],
         "plan_s": t_plan,
         "core_plan_s": t_core,
-        "trajectory_conversion_s": t_plan - t_core,
+        "trajectory_conversion_s": statistics.median(conversion_t),
         "step_loop_s": t_step,
         "step_configurations": n_steps,
-        "step_overhead_us": (t_step - t_core) / max(n_steps, 1) * 1e6,
+        "step_overhead_us": statistics.median(overhead_t) * 1e6,
         "constructor_s": statistics.median(constructor),
         "step_p50_phase2_us": statistics.median(step_p50) * 1e6,
         "step_max_ms": statistics.median(step_max) * 1e3,
