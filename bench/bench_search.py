@@ -22,12 +22,15 @@ import hugger
 from hugger import analysis
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--threads", type=int, default=2)
-    ap.add_argument("--approaches", type=int, default=26)
-    args = ap.parse_args()
+    ap.add_argument("--repeat", type=int, default=5, help="timed runs of the search (default 5)")
+    ap.add_argument("--threads", type=int, default=2, help="threads of the search (default 2)")
+    ap.add_argument("--approaches", type=int, default=26, help="approaches searched (default 26)")
+    args = ap.parse_args(argv)
+    if args.repeat < 1 or args.threads < 1 or args.approaches < 1:
+        ap.error(f"--repeat, --threads and --approaches must be at least 1, got {args.repeat}, {args.threads} "
+                 f"and {args.approaches}")
     hand = hugger.Hand()
     case = hugger.scenarios.default_case("curvy", hand)
     pole = case.palm_pose[:3, 3] - case.target

@@ -43,7 +43,7 @@ PLANNERS = ("hug", "paper", "baseline")
 
 
 def candidates(selection: list[str] | None) -> list[tuple[str, str]]:
-    """(name, spec) pairs: built-ins by name, meshes by path."""
+    """(name, spec) pairs: built-ins by name, meshes by path; a ValueError names any unknown object."""
     from hugger import objects
 
     items = [(name, name) for name in objects.names()]
@@ -53,7 +53,7 @@ def candidates(selection: list[str] | None) -> list[tuple[str, str]]:
         known = dict(items)
         missing = [s for s in selection if s not in known and not Path(s).is_file()]
         if missing:
-            raise SystemExit(f"unknown objects: {', '.join(missing)} (built-ins: {', '.join(objects.names())}; "
+            raise ValueError(f"unknown objects: {', '.join(missing)} (built-ins: {', '.join(objects.names())}; "
                              f"meshes: the .obj files in {SHARED_OBJECTS})")
         items = [(s, known[s]) if s in known else (Path(s).stem, s) for s in selection]
     return items
@@ -180,11 +180,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-extent", type=float, default=0.16, help="largest bounding-box extent (m) that fits the hand")
     ap.add_argument("--no-validate", action="store_true", help="skip the MuJoCo hold test")
     args = ap.parse_args(argv)
-    hand = hugger.Hand()
     selection = [s.strip() for s in args.objects.split(",") if s.strip()] if args.objects else None
+    try:
+        items = candidates(selection)
+    except ValueError as exc:
+        ap.error(f"--objects: {exc}")
+    hand = hugger.Hand()
     rows = []
     t0 = time.perf_counter()
-    for name, spec in candidates(selection):
+    for name, spec in items:
         print(f"{name} ...", flush=True)
         row = run_one(name, spec, hand, args.max_extent, not args.no_validate)
         if "skipped" in row:

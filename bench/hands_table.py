@@ -23,6 +23,7 @@ import numpy as np
 import hugger
 from hugger import analysis, hands, objects, scenarios
 from hugger._files import write_atomic
+from hugger.planner import RULES
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
@@ -42,21 +43,38 @@ def _short(failure: str) -> str:
     return f"{check}: {head}"
 
 
+#: The test suite's opposed-thumb URDF hand: its row name, and the name --hands knows it by.
+THUMB, THUMB_OPTION = "thumb URDF", "thumb_urdf"
+
+
+def _chosen(ap: argparse.ArgumentParser, option: str, text: str, allowed: list[str], what: str) -> list[str]:
+    """The comma-separated names of ``text``, each one of ``allowed``; else the usage and one error line (exit 2)."""
+    chosen = [s.strip() for s in text.split(",") if s.strip()]
+    unknown = [s for s in chosen if s not in allowed]
+    if unknown or not chosen:
+        ap.error(f"{option}: unknown {', '.join(unknown) or '(none given)'}; {what}: {', '.join(allowed)}")
+    return list(dict.fromkeys(chosen))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=None)
-    ap.add_argument("--rules", default="paper,hug")
-    ap.add_argument("--hands", default=None, help="comma-separated names (presets, 'thumb_urdf'); default all")
+    ap.add_argument("--out", type=Path, default=None, help="also write the markdown table and its summary here")
+    ap.add_argument("--rules", default="paper,hug",
+                    help=f"comma-separated rule sets, of {', '.join(RULES)} (default paper,hug)")
+    ap.add_argument("--hands", default=None,
+                    help=f"comma-separated hands, of {', '.join([*hands.PRESETS, THUMB_OPTION])} (default all)")
     args = ap.parse_args(argv)
+    rule_sets = _chosen(ap, "--rules", args.rules, list(RULES), "rule sets")
+    keep = None if args.hands is None else set(
+        _chosen(ap, "--hands", args.hands, [*hands.PRESETS, THUMB_OPTION], "hands"))
     th = _test_hands()
     checker = helpers.load_checker()
     tmp = Path(tempfile.mkdtemp())
     hand_list = [(n, hands.preset(n)) for n in hands.PRESETS]
-    hand_list.append(("thumb URDF", hugger.Hand.from_urdf(
+    hand_list.append((THUMB, hugger.Hand.from_urdf(
         th.thumb_urdf(tmp / "thumb.urdf"), fixed_joints={f"{p}_spread": 0.0 for p in ("f0", "f1", "f2", "thumb")})))
-    if args.hands:
-        keep = set(args.hands.split(","))
-        hand_list = [(n, h) for n, h in hand_list if n in keep or n.replace(" ", "_").lower() in keep]
+    if keep is not None:
+        hand_list = [(n, h) for n, h in hand_list if n.replace(" ", "_").lower() in keep]
     rows = ["| hand | object | rules | status | configurations | links in contact | palm | ε | checker |",
             "|---|---|---|---|---:|---:|---|---:|---|"]
     print("\n".join(rows), flush=True)
@@ -65,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
         rest_nonzero = bool(np.any(hand.rest_angles != 0))
         for obj_name in objects.BUILTINS:
             case = scenarios.default_case(obj_name, hand)
-            for rules in args.rules.split(","):
+            for rules in rule_sets:
                 traj = hugger.Planner(hand, case.obj, case.target, case.palm_pose, rules=rules).plan()
                 a = analysis.analyze(traj)
                 fails, _ = th.full_check(checker, traj, tmp / "p.npz", rest_nonzero)

@@ -137,6 +137,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--check", action="store_true", help="run the independent checker on every plan")
     ap.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     args = ap.parse_args(argv)
+    if args.cases < 1:
+        ap.error(f"--cases must be at least 1, got {args.cases}")
     checker = load_checker() if args.check and CHECKER.is_file() else None
     if args.check and checker is None:
         print(f"note: {CHECKER} is absent; plans are not checked", file=sys.stderr)

@@ -16,7 +16,6 @@ import contextlib
 import functools
 import importlib.util
 import io
-import json
 import sys
 import tempfile
 import time
@@ -25,6 +24,7 @@ from pathlib import Path
 import hugger
 from hugger import analysis, scenarios
 from hugger._files import write_atomic
+from hugger.planner import RULES
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared"
@@ -48,18 +48,24 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, help="also write the markdown table here")
     ap.add_argument("--check", action="store_true", help="run ../shared/tools/check_trajectory.py on every plan")
-    ap.add_argument("--rules", default="paper,hug", help="comma-separated rule sets (default paper,hug)")
+    ap.add_argument("--rules", default="paper,hug",
+                    help=f"comma-separated rule sets, of {', '.join(RULES)} (default paper,hug)")
     args = ap.parse_args(argv)
+    rule_sets = [r.strip() for r in args.rules.split(",") if r.strip()]
+    unknown = [r for r in rule_sets if r not in RULES]
+    if unknown or not rule_sets:
+        ap.error(f"--rules: unknown {', '.join(unknown) or '(none given)'}; rule sets: {', '.join(RULES)}")
     specs = list(hugger.objects.names())
     meshes = sorted((SHARED / "data" / "objects").glob("*.obj"))
     if not meshes:
         print("note: ../shared/data/objects is absent; built-in objects only", file=sys.stderr)
     specs += [str(p) for p in meshes]
     hand = hugger.Hand()
-    rule_sets = [r.strip() for r in args.rules.split(",") if r.strip()]
     rows = ["| object | triangles | rules | status | configurations | links in contact | palm | ε | plan (ms) |"
             + (" checker |" if args.check else ""),
             "|---|---:|---|---|---:|---:|---|---:|---:|" + ("---|" if args.check else "")]
+    print("\n".join(rows), flush=True)  # stdout carries the whole table, as --out does
+    passed = 0
     for spec in specs:
         case = scenarios.default_case(spec, hand)
         for rules in rule_sets:
@@ -74,13 +80,17 @@ def main(argv: list[str] | None = None) -> int:
                 with tempfile.TemporaryDirectory() as d:
                     path = Path(d) / "plan.npz"
                     traj.save(path)
-                    row += f" {checker_verdict(path)} |"
+                    verdict = checker_verdict(path)
+                    passed += verdict == "pass"
+                    row += f" {verdict} |"
             rows.append(row)
             print(row, flush=True)
     if args.out:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         write_atomic(args.out, "\n".join(rows) + "\n")
-    print(json.dumps({"objects": len(specs)}), file=sys.stderr)
+    plans = len(specs) * len(rule_sets)
+    print(f"{len(specs)} objects, rules {','.join(rule_sets)}: {plans} plans"
+          + (f", {passed} of {plans} pass the checker" if args.check else ""), file=sys.stderr)
     return 0
 
 

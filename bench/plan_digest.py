@@ -66,9 +66,12 @@ def names(text: str, allowed: list[str], what: str) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     builtins = list(hugger.objects.names())
-    parser.add_argument("--skins", type=lambda t: names(t, ["mesh", "section"], "skins"), default=["mesh", "section"])
-    parser.add_argument("--rules", type=lambda t: names(t, ["paper", "hug"], "rule sets"), default=["paper", "hug"])
-    parser.add_argument("--objects", type=lambda t: names(t, builtins, "objects"), default=builtins)
+    parser.add_argument("--skins", type=lambda t: names(t, ["mesh", "section"], "skins"), default=["mesh", "section"],
+                        help="comma-separated skins, of mesh, section (default mesh,section: one digest each)")
+    parser.add_argument("--rules", type=lambda t: names(t, ["paper", "hug"], "rule sets"), default=["paper", "hug"],
+                        help="comma-separated rule sets, of paper, hug (default paper,hug)")
+    parser.add_argument("--objects", type=lambda t: names(t, builtins, "objects"), default=builtins,
+                        help=f"comma-separated built-in objects, of {', '.join(builtins)} (default all of them)")
     parser.add_argument("--json", action="store_true", help="print JSON")
     args = parser.parse_args(argv)
     plans = len(args.objects) * len(HANDS) * len(args.rules)

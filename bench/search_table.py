@@ -30,9 +30,15 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import hugger  # noqa: E402
-from generation_common import fits, fitting_objects  # noqa: E402
+from generation_common import SHARED_OBJECTS, fits, fitting_objects  # noqa: E402
 from hugger import analysis, physics  # noqa: E402
-from hugger.scenarios import default_case, interior_target, start_pose  # noqa: E402
+from hugger.planner import RULES  # noqa: E402
+from hugger.scenarios import default_case, interior_target, load_object, start_pose  # noqa: E402
+
+#: The table's header, the columns of every row printed (the single approach, then the search's choice).
+HEADER = ("| object | single: links | ε | held | best: links | ε | held | robust | held fraction | max push (N) "
+          "| search (s) | verified | checker |")
+RULE = "|---|---|---:|---|---|---:|---|---|---:|---:|---:|---:|---|"
 
 
 def generated(count: int) -> list[tuple[str, hugger.Object]]:
@@ -54,6 +60,15 @@ def generated(count: int) -> list[tuple[str, hugger.Object]]:
             obj, name = hugger.objects.box(extents=e), "box(" + ",".join(f"{1000 * x:.0f}" for x in e) + ")"
         if fits(obj):
             out.append((name, obj))
+    return out
+
+
+def known_objects() -> dict[str, str]:
+    """Every object the table may plan (fitting or not), by its name in the table: the built-ins,
+    then the shared meshes by stem -> the spec to load it."""
+    out = {name: name for name in hugger.objects.BUILTINS}
+    if SHARED_OBJECTS.is_dir():
+        out.update((p.stem, str(p)) for p in sorted(SHARED_OBJECTS.glob("*.obj")))
     return out
 
 
@@ -100,12 +115,12 @@ def _num(x: float | None, digits: int) -> str:
     return "-" if x is None or x != x else f"{x:.{digits}f}"
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--approaches", type=int, default=26)
-    ap.add_argument("--threads", type=int, default=2)
-    ap.add_argument("--workers", type=int, default=None, help="processes of the robust verdict")
-    ap.add_argument("--rules", default=None, help="the Phase 2 rule set: hug (the default) or paper")
+    ap.add_argument("--approaches", type=int, default=26, help="approaches searched (default 26)")
+    ap.add_argument("--threads", type=int, default=2, help="threads of the search (default 2)")
+    ap.add_argument("--workers", type=int, default=None, help="processes of the robust verdict (default: the CPUs)")
+    ap.add_argument("--rules", default=None, choices=RULES, help="the Phase 2 rule set: hug (the default) or paper")
     ap.add_argument("--verify", type=int, default=0, help="hugger.search(verify=V): physics check of the V best-ranked")
     ap.add_argument("--robust-verify", action="store_true",
                     help="hugger.search(verify=V, robust=True): the V best-ranked checked with the robust verdict")
@@ -118,7 +133,25 @@ def main() -> int:
     ap.add_argument("--only-generated", action="store_true")
     ap.add_argument("--check", action="store_true", help="run the independent checker on every chosen plan")
     ap.add_argument("--json", action="store_true")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
+    if args.approaches < 1 or args.threads < 1:
+        ap.error(f"--approaches and --threads must be at least 1, got {args.approaches} and {args.threads}")
+    if args.workers is not None and args.workers < 1:
+        ap.error(f"--workers must be at least 1, got {args.workers}")
+    if args.verify < 0 or args.blobs < 0:
+        ap.error(f"--verify and --blobs must be at least 0, got {args.verify} and {args.blobs}")
+    if args.robust_verify and not args.verify:
+        ap.error("--robust-verify checks the --verify V best-ranked: give --verify V >= 1")
+    if args.only_generated and not args.blobs:
+        ap.error("--only-generated plans the --blobs N generated bodies only: give --blobs N >= 1")
+    known = known_objects()
+    if args.objects is not None and not args.only_generated:
+        unknown = [s for s in args.objects if s not in known]
+        if unknown or not args.objects:
+            ap.error(f"--objects: unknown {', '.join(unknown) or '(none given)'}; known objects: {', '.join(known)}")
+        misfits = [s for s in dict.fromkeys(args.objects) if not fits(load_object(known[s])[1])]
+        if misfits:
+            ap.error(f"--objects: not fitting the hand (generation_common.fits): {', '.join(misfits)}")
     hand = hugger.Hand()
     checker = None
     if args.check:
@@ -128,13 +161,14 @@ def main() -> int:
     rows = []
     cases = []
     if not args.only_generated:
-        for spec in fitting_objects():
-            if args.objects is not None and Path(spec).stem not in args.objects:
-                continue
+        specs = fitting_objects() if args.objects is None else [s for n, s in known.items() if n in args.objects]
+        for spec in specs:
             c = default_case(spec, hand)
             cases.append((c.name, c.obj, c.target, c.palm_pose[:3, 3] - c.target))
     for name, obj in generated(args.blobs):
         cases.append((name, obj, interior_target(obj), np.array([0.0, 0.0, 1.0])))
+    if not args.json:
+        print(HEADER + "\n" + RULE, flush=True)
     for name, obj, target, pole in cases:
         r = row(name, obj, target, pole, hand, args, checker)
         rows.append(r)

@@ -3,7 +3,10 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
+import subprocess
+import sys
 
 import pytest
 
@@ -62,6 +65,101 @@ def test_plan_digest_is_repeatable_and_tells_plans_apart(capsys):
     with pytest.raises(SystemExit) as bad:
         mod.main(["--objects", "no-such-object"])
     assert bad.value.code == 2
+
+
+def _run_script(script: str, *args: str, timeout: float = 60) -> subprocess.CompletedProcess[str]:
+    """bench/<script>.py run as a user runs it: its own interpreter, its exit status and both streams."""
+    return subprocess.run([sys.executable, str(helpers.BENCH / f"{script}.py"), *args], cwd=helpers.ROOT,
+                          capture_output=True, encoding="utf-8", timeout=timeout,
+                          env={**os.environ, "PYTHONIOENCODING": "utf-8"})
+
+
+#: (script, arguments, words the error line must hold): a bad value of one option each. Options
+#: that, accepted, would start planning come with ``--objects sphere`` or the like, so that a
+#: script that lets them through fails here in seconds, not after a whole table.
+BAD_ARGUMENTS = [
+    ("bench_search", ["--repeat", "0"], ["--repeat"]),
+    ("bench_search", ["--repeat", "-1"], ["--repeat", "-1"]),
+    ("bench_search", ["--threads", "0"], ["--threads"]),
+    ("bench_search", ["--approaches", "0"], ["--approaches"]),
+    ("search_table", ["--objects", "sphere", "--threads", "0"], ["--threads"]),
+    ("search_table", ["--objects", "sphere", "--approaches", "0"], ["--approaches"]),
+    ("search_table", ["--objects", "sphere", "--workers", "0"], ["--workers"]),
+    ("search_table", ["--objects", "sphere", "--rules", "foo"], ["--rules", "foo", "paper", "hug"]),
+    ("search_table", ["--objects", "nope"], ["--objects", "nope", "sphere"]),
+    ("search_table", ["--objects"], ["--objects", "none given"]),
+    ("search_table", ["--objects", "torus"], ["torus", "fit"]),  # known, but does not fit the hand
+    ("search_table", ["--blobs", "-1", "--only-generated"], ["--blobs", "-1"]),
+    ("search_table", ["--only-generated"], ["--only-generated", "--blobs"]),
+    ("search_table", ["--objects", "sphere", "--verify", "-1"], ["--verify"]),
+    ("search_table", ["--objects", "sphere", "--robust-verify"], ["--robust-verify", "--verify"]),
+    ("objects_table", ["--rules", "foo"], ["--rules", "foo", "paper, hug"]),
+    ("objects_table", ["--rules", ","], ["--rules", "none given"]),
+    ("hands_table", ["--rules", "foo"], ["--rules", "foo", "paper, hug"]),
+    ("hands_table", ["--hands", "nope"], ["--hands", "nope", "barrett_bh8", "thumb_urdf"]),
+    ("hug_metrics", ["--cases", "0"], ["--cases"]),
+    ("hug_metrics", ["--cases", "-1"], ["--cases", "-1"]),
+    ("compare_baseline", ["--objects", "nope", "--no-validate"], ["--objects", "nope", "sphere"]),
+]
+
+
+@pytest.mark.parametrize(("script", "args", "named"), BAD_ARGUMENTS,
+                         ids=[f"{s}:{' '.join(a)}" for s, a, _ in BAD_ARGUMENTS])
+def test_bench_scripts_refuse_bad_arguments_in_one_line(script, args, named, tmp_path):
+    """A bad option value: the usage and one "error:" line naming it, exit status 2, before any
+    planning -- never a traceback, nor a silent empty table."""
+    run = _run_script(script, *args, "--out", str(tmp_path / "out.md")) if script == "compare_baseline" \
+        else _run_script(script, *args, timeout=30)
+    assert run.returncode == 2, (run.returncode, run.stdout[-500:], run.stderr[-2000:])
+    assert "Traceback" not in run.stderr, run.stderr
+    assert run.stdout == ""  # refused before any row, progress line or header
+    lines = run.stderr.splitlines()
+    errors = [line for line in lines if "error:" in line]
+    assert len(errors) == 1 and lines[-1] == errors[0], run.stderr
+    for word in named:
+        assert word in errors[0], (word, errors[0])
+    assert not (tmp_path / "out.md").exists()
+
+
+def test_plan_digest_help_gives_every_option_its_values_and_default():
+    run = _run_script("plan_digest", "--help", timeout=30)
+    assert run.returncode == 0, run.stderr
+    text = " ".join(run.stdout.split())  # argparse wraps the help at the terminal's width
+    for option, values, default in (("--skins", "mesh, section", "default mesh,section"),
+                                     ("--rules", "paper, hug", "default paper,hug"),
+                                     ("--objects", "sphere, apple", "default all")):
+        help_text = text.split(f"{option} {option[2:].upper()} ", 1)[1].split(" --", 1)[0]
+        assert values in help_text and default in help_text, (option, help_text)
+
+
+def _table(lines: list[str]) -> list[list[str]]:
+    return [[c.strip() for c in line.strip().strip("|").split("|")] for line in lines]
+
+
+def test_objects_table_prints_on_stdout_the_table_it_writes(tmp_path, capsys, monkeypatch):
+    mod = bench_module("objects_table")
+    monkeypatch.setattr(mod, "SHARED", tmp_path / "no-shared")  # the built-ins only: 7 plans, quick
+    out = tmp_path / "objects.md"
+    assert mod.main(["--rules", "hug", "--out", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert captured.out == out.read_text()  # the header and |---| line included
+    table = _table(captured.out.splitlines())
+    assert table[0][:3] == ["object", "triangles", "rules"] and set(table[1][0]) == {"-"}
+    assert [row[0] for row in table[2:]] == list(mod.hugger.objects.names())
+    assert all(len(row) == len(table[0]) for row in table)
+    assert captured.err.splitlines()[-1] == "7 objects, rules hug: 7 plans"  # readable, not JSON
+
+
+def test_search_table_prints_its_header_before_the_rows():
+    run = _run_script("search_table", "--objects", "sphere", "box", "--approaches", "1", "--threads", "1",
+                      "--no-physics", timeout=120)
+    assert run.returncode == 0, run.stderr[-2000:]
+    lines = run.stdout.splitlines()
+    table = _table(lines[:lines.index("")])  # the table, then a blank line and the summary
+    assert table[0][:3] == ["object", "single: links", "ε"] and set(table[1][0]) == {"-"}
+    assert [row[0] for row in table[2:]] == ["sphere", "box"]
+    assert all(len(row) == len(table[0]) for row in table)
+    assert lines[-1].startswith("2 objects: ")
 
 
 def test_bench_python_reports_the_streaming_figures(capsys):
