@@ -80,8 +80,7 @@ def main(argv: list[str] | None = None) -> int:
         planner = hugger.Planner(hand, obj, target, pose)
         planner._core.plan(None)
         t1 = time.perf_counter()
-        planner._emitted = None  # as plan() leaves it: the whole plan handed out
-        traj = planner.trajectory()
+        traj = planner.plan()  # planned already: what is left is handing the trajectory to Python
         t2 = time.perf_counter()
         p = hugger.Planner(hand, obj, target, pose)
         n_steps = 0

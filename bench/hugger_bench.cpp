@@ -429,7 +429,7 @@ int main(int argc, char** argv) {
       const Mesh m = it->mesh();
       FILE* f = std::fopen(path.c_str(), "w");
       if (!f) {
-        std::fprintf(stderr, "cannot write %s\n", path.c_str());
+        std::fprintf(stderr, "hugger_bench: cannot write %s\n", path.c_str());
         return 2;
       }
       for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
@@ -437,7 +437,11 @@ int main(int argc, char** argv) {
       for (Eigen::Index t = 0; t < m.faces.rows(); ++t)
         std::fprintf(f, "f %lld %lld %lld\n", static_cast<long long>(m.faces(t, 0) + 1),
                      static_cast<long long>(m.faces(t, 1) + 1), static_cast<long long>(m.faces(t, 2) + 1));
-      std::fclose(f);
+      const bool written = !std::ferror(f);
+      if (std::fclose(f) != 0 || !written) {
+        std::fprintf(stderr, "hugger_bench: cannot write %s\n", path.c_str());
+        return 2;
+      }
       return 0;
     }
     else if (a == "--list") list = true; else if (a == "--help" || a == "-h") {
@@ -533,7 +537,7 @@ int main(int argc, char** argv) {
          << ", \"phase1_configurations\": " << r.phase1_configurations
          << ", \"phase2_iterations\": " << r.phase2_iterations << ", \"object_setup_s\": " << r.object_s
          << ", \"planner_setup_and_phase1_s\": " << r.planner_s << ", \"sections_s\": " << r.sections_s << ", \"phase2_s\": " << r.phase2_s
-         << ", \"total_s\": " << r.total_s << ", \"phase2_configurations_per_s\": " << r.iterations_per_s
+         << ", \"total_s\": " << r.total_s << ", \"phase2_iterations_per_s\": " << r.iterations_per_s
          << ", \"iteration_us\": {\"p50\": " << r.p50_us << ", \"p90\": " << r.p90_us << ", \"p99\": " << r.p99_us
          << ", \"max\": " << r.max_us << "}, \"max_rss_mib\": " << r.max_rss_mib
          << ", \"minor_faults\": {\"object\": " << std::llround(r.object_faults)

@@ -505,7 +505,7 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
   const double max_turn = budget / dist, inc = 0.25 * s / dist;
   const Vec2 root = root2d(m, new_eta);
   SnakeRequest req = snake_request(m, new_eta, true);  // a folding chain is refused below
-  req.fold_early = true;  // most chains tried here fold (on the cylinder 235 of 343)
+  req.fold_early = true;  // most chains tried here fold (on the cylinder 235 of 331)
   for (double phi = inc; phi <= max_turn + 1e-12; phi += inc) {
     if (a[0] - phi < lowest - kLimitSlack) return false;
     std::vector<double> b = a;

@@ -104,7 +104,7 @@ inline bool joint_near_link(const Vec2& j, const Vec2& a, const Vec2& b, double 
   const double de = d.dot(e);
   if (!(de > 0.0)) return d.squaredNorm() < d2;
   const double ee = e.squaredNorm();
-  return de >= ee ? (j - b).squaredNorm() < d2 : d.squaredNorm() - de * (de / ee) < d2;
+  return de >= ee ? (j - b).squaredNorm() < d2 : (d - e * (de / ee)).squaredNorm() < d2;
 }
 
 /// The chain before a propagation, on the stack: the propagations run for every finger, every

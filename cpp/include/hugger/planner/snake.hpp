@@ -36,8 +36,10 @@ struct SnakeRequest {
   double self_separation = 0.0;
   /// With self_separation > 0: Tail2Head also gives up before it asks the skin about a link whose
   /// first joint already lies that close to the link before the last (every link from that joint
-  /// folds), with the same answer. Worth it where most chains fold (the hug rules' opening
-  /// steps); elsewhere the test costs more than the queries it spares.
+  /// folds): it returns false as it would have once that link was placed (up to rounding at an
+  /// exact tie), and `folded` is set even where the skin would have refused the link first.
+  /// Worth it where most chains fold (the hug rules' opening steps); elsewhere the test costs
+  /// more than the queries it spares.
   bool fold_early = false;
 };
 
