@@ -27,7 +27,9 @@ from hugger.planner import RULES
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "bench"))
 import helpers  # noqa: E402
+from bench_args import comma_names  # noqa: E402
 
 
 def _test_hands():
@@ -47,26 +49,17 @@ def _short(failure: str) -> str:
 THUMB, THUMB_OPTION = "thumb URDF", "thumb_urdf"
 
 
-def _chosen(ap: argparse.ArgumentParser, option: str, text: str, allowed: list[str], what: str) -> list[str]:
-    """The comma-separated names of ``text``, each one of ``allowed``; else the usage and one error line (exit 2)."""
-    chosen = [s.strip() for s in text.split(",") if s.strip()]
-    unknown = [s for s in chosen if s not in allowed]
-    if unknown or not chosen:
-        ap.error(f"{option}: unknown {', '.join(unknown) or '(none given)'}; {what}: {', '.join(allowed)}")
-    return list(dict.fromkeys(chosen))
-
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=None, help="also write the markdown table and its summary here")
-    ap.add_argument("--rules", default="paper,hug",
+    ap.add_argument("--rules", type=comma_names(RULES, "rule sets"), default="paper,hug",
                     help=f"comma-separated rule sets, of {', '.join(RULES)} (default paper,hug)")
-    ap.add_argument("--hands", default=None,
+    ap.add_argument("--hands", type=comma_names([*hands.PRESETS, THUMB_OPTION], "hands"), default=None,
                     help=f"comma-separated hands, of {', '.join([*hands.PRESETS, THUMB_OPTION])} (default all)")
     args = ap.parse_args(argv)
-    rule_sets = _chosen(ap, "--rules", args.rules, list(RULES), "rule sets")
-    keep = None if args.hands is None else set(
-        _chosen(ap, "--hands", args.hands, [*hands.PRESETS, THUMB_OPTION], "hands"))
+    rule_sets = args.rules
+    keep = None if args.hands is None else set(args.hands)
     th = _test_hands()
     checker = helpers.load_checker()
     tmp = Path(tempfile.mkdtemp())

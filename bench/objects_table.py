@@ -26,6 +26,9 @@ from hugger import analysis, scenarios
 from hugger._files import write_atomic
 from hugger.planner import RULES
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_args import comma_names  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared"
 
@@ -48,13 +51,10 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, help="also write the markdown table here")
     ap.add_argument("--check", action="store_true", help="run ../shared/tools/check_trajectory.py on every plan")
-    ap.add_argument("--rules", default="paper,hug",
+    ap.add_argument("--rules", type=comma_names(RULES, "rule sets"), default="paper,hug",
                     help=f"comma-separated rule sets, of {', '.join(RULES)} (default paper,hug)")
     args = ap.parse_args(argv)
-    rule_sets = [r.strip() for r in args.rules.split(",") if r.strip()]
-    unknown = [r for r in rule_sets if r not in RULES]
-    if unknown or not rule_sets:
-        ap.error(f"--rules: unknown {', '.join(unknown) or '(none given)'}; rule sets: {', '.join(RULES)}")
+    rule_sets = args.rules
     specs = list(hugger.objects.names())
     meshes = sorted((SHARED / "data" / "objects").glob("*.obj"))
     if not meshes:

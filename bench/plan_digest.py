@@ -15,12 +15,17 @@ import argparse
 import hashlib
 import json
 import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 import hugger
 from hugger import scenarios
+from hugger.planner import RULES
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_args import comma_names  # noqa: E402
 
 HANDS = (None, "barrett_bh8", "robotiq_3f", "parallel_3link")
 FIELDS = ("palm_pose", "joints", "angles", "tip_state", "iteration", "phase")
@@ -55,22 +60,15 @@ def digest(skin: str, rules: list[str], objects: list[str]) -> str:
     return h.hexdigest()
 
 
-def names(text: str, allowed: list[str], what: str) -> list[str]:
-    chosen = [s for s in text.split(",") if s]
-    unknown = [s for s in chosen if s not in allowed]
-    if unknown or not chosen:
-        raise argparse.ArgumentTypeError(f"unknown {what}: {', '.join(unknown) or '(none)'} (choose from {', '.join(allowed)})")
-    return chosen
-
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     builtins = list(hugger.objects.names())
-    parser.add_argument("--skins", type=lambda t: names(t, ["mesh", "section"], "skins"), default=["mesh", "section"],
+    parser.add_argument("--skins", type=comma_names(["mesh", "section"], "skins"), default=["mesh", "section"],
                         help="comma-separated skins, of mesh, section (default mesh,section: one digest each)")
-    parser.add_argument("--rules", type=lambda t: names(t, ["paper", "hug"], "rule sets"), default=["paper", "hug"],
+    parser.add_argument("--rules", type=comma_names(RULES, "rule sets"), default=["paper", "hug"],
                         help="comma-separated rule sets, of paper, hug (default paper,hug)")
-    parser.add_argument("--objects", type=lambda t: names(t, builtins, "objects"), default=builtins,
+    parser.add_argument("--objects", type=comma_names(builtins, "objects"), default=builtins,
                         help=f"comma-separated built-in objects, of {', '.join(builtins)} (default all of them)")
     parser.add_argument("--json", action="store_true", help="print JSON")
     args = parser.parse_args(argv)
