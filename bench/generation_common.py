@@ -21,14 +21,19 @@ def fits(obj: hugger.Object) -> bool:
     return bool(e[2] <= FIT_MAX and e[0] >= FIT_MIN and e[1] >= FIT_MID)
 
 
+def object_specs() -> list[str]:
+    """Built-in names, then the shared mesh paths (where ../shared is present)."""
+    specs = list(hugger.objects.BUILTINS)
+    if SHARED_OBJECTS.is_dir():
+        specs += [str(p) for p in sorted(SHARED_OBJECTS.glob("*.obj"))]
+    return specs
+
+
 def fitting_objects() -> list[str]:
     """Built-in names and shared mesh paths that fit the default hand."""
     from hugger.scenarios import load_object
 
-    specs = list(hugger.objects.BUILTINS)
-    if SHARED_OBJECTS.is_dir():
-        specs += [str(p) for p in sorted(SHARED_OBJECTS.glob("*.obj"))]
-    return [s for s in specs if fits(load_object(s)[1])]
+    return [s for s in object_specs() if fits(load_object(s)[1])]
 
 
 def ranking_value(force_closure, firmness) -> float:

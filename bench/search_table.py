@@ -30,7 +30,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import hugger  # noqa: E402
-from generation_common import SHARED_OBJECTS, fits, fitting_objects  # noqa: E402
+from generation_common import fits, fitting_objects, object_specs  # noqa: E402
 from hugger import analysis, physics  # noqa: E402
 from hugger.planner import RULES  # noqa: E402
 from hugger.scenarios import default_case, interior_target, load_object, start_pose  # noqa: E402
@@ -64,12 +64,9 @@ def generated(count: int) -> list[tuple[str, hugger.Object]]:
 
 
 def known_objects() -> dict[str, str]:
-    """Every object the table may plan (fitting or not), by its name in the table: the built-ins,
-    then the shared meshes by stem -> the spec to load it."""
-    out = {name: name for name in hugger.objects.BUILTINS}
-    if SHARED_OBJECTS.is_dir():
-        out.update((p.stem, str(p)) for p in sorted(SHARED_OBJECTS.glob("*.obj")))
-    return out
+    """Every object the table may plan (fitting or not), by its name in the table (a mesh's stem)
+    -> the spec to load it."""
+    return {Path(s).stem: s for s in object_specs()}
 
 
 def row(name, obj, target, pole, hand, args, checker) -> dict:

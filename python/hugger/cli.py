@@ -93,14 +93,16 @@ def _planner_params(g: Any) -> None:
     g.add_argument("--max-iterations", type=int, help="Phase 2 iteration limit (default 20000)")
 
 
-def _planner_options(p: argparse.ArgumentParser) -> None:
+_SKIN_HELP = "sensing skin: section (2D per finger plane, the default) or mesh (exact 3D queries, the reference)"
+
+
+def _planner_options(p: argparse.ArgumentParser, skin_help: str = _SKIN_HELP) -> None:
     g = p.add_argument_group("planner (defaults as hugger.Planner)")
     _planner_params(g)
     g.add_argument("--rules", choices=RULES, default="hug",
                    help="Phase 2 rule set: 'hug' (default; the paper's rules plus extensions for firmer "
                         "grasps) or 'paper' (the 1994 method with the documented decisions only)")
-    g.add_argument("--skin", choices=SKINS,
-                   help="sensing skin: section (2D per finger plane, the default) or mesh (exact 3D queries, the reference)")
+    g.add_argument("--skin", choices=SKINS, help=skin_help)
     g.add_argument("--timeout", type=float, metavar="SECONDS",
                    help="stop planning Phase 2 after this long, with status 'timeout' and a valid partial "
                         "plan (Phase 1 and the finger planes' regions come before it)")
@@ -761,11 +763,8 @@ def build_parser() -> _Parser:
                                  "and the hold test, not for check_trajectory.py)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     _hand_options(p)
-    _planner_options(p)
-    for action in p._actions:  # the closed loop senses through MuJoCo
-        if action.dest == "skin":
-            action.help = ("sensing skin of the --open-loop plan on the static mesh: section (the default) or mesh; "
-                           "the closed loop senses through MuJoCo")
+    _planner_options(p, skin_help="sensing skin of the --open-loop plan on the static mesh: section (the default) "
+                                  "or mesh; the closed loop senses through MuJoCo")
     _case_options(p)
     p.set_defaults(func=cmd_simulate)
 
