@@ -180,7 +180,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-extent", type=float, default=0.16, help="largest bounding-box extent (m) that fits the hand")
     ap.add_argument("--no-validate", action="store_true", help="skip the MuJoCo hold test")
     args = ap.parse_args(argv)
-    selection = [s.strip() for s in args.objects.split(",") if s.strip()] if args.objects else None
+    selection = None
+    if args.objects is not None:  # repeats dropped, order kept (as bench_args.comma_names)
+        selection = list(dict.fromkeys(s.strip() for s in args.objects.split(",") if s.strip()))
+        if not selection:
+            ap.error("--objects: no object named (give built-in names, mesh stems or mesh paths)")
     try:
         items = candidates(selection)
     except ValueError as exc:

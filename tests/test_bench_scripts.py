@@ -100,6 +100,7 @@ BAD_ARGUMENTS = [
     ("hug_metrics", ["--cases", "0"], ["--cases"]),
     ("hug_metrics", ["--cases", "-1"], ["--cases", "-1"]),
     ("compare_baseline", ["--objects", "nope", "--no-validate"], ["--objects", "nope", "sphere"]),
+    ("compare_baseline", ["--objects", ",", "--no-validate"], ["--objects", "no object named"]),
 ]
 
 
