@@ -374,6 +374,58 @@ TEST(SectionSkin, AnyWithinMatchesEverySegment) {
   EXPECT_GE(hits, 5000);
 }
 
+// reach()'s hints (the segment last found within reach of a query starting near the same
+// point) steer its search, never its answer: links that slide along R's boundary in small steps,
+// as a finger's do from one iteration to the next, crossing it or a hair to millimetres off it,
+// forward and then back over stale hints, each answer of any_within() and clear() against every
+// segment. Cases within a picometre of the threshold are left to rounding.
+TEST(SectionSkin, ReachHintsLeaveEveryAnswerAsEverySegmentSays) {
+  long checked = 0, hits = 0;
+  // Regions the convex loop's shortcuts do not settle: a torus's two loops, two balls, dents.
+  for (const test::Mesh& m : {test::torus(0.03, 0.012, 48, 24), test::curvy(4),
+                              test::join(test::icosphere(3, Vec3::Constant(0.02), Vec3(-0.025, 0, 0)),
+                                         test::icosphere(3, Vec3::Constant(0.02), Vec3(0.025, 0, 0)))}) {
+    Scene s(m, 31);
+    for (int k = 0; k < 6; ++k) {
+      const FingerPlane pl = test::random_plane(s.rng, s.c);
+      const PlaneRegion* R = s.skin.region(pl, (k % 2) * 0.004);
+      ASSERT_NE(R, nullptr);
+      const auto& segs = R->segments();
+      if (segs.empty()) continue;
+      for (int slide = 0; slide < 12; ++slide) {
+        const PlaneRegion::Segment& g = segs[static_cast<std::size_t>(s.u() * segs.size())];
+        const Vec2 along = (g.b - g.a).normalized();
+        // Off the boundary along its normal: across it (negative) or outside, 10^-13 to 10^-2.5 m.
+        const double off = slide % 3 == 0 ? -0.002 * s.u() : std::pow(10.0, -13.0 + 10.5 * s.u());
+        const Vec2 dir = rotate_planar(along, (s.u() - 0.5) * 0.6), start = g.a + off * g.normal;
+        const double len = 0.02, step = 2e-4 * (s.u() < 0.5 ? 1.0 : -1.0);
+        for (int pass = 0; pass < 2; ++pass)
+          for (int i = 0; i < 40; ++i) {
+            const int t = pass == 0 ? i : 39 - i;
+            const Vec2 a = start + (t * step) * along - 0.5 * len * dir, b = a + len * dir;
+            const double best = boundary_apart(segs, a, b);
+            for (double d : {1e-12, 1e-6, 1e-4}) {
+              if (std::abs(best - d) < 1e-12) continue;
+              ASSERT_EQ(R->any_within(a, b, d), best <= d) << "plane " << k << " slide " << slide << " at " << t;
+              ++checked;
+              hits += best <= d;
+            }
+            if (best > 2e-12) {
+              ASSERT_EQ(R->clear(a, b, false), !inside_by_parity(segs, a)) << "plane " << k << " slide " << slide;
+              ++checked;
+            } else if (best == 0.0) {
+              ASSERT_FALSE(R->clear(a, b, false)) << "plane " << k << " slide " << slide << " at " << t;
+              ++checked;
+            }
+          }
+      }
+    }
+  }
+  std::printf("  %ld decisions, %ld within\n", checked, hits);
+  EXPECT_GE(checked, 20000);
+  EXPECT_GE(hits, 5000);
+}
+
 // The hull settles a query only where every segment agrees. Lines across each region's hull (at
 // fractions of its width, in random and axis directions and along its own segments, where
 // nearly collinear hull edges lie) and lines just outside it, on boxes (flat faces: collinear

@@ -204,6 +204,7 @@ void PlaneRegion::finish() {
   // The chains may move out by what the arcs' flattening left of the tolerance (at least half).
   simplify(flatten_ - std::min(arc_deviation_, 0.5 * flatten_));
   build_bvh();
+  for (auto& h : hints_) h.store(-1, std::memory_order_relaxed);
   build_cells();
   link_segments();
   build_loop();
@@ -851,6 +852,7 @@ void PlaneRegion::build_cells() {
   const double size = (hi - lo).maxCoeff();
   if (!(size > 0.0) || !std::isfinite(size)) return;
   cell_ = size / kCells;
+  hint_scale_ = 0.125 / cell_;
   cells_lo_ = lo - Vec2::Constant(cell_);
   for (int a = 0; a < 2; ++a) cells_n_[a] = static_cast<int>(std::ceil((hi[a] - lo[a]) / cell_)) + 3;
   const int nx = cells_n_[0], ny = cells_n_[1];
@@ -1437,17 +1439,33 @@ PlaneRegion::Reach PlaneRegion::reach(const Vec2& a, const Vec2& b, double dista
   const double limit = distance + q.slack(extent_);
   // The root's box first, then the hull (which a link tangent to a convex R is apart from).
   if (nodes_.empty() || node_farther(nodes_[0], q, distance) || hull_apart(q, limit)) return Reach::kApart;
+  auto within = [&](int i, double d) {
+    const Segment& s = segments_[i];
+    if (farther_than(q, s.a, s.b, s.normal, limit)) return false;
+    Vec2 c1, c2;
+    return segment_distance(a, b, s.a, s.b, &c1, &c2) <= d;
+  };
+  // The segment last found within reach of a query starting near a, and its successor along the
+  // boundary (a link that slid on): one within `distance` less a margin for the tree's rounding
+  // is one the walk below would reach, so the answer is the walk's.
+  std::atomic<int>& hint = hints_[hint_key(a)];
+  const int h = hint.load(std::memory_order_relaxed);
+  if (h >= 0) {
+    const double sure = distance - q.slack(extent_);
+    if (within(h, sure) || (next_[h] >= 0 && within(next_[h], sure))) return Reach::kWithin;
+  }
+  int found = -1;
   // (The root's box was asked above.)
-  return visit_segments([&](const Node& nd) { return node_farther(nd, q, distance); },
-                        [&](int i) {
-                          const Segment& s = segments_[i];
-                          if (farther_than(q, s.a, s.b, s.normal, limit)) return false;
-                          Vec2 c1, c2;
-                          return segment_distance(a, b, s.a, s.b, &c1, &c2) <= distance;
-                        },
-                        true)
-             ? Reach::kWithin
-             : Reach::kBeyond;
+  const bool hit = visit_segments([&](const Node& nd) { return node_farther(nd, q, distance); },
+                                  [&](int i) {
+                                    if (!within(i, distance)) return false;
+                                    found = i;
+                                    return true;
+                                  },
+                                  true);
+  if (!hit) return Reach::kBeyond;
+  hint.store(found, std::memory_order_relaxed);
+  return Reach::kWithin;
 }
 
 namespace {

@@ -236,7 +236,8 @@ class PlaneRegion {
   bool hull_apart(const Q& q, double limit) const;
   /// How near segment [a, b] comes to the boundary: within `distance` of a piece; apart from
   /// the boundary's box or hull by more (so outside them: outside R); or beyond `distance` of
-  /// every piece, found by the tree.
+  /// every piece, found by the tree. A piece found within is kept as a hint for the next query
+  /// starting near a (hints_), which asks it and its successor before the tree.
   enum class Reach : std::uint8_t { kWithin, kApart, kBeyond };
   Reach reach(const Vec2& a, const Vec2& b, double distance) const;
   /// Drops the runs of segments that lie inside R (found from their loose ends and junctions,
@@ -388,6 +389,18 @@ class PlaneRegion {
   std::vector<signed char> cells_;
   long dropped_ = 0;
   mutable std::atomic<long> fallbacks_{0};
+  /// reach()'s hints: per coarse cell of a query's start (8 of build_cells' cells a side; the
+  /// cells hashed into kHints slots), the segment last found within reach of such a query (-1:
+  /// none). They steer the search, never its answer; shared by threads, relaxed.
+  static constexpr int kHints = 256;
+  mutable std::array<std::atomic<int>, kHints> hints_{};
+  double hint_scale_ = 0.0;  ///< hint cells per metre
+  int hint_key(const Vec2& a) const {
+    const double x = (a.x() - cells_lo_.x()) * hint_scale_, y = (a.y() - cells_lo_.y()) * hint_scale_;
+    auto cell = [](double v) { return v > 0.0 ? static_cast<unsigned>(std::min(v, 1e6)) : 0u; };  // NaN: 0
+    const unsigned ix = cell(x), iy = cell(y);
+    return static_cast<int>((ix * 73856093u ^ iy * 19349663u) & (kHints - 1));
+  }
 };
 
 /// The section skin (docs/performance.md): answers link queries given in finger-plane
