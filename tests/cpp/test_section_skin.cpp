@@ -375,23 +375,36 @@ TEST(SectionSkin, AnyWithinMatchesEverySegment) {
 }
 
 // reach()'s hints (the segment last found within reach of a query starting near the same
-// point) steer its search, never its answer: links that slide along R's boundary in small steps,
-// as a finger's do from one iteration to the next, crossing it or a hair to millimetres off it,
-// forward and then back over stale hints, each answer of any_within() and clear() against every
-// segment. Cases within a picometre of the threshold are left to rounding.
-TEST(SectionSkin, ReachHintsLeaveEveryAnswerAsEverySegmentSays) {
-  long checked = 0, hits = 0;
+// point) are taken only where the tree's walk would answer the same: links that slide along R's
+// boundary in small steps, as a finger's do from one iteration to the next, crossing it or a hair
+// to millimetres off it, forward and then back over stale hints. Each answer of any_within() and
+// clear() against every segment (cases within a picometre of the threshold left to rounding);
+// then the same questions, thresholds at the nearest segment's distance and a rounding step
+// either side included, asked in a shuffled order of a twin region (the same object and plane,
+// other hints): every answer the same.
+TEST(SectionSkin, ReachHintsLeaveEveryAnswerAsTheWalkGives) {
+  long checked = 0, hits = 0, twins = 0;
   // Regions the convex loop's shortcuts do not settle: a torus's two loops, two balls, dents.
   for (const test::Mesh& m : {test::torus(0.03, 0.012, 48, 24), test::curvy(4),
                               test::join(test::icosphere(3, Vec3::Constant(0.02), Vec3(-0.025, 0, 0)),
                                          test::icosphere(3, Vec3::Constant(0.02), Vec3(0.025, 0, 0)))}) {
     Scene s(m, 31);
+    const SectionSkin twin(s.object, kFlatten);
     for (int k = 0; k < 6; ++k) {
       const FingerPlane pl = test::random_plane(s.rng, s.c);
-      const PlaneRegion* R = s.skin.region(pl, (k % 2) * 0.004);
+      const double radius = (k % 2) * 0.004;
+      const PlaneRegion* R = s.skin.region(pl, radius);
+      const PlaneRegion* T = twin.region(pl, radius);
       ASSERT_NE(R, nullptr);
+      ASSERT_NE(T, nullptr);
       const auto& segs = R->segments();
       if (segs.empty()) continue;
+      struct Asked {
+        Vec2 a, b;
+        double d;  ///< any_within's threshold; negative: clear()
+        bool answer;
+      };
+      std::vector<Asked> asked;
       for (int slide = 0; slide < 12; ++slide) {
         const PlaneRegion::Segment& g = segs[static_cast<std::size_t>(s.u() * segs.size())];
         const Vec2 along = (g.b - g.a).normalized();
@@ -405,25 +418,41 @@ TEST(SectionSkin, ReachHintsLeaveEveryAnswerAsEverySegmentSays) {
             const Vec2 a = start + (t * step) * along - 0.5 * len * dir, b = a + len * dir;
             const double best = boundary_apart(segs, a, b);
             for (double d : {1e-12, 1e-6, 1e-4}) {
+              const bool answer = R->any_within(a, b, d);
+              asked.push_back({a, b, d, answer});
               if (std::abs(best - d) < 1e-12) continue;
-              ASSERT_EQ(R->any_within(a, b, d), best <= d) << "plane " << k << " slide " << slide << " at " << t;
+              ASSERT_EQ(answer, best <= d) << "plane " << k << " slide " << slide << " at " << t;
               ++checked;
               hits += best <= d;
             }
+            if (best > 0.0)  // at the nearest distance and a rounding step or a few either side
+              for (double d : {best, std::nextafter(best, 0.0), std::nextafter(best, kInf), best * (1.0 - 1e-15),
+                               best * (1.0 + 1e-15), best - 1e-13, best + 1e-13, 1.5 * best})
+                if (d > 0.0) asked.push_back({a, b, d, R->any_within(a, b, d)});
+            const bool clear = R->clear(a, b, false);
+            asked.push_back({a, b, -1.0, clear});
             if (best > 2e-12) {
-              ASSERT_EQ(R->clear(a, b, false), !inside_by_parity(segs, a)) << "plane " << k << " slide " << slide;
+              ASSERT_EQ(clear, !inside_by_parity(segs, a)) << "plane " << k << " slide " << slide;
               ++checked;
             } else if (best == 0.0) {
-              ASSERT_FALSE(R->clear(a, b, false)) << "plane " << k << " slide " << slide << " at " << t;
+              ASSERT_FALSE(clear) << "plane " << k << " slide " << slide << " at " << t;
               ++checked;
             }
           }
       }
+      std::shuffle(asked.begin(), asked.end(), s.rng);
+      for (const Asked& q : asked) {
+        ASSERT_EQ(q.d < 0.0 ? T->clear(q.a, q.b, false) : T->any_within(q.a, q.b, q.d), q.answer)
+            << "plane " << k << " threshold " << q.d;
+        ++twins;
+      }
     }
   }
-  std::printf("  %ld decisions, %ld within\n", checked, hits);
+  std::printf("  %ld decisions against every segment, %ld within; %ld asked again of the twin\n", checked, hits,
+              twins);
   EXPECT_GE(checked, 20000);
   EXPECT_GE(hits, 5000);
+  EXPECT_GE(twins, 100000);
 }
 
 // The hull settles a query only where every segment agrees. Lines across each region's hull (at

@@ -152,7 +152,9 @@ struct Query {
       line = true;
     }
   }
-  /// A margin for rounding in the cheap bounds below, for coordinates up to `extent`.
+  /// A margin for rounding in the cheap bounds below, for coordinates up to `extent`. reach()'s
+  /// hints rely on it too: a segment within a distance less this margin lies in no node that
+  /// node_farther puts beyond that distance (keep it so if the bounds change).
   double slack(double extent) const { return 1e-12 * (extent + std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff())); }
 };
 
@@ -204,7 +206,7 @@ void PlaneRegion::finish() {
   // The chains may move out by what the arcs' flattening left of the tolerance (at least half).
   simplify(flatten_ - std::min(arc_deviation_, 0.5 * flatten_));
   build_bvh();
-  for (auto& h : hints_) h.store(-1, std::memory_order_relaxed);
+  for (auto& h : hints_) h.store(-1, std::memory_order_relaxed);  // no segment found yet
   build_cells();
   link_segments();
   build_loop();
@@ -381,6 +383,14 @@ void PlaneRegion::build_loop() {
   double fall = 0.0;
   loop_edge_first_ = index_edge_angles(loop_tail_, &loop_edges_, &fall);
   if (fall > 1e-9) clear_loop();
+}
+
+int PlaneRegion::hint_key(const Vec2& a) const {
+  const double x = (a.x() - cells_lo_.x()) * hint_scale_, y = (a.y() - cells_lo_.y()) * hint_scale_;
+  auto cell = [](double v) { return v > 0.0 ? static_cast<unsigned>(std::min(v, 1e6)) : 0u; };  // NaN: 0
+  // Two large odd multipliers mix the cell's coordinates (a common spatial hash); unsigned
+  // arithmetic wraps.
+  return static_cast<int>((cell(x) * 73856093u ^ cell(y) * 19349663u) & (kHints - 1));
 }
 
 bool PlaneRegion::near_pocket(const Vec2& a, const Vec2& b, double distance) const {
@@ -1311,7 +1321,8 @@ inline double node_bound2(const Node& nd, const Query& q) {
 }
 
 /// True when the node's box lies farther than d from the query (node_bound2 > d^2, the box
-/// tests first): the tests of the threshold queries.
+/// tests first): the tests of the threshold queries. A lower bound of the distance to every
+/// segment in the node, up to rounding far below Query::slack: reach()'s hints rely on that.
 template <class Node>
 inline bool node_farther(const Node& nd, const Query& q, double d) {
   const double dx = std::max(nd.lo[0] - q.hi.x(), q.lo.x() - nd.hi[0]);

@@ -237,7 +237,10 @@ class PlaneRegion {
   /// How near segment [a, b] comes to the boundary: within `distance` of a piece; apart from
   /// the boundary's box or hull by more (so outside them: outside R); or beyond `distance` of
   /// every piece, found by the tree. A piece found within is kept as a hint for the next query
-  /// starting near a (hints_), which asks it and its successor before the tree.
+  /// starting near a (hints_), which asks it and its successor before the tree: taken where it
+  /// lies within `distance` less the rounding margin of the tree's node bounds (Query::slack),
+  /// so that the walk would have reached it. (At coordinates of a metre or more that margin
+  /// exceeds clear()'s touching distance, and clear() takes no hint: the same answers, slower.)
   enum class Reach : std::uint8_t { kWithin, kApart, kBeyond };
   Reach reach(const Vec2& a, const Vec2& b, double distance) const;
   /// Drops the runs of segments that lie inside R (found from their loose ends and junctions,
@@ -391,16 +394,14 @@ class PlaneRegion {
   mutable std::atomic<long> fallbacks_{0};
   /// reach()'s hints: per coarse cell of a query's start (8 of build_cells' cells a side; the
   /// cells hashed into kHints slots), the segment last found within reach of such a query (-1:
-  /// none). They steer the search, never its answer; shared by threads, relaxed.
+  /// none; reset by finish()). A hint is taken only where the tree's walk would answer the same
+  /// (reach), so the answers do not depend on them; shared by threads, relaxed.
   static constexpr int kHints = 256;
+  static_assert((kHints & (kHints - 1)) == 0, "hint_key masks with kHints - 1");
   mutable std::array<std::atomic<int>, kHints> hints_{};
-  double hint_scale_ = 0.0;  ///< hint cells per metre
-  int hint_key(const Vec2& a) const {
-    const double x = (a.x() - cells_lo_.x()) * hint_scale_, y = (a.y() - cells_lo_.y()) * hint_scale_;
-    auto cell = [](double v) { return v > 0.0 ? static_cast<unsigned>(std::min(v, 1e6)) : 0u; };  // NaN: 0
-    const unsigned ix = cell(x), iy = cell(y);
-    return static_cast<int>((ix * 73856093u ^ iy * 19349663u) & (kHints - 1));
-  }
+  double hint_scale_ = 0.0;  ///< hint cells per metre (0 without cells: every query in slot 0)
+  /// The slot of the query starting at a.
+  int hint_key(const Vec2& a) const;
 };
 
 /// The section skin (docs/performance.md): answers link queries given in finger-plane
