@@ -109,7 +109,9 @@ def test_scale_is_refused_for_a_builtin(tmp_path, capsys):
     (["--verify", "-1"], "--approaches K > 1"),
     (["--robust-verify"], "--approaches K > 1"),
     (["--workers", "2"], "--approaches K > 1"),
-    (["--turn", "inf"], "must be finite"),
+    (["--turn", "inf"], "must be within [-180, 180]"),
+    (["--turn", "400"], "must be within [-180, 180]"),  # refused, not taken as 40 degrees
+    (["--finger", "3"], "unrecognized arguments: --finger"),  # an option's prefix is not the option
 ])
 def test_plan_refuses_options_it_would_ignore_or_cannot_use(argv, tmp_path, capsys, message):
     code, _, err = run(["plan", "sphere", "--out", tmp_path / "a.npz", *argv], capsys)
@@ -147,7 +149,8 @@ def test_mesh_files_are_read_once_per_process(tmp_path, monkeypatch):
     (["plan", "sphere", "--out", "x.npz", "--step", "-1"], "step"),
     (["plan", "sphere", "--out", "x.npz", "--epsilon", "0"], "epsilon"),
     (["plan", "sphere", "--out", "x.npz", "--target", "1", "0", "0"], "not inside"),
-    (["plan", "sphere", "--out", "x.npz", "--start", "0", "0", "0.01"], ""),
+    (["plan", "sphere", "--out", "x.npz", "--start", "0", "0", "0.01"], "link 0 of finger 0 lies inside it"),  # no -inf
+    (["view", "p.npz", "--fps", "inf"], "--fps must be a positive finite number"),  # as render says it
     (["plan", "x.stl", "--out", "x.npz", "--scale", "0"], "scale"),
     (["plan", "sphere", "--out", "no/such/dir/x.npz"], "no such directory 'no/such/dir'"),
     (["plan", "sphere", "--out", "x.txt"], "--out must end in .npz, got 'x.txt'"),
@@ -200,6 +203,16 @@ def test_bad_arguments_exit_2_with_one_line(args, message, capsys, tmp_path, mon
     assert code == 2
     assert err.startswith("hugger: error: ") and message in err
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+@pytest.mark.parametrize("command, out", [("export-mjcf", "h.xml"), ("export-urdf", "h.urdf")])
+def test_exports_name_the_configuration_out_of_range(command, out, sphere_file, tmp_path, capsys):
+    n = len(hugger.Trajectory.load(sphere_file))
+    for k in (n, -n - 1):
+        code, _, err = run([command, sphere_file, "--out", tmp_path / out, "--configuration", str(k)], capsys)
+        assert code == 2 and err.strip() == (f"hugger: error: --configuration {k} is out of range for {n} "
+                                             "configurations"), err
+        assert not (tmp_path / out).exists()
 
 
 def test_info_reports_the_file(sphere_file, capsys):

@@ -32,6 +32,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Mapping, NoReturn, Sequence, TextIO
 
+from ._checks import positive
 from ._files import atomic_path, write_atomic
 from ._progress import Progress
 from ._core import RULES, SKINS
@@ -57,6 +58,11 @@ class UsageError(Exception):
 class _Parser(argparse.ArgumentParser):
     #: The subcommands' parsers, by name (the top-level parser's; empty for a subcommand's).
     commands: Mapping[str, argparse.ArgumentParser] = {}
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        # Options whole: a prefix such as --finger is refused, not taken for --fingers.
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:  # one line, exit 2, no usage dump
         raise UsageError(f"{message} (see '{self.prog} --help')")
@@ -116,7 +122,7 @@ def _case_options(p: argparse.ArgumentParser) -> None:
                    help="initial palm normal (default: towards T); without --start the palm starts at the safe "
                         "distance from T against it, facing T along it")
     g.add_argument("--turn", type=float, default=0.0, metavar="DEG",
-                   help="turn the default start away from T by DEG about the palm's y axis (default 0; "
+                   help="turn the default start away from T by DEG (-180 to 180) about the palm's y axis (default 0; "
                         "not with --start or --normal)")
     g.add_argument("--scale", type=float, help="multiply a mesh file's coordinates (0.001 for millimetres; "
                                                "not for built-in objects)")
@@ -554,11 +560,19 @@ def cmd_generate(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _configuration(traj: Trajectory, k: int) -> None:
+    """Refuse a --configuration index outside the trajectory (negative ones count from the end)."""
+    n = len(traj)
+    if not -n <= k < n:
+        raise UsageError(f"--configuration {k} is out of range for {n} configurations")
+
+
 def cmd_export_mjcf(args: argparse.Namespace) -> int:
     from . import physics
 
     out = _out_path(args.out, (".xml",))
     traj = _load(args.file)
+    _configuration(traj, args.configuration)
     with atomic_path(out) as tmp:
         physics.export_mjcf(traj, tmp, k=args.configuration)
     print(f"wrote {out}")
@@ -572,8 +586,11 @@ def cmd_view(args: argparse.Namespace) -> int:
 
     if not 0 <= args.port <= 65535:
         raise UsageError(f"--port must be in 0..65535, got {args.port}")
-    if args.fps is not None and not (0 < args.fps < float("inf")):
-        raise UsageError(f"--fps must be a positive number, got {args.fps}")
+    if args.fps is not None:
+        try:
+            positive("fps", args.fps)
+        except ValueError as exc:  # "fps must be ...", as render says it
+            raise UsageError(f"--{exc}") from None
     viewer._viser()  # the extra, before loading anything
     trajs = [_load(f) for f in args.files]
     labels = [f"{os.path.basename(f)}: {t.status}, {len(t)} configurations" for f, t in zip(args.files, trajs)]
@@ -620,9 +637,7 @@ def cmd_export_urdf(args: argparse.Namespace) -> int:
     from .hands.robot import grasp_joint_values, to_mjcf, to_urdf
 
     traj = _load(args.file)
-    n = len(traj.palm_pose)
-    if not -n <= args.configuration < n:
-        raise UsageError(f"--configuration {args.configuration} is out of range for {n} configurations")
+    _configuration(traj, args.configuration)
     hand = hugger.Hand.from_dict(traj.hand)
     angles = traj.angles[args.configuration]
     out = _out_path(args.out, (".urdf", ".xml", ".mjcf"))
@@ -816,7 +831,7 @@ def build_parser() -> _Parser:
 
     p = sub.add_parser("export-urdf", help="write the hand with a configuration's joint values as URDF (hugger[hands])")
     p.add_argument("file", help="trajectory file (.npz)")
-    p.add_argument("--out", required=True, help="URDF file to write (.urdf; .xml writes the hand alone as MJCF)")
+    p.add_argument("--out", required=True, help="URDF file to write (.urdf; .xml or .mjcf writes the hand alone as MJCF)")
     p.add_argument("--configuration", type=int, default=-1, help="configuration index (default -1, the last)")
     p.add_argument("--json", action="store_true", help="print the file and the joint values as JSON")
     p.set_defaults(func=cmd_export_urdf)

@@ -143,8 +143,8 @@ def default_case(spec: str | os.PathLike[str], hand: Hand | None = None, scale: 
         t = interior_target(obj)
     if not bool(obj.inside(t[None])[0]):
         raise ValueError(f"target T {t.tolist()} is not inside {name}")
-    if not math.isfinite(turn_deg):
-        raise ValueError(f"turn_deg (--turn) must be finite, got {turn_deg!r}")
+    if not (math.isfinite(turn_deg) and -180.0 <= turn_deg <= 180.0):
+        raise ValueError(f"turn_deg (--turn) must be within [-180, 180] degrees, got {turn_deg!r}")
     if turn_deg and (start is not None or normal is not None):
         raise ValueError("turn_deg (--turn) applies to the default start only, not with start or normal")
     if start is None and normal is None:

@@ -30,7 +30,7 @@ import numpy as np
 
 from . import _palette, analysis
 from ._palette import rgb255
-from ._checks import whole
+from ._checks import positive, whole
 from ._files import write_atomic
 from ._rotation import quaternion_wxyz
 from .trajectory import Trajectory
@@ -208,8 +208,7 @@ class Viewer:
                  labels: Sequence[str] | None = None) -> None:
         plans = _plans(trajs)
         port = whole("port", port, 0, 65535)
-        if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
-            raise ValueError(f"fps must be a positive number, got {fps!r}")
+        fps = positive("fps", fps)
         if labels is not None and len(labels) != len(plans):
             raise ValueError(f"labels must name each of the {len(plans)} plans, got {len(labels)}")
         viser = _viser()
