@@ -380,6 +380,13 @@ def test_timeout_stops_with_a_valid_partial_trajectory(hand, sphere, checker, tm
     assert hugger.Trajectory.load(path).status == "timeout"
 
 
+def test_hugger_plan_refuses_an_unknown_parameter_as_plan_many_does(hand, sphere):
+    for call in (lambda: hugger.plan(hand, sphere, [0, 0, 0], START, stepp=1e-3),
+                 lambda: hugger.plan_many([(hand, sphere, [0, 0, 0], START)], stepp=1e-3)):
+        with pytest.raises(ValueError, match=r"unknown planner parameters \['stepp'\]; expected some of .*'step'"):
+            call()
+
+
 def test_timeout_through_hugger_plan(hand, sphere):
     t = hugger.plan(hand, sphere, [0, 0, 0], START, timeout=1e-3, step=5e-5, contact_tolerance=1e-5,
                     max_iterations=100000)

@@ -41,6 +41,14 @@ def test_save_load_round_trip(hand, fine_sphere_plan, tmp_path):
         assert int(z["format_version"]) == 1 and z["tip_state"].dtype == np.int8
 
 
+def test_repr_is_one_short_line(fine_sphere_plan):
+    text = repr(fine_sphere_plan)  # the arrays stay attributes; printed, a plan is its summary
+    assert "\n" not in text and len(text) < 200, text
+    assert text == (f"Trajectory(status='done', configurations={len(fine_sphere_plan)}, fingers=5, links=5, "
+                    f"object={len(fine_sphere_plan.object_vertices)} vertices/"
+                    f"{len(fine_sphere_plan.object_faces)} faces)")
+
+
 def test_load_refuses_corrupt_and_pickled_files(tmp_path):
     (tmp_path / "junk.npz").write_bytes(b"not a zip file at all")
     with pytest.raises(ValueError, match="cannot read"):

@@ -106,7 +106,7 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
 
     Each case is a mapping with ``hand`` (or the ``hand`` argument), ``obj``,
     ``target``, ``palm_pose`` and optionally ``step``, ``epsilon``, ``contact_tolerance``,
-    ``max_iterations`` and ``timeout``; or a tuple ``(hand, obj, target, palm_pose[, params])``;
+    ``max_iterations``, ``rules``, ``skin`` and ``timeout``; or a tuple ``(hand, obj, target, palm_pose[, params])``;
     or an object with ``obj``, ``target`` and ``palm_pose`` attributes such as
     ``hugger.scenarios.Case``. ``**params`` and ``timeout`` (seconds per plan's Phase 2, see
     :meth:`Planner.plan`) apply to every case unless the case gives its own.

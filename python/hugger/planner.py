@@ -215,4 +215,8 @@ def plan(hand: Hand, obj: Object, target: Any, palm_pose: Any, timeout: float | 
     """Plan in one call: ``Planner(hand, obj, target, palm_pose, **params).plan(timeout)``
     (``timeout`` bounds ``plan()``: the constructor's Phase 1 and regions come before it)."""
     limit = _timeout(timeout)  # checked before any planning
+    known = (*PARAMS, "record_object")
+    unknown = sorted(set(params) - set(known))
+    if unknown:  # as plan_many says it (Planner itself: Python's TypeError for an unknown keyword)
+        raise ValueError(f"unknown planner parameters {unknown}; expected some of {list(known)}")
     return Planner(hand, obj, target, palm_pose, **params).plan(limit)

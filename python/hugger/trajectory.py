@@ -73,6 +73,12 @@ class Trajectory:
     def __len__(self) -> int:
         return int(self.palm_pose.shape[0])
 
+    def __repr__(self) -> str:
+        # One line: the arrays' contents would fill a terminal (every field is still an attribute).
+        k, m, n = (self.angles.shape + (0, 0, 0))[:3]
+        return (f"Trajectory(status={self.status!r}, configurations={len(self)}, fingers={m}, links={n}, "
+                f"object={len(self.object_vertices)} vertices/{len(self.object_faces)} faces)")
+
     def __getstate__(self) -> dict[str, Any]:
         # Pickled (to a worker process, say) without object()'s cached C++ Object, which cannot be
         # pickled: the receiver builds its own from the arrays when it needs one.
