@@ -66,7 +66,8 @@ Mesh sphere(double radius, int subdivisions) {
 using test::curvy;
 
 /// The paper-like start, as hugger.scenarios.start_pose(obj, hand, T, (0, 0, 1), turn_deg=60,
-/// distance=0.2) builds it for the demo: look_at(T + (0, 0, 0.2), T), then turned 60 degrees
+/// distance=0.2) builds it (the demo starts from the same direction at the safe distance,
+/// nearer): look_at(T + (0, 0, 0.2), T), then turned 60 degrees
 /// about the palm's own y axis (the rotation applied on the right of the palm's rotation).
 Pose paper_start(const Vec3& target) {
   // look_at: z toward T; up (0, 0, 1) is parallel to z, so up = (1, 0, 0) as in look_at.
