@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import functools
-import importlib.util
 import io
 import sys
 import tempfile
@@ -29,16 +28,10 @@ from hugger.planner import RULES
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_args import comma_names  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared"
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from helpers import SHARED, checker_unavailable, load_checker  # noqa: E402
 
-
-@functools.lru_cache(maxsize=None)
-def _checker():  # loaded once, not once per plan
-    spec = importlib.util.spec_from_file_location("check_trajectory", SHARED / "tools" / "check_trajectory.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+_checker = functools.lru_cache(maxsize=None)(load_checker)  # loaded once, not once per plan
 
 
 def checker_verdict(path: Path) -> str:
@@ -54,6 +47,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rules", type=comma_names(RULES, "rule sets"), default="paper,hug",
                     help=f"comma-separated rule sets, of {', '.join(RULES)} (default paper,hug)")
     args = ap.parse_args(argv)
+    if args.check and (reason := checker_unavailable()):
+        print(f"note: {reason}", file=sys.stderr)
+        args.check = False
     rule_sets = args.rules
     specs = list(hugger.objects.names())
     meshes = sorted((SHARED / "data" / "objects").glob("*.obj"))

@@ -44,7 +44,6 @@ import contextlib
 import datetime
 import functools
 import hashlib
-import importlib.util
 import io
 import json
 import os
@@ -65,7 +64,7 @@ from hugger._files import write_atomic
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import plan_digest  # noqa: E402
-from helpers import CHECKER, load_checker  # noqa: E402
+from helpers import CHECKER, checker_unavailable, load_checker  # noqa: E402
 
 _checker = functools.lru_cache(maxsize=None)(load_checker)  # loaded once, not once per plan
 SKINS = ("mesh", "section")
@@ -94,15 +93,6 @@ def digest(traj: hugger.Trajectory) -> str:
     h = hashlib.sha256()
     plan_digest.update(h, traj)
     return h.hexdigest()[:16]
-
-
-def check_unavailable() -> str | None:
-    """Why the independent checker cannot run here, or None when it can."""
-    if not CHECKER.is_file():
-        return f"{CHECKER.parent.parent} is absent ({CHECKER} not found): the check is skipped"
-    if importlib.util.find_spec("fcl") is None:
-        return "the checker needs python-fcl (pip install python-fcl): the check is skipped"
-    return None
 
 
 def checker_verdict(path: Path) -> tuple[bool, list[str]]:
@@ -293,7 +283,7 @@ def main(argv: list[str] | None = None) -> int:
     cases = {n: scenarios.default_case(n, hand) for n in names}
     # the arrays Hugger's setup builds its Object from (private copies, made before any clock)
     arrays = {n: (np.array(c.obj.vertices), np.array(c.obj.faces)) for n, c in cases.items()}
-    check_reason = check_unavailable() if args.check else None
+    check_reason = checker_unavailable() if args.check else None
     if check_reason:
         say(f"--check: {check_reason}")
     tmp = tempfile.TemporaryDirectory(prefix="plan_vs_baseline-") if args.check and not check_reason else None

@@ -87,6 +87,15 @@ BAD_POSES = [
 ]
 
 
+def checker_unavailable() -> str | None:
+    """Why the independent checker cannot run here (a sentence for the user), or None when it can."""
+    if not CHECKER.is_file():
+        return f"{CHECKER.parent.parent} is absent ({CHECKER} not found): the check is skipped"
+    if importlib.util.find_spec("fcl") is None:
+        return "the checker needs python-fcl (pip install python-fcl): the check is skipped"
+    return None
+
+
 def load_checker():
     spec = importlib.util.spec_from_file_location("check_trajectory", CHECKER)
     mod = importlib.util.module_from_spec(spec)

@@ -151,6 +151,17 @@ def test_objects_table_prints_on_stdout_the_table_it_writes(tmp_path, capsys, mo
     assert captured.err.splitlines()[-1] == "7 objects, rules hug: 7 plans"  # readable, not JSON
 
 
+def test_objects_table_check_without_the_checker_says_so_and_plans_on(tmp_path, capsys, monkeypatch):
+    mod = bench_module("objects_table")
+    monkeypatch.setattr(mod, "SHARED", tmp_path / "no-shared")
+    monkeypatch.setattr(mod, "checker_unavailable", lambda: "../shared is absent: the check is skipped")
+    assert mod.main(["--rules", "hug", "--check"]) == 0  # a traceback before, at the first plan
+    captured = capsys.readouterr()
+    assert captured.err.splitlines()[0] == "note: ../shared is absent: the check is skipped"
+    table = _table(captured.out.splitlines())
+    assert "checker" not in table[0] and len(table) == 2 + len(mod.hugger.objects.names())
+
+
 def test_search_table_prints_its_header_before_the_rows():
     run = _run_script("search_table", "--objects", "sphere", "box", "--approaches", "1", "--threads", "1",
                       "--no-physics", timeout=120)

@@ -149,8 +149,10 @@ def test_mesh_files_are_read_once_per_process(tmp_path, monkeypatch):
     (["plan", "sphere", "--out", "x.npz", "--step", "-1"], "step"),
     (["plan", "sphere", "--out", "x.npz", "--epsilon", "0"], "epsilon"),
     (["plan", "sphere", "--out", "x.npz", "--target", "1", "0", "0"], "not inside"),
-    (["plan", "sphere", "--out", "x.npz", "--start", "0", "0", "0.01"], "link 0 of finger 0 lies inside it"),  # no -inf
+    (["plan", "sphere", "--out", "x.npz", "--start", "0", "0", "0.01"], "link 0 of finger 0's axis enters it"),  # no -inf
     (["view", "p.npz", "--fps", "inf"], "--fps must be a positive finite number"),  # as render says it
+    (["view", "p.npz", "--fps", "500"], "--fps must be at most 120"),  # the page's control: 1 to 120
+    (["view", "p.npz", "--fps", "0.5"], "--fps must be at least 1"),
     (["plan", "x.stl", "--out", "x.npz", "--scale", "0"], "scale"),
     (["plan", "sphere", "--out", "no/such/dir/x.npz"], "no such directory 'no/such/dir'"),
     (["plan", "sphere", "--out", "x.txt"], "--out must end in .npz, got 'x.txt'"),

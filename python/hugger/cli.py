@@ -32,7 +32,6 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Mapping, NoReturn, Sequence, TextIO
 
-from ._checks import positive
 from ._files import atomic_path, write_atomic
 from ._progress import Progress
 from ._core import RULES, SKINS
@@ -588,7 +587,7 @@ def cmd_view(args: argparse.Namespace) -> int:
         raise UsageError(f"--port must be in 0..65535, got {args.port}")
     if args.fps is not None:
         try:
-            positive("fps", args.fps)
+            viewer.check_fps(args.fps)
         except ValueError as exc:  # "fps must be ...", as render says it
             raise UsageError(f"--{exc}") from None
     viewer._viser()  # the extra, before loading anything
@@ -816,7 +815,7 @@ def build_parser() -> _Parser:
                         "as the printed address says)")
     p.add_argument("--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1, this machine only)")
     p.add_argument("--no-browser", action="store_true", help="do not open a web browser, just serve")
-    p.add_argument("--fps", type=float, help="playback frames per second (default 20)")
+    p.add_argument("--fps", type=float, help="playback frames per second, 1 to 120 (default 20)")
     p.set_defaults(func=cmd_view)
 
     p = sub.add_parser("export-scene", help="write the final grasp (or every configuration) as a glTF scene "

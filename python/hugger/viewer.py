@@ -30,7 +30,17 @@ import numpy as np
 
 from . import _palette, analysis
 from ._palette import rgb255
-from ._checks import positive, whole
+from ._checks import whole
+
+#: The slowest playback the page's control offers (frames per second); the fastest is render's
+#: limit, hugger.viz.backend.MAX_FPS.
+MIN_FPS = 1.0
+
+
+def _max_fps() -> float:
+    from .viz.backend import MAX_FPS  # (hugger.viz imports this module)
+
+    return MAX_FPS
 from ._files import write_atomic
 from ._rotation import quaternion_wxyz
 from .trajectory import Trajectory
@@ -199,6 +209,17 @@ def scene_nodes(fingers: int, links: int, plan: int = 0) -> dict[str, list[str]]
 
 # --- the viewer ---------------------------------------------------------------------------------------
 
+def check_fps(fps: Any) -> float:
+    """``fps`` as a float: from MIN_FPS to render's MAX_FPS, the range of the page's control;
+    otherwise a ValueError."""
+    from .viz.backend import check_fps as check  # (hugger.viz imports this module)
+
+    x = check(fps)
+    if x < MIN_FPS:
+        raise ValueError(f"fps must be at least {MIN_FPS:g}, got {fps!r}")
+    return x
+
+
 class Viewer:
     """A viser server showing one or more plans (see the module's docstring). ``configuration``
     is the index shown (common to all plans; each plan shows min(k, its K-1)). Stop it with
@@ -208,7 +229,7 @@ class Viewer:
                  labels: Sequence[str] | None = None) -> None:
         plans = _plans(trajs)
         port = whole("port", port, 0, 65535)
-        fps = positive("fps", fps)
+        fps = check_fps(fps)
         if labels is not None and len(labels) != len(plans):
             raise ValueError(f"labels must name each of the {len(plans)} plans, got {len(labels)}")
         viser = _viser()
@@ -276,7 +297,8 @@ class Viewer:
         self.slider = gui.add_slider("configuration k", min=0, max=max(self.count - 1, 1), step=1,
                                      initial_value=self.count - 1)
         self.play_button = gui.add_button("play / pause")
-        self.fps_number = gui.add_number("frames per second", initial_value=self.fps, min=1.0, max=120.0, step=1.0)
+        self.fps_number = gui.add_number("frames per second", initial_value=self.fps, min=MIN_FPS, max=_max_fps(),
+                                         step=1.0)
         self.transparent = gui.add_checkbox("transparent object", initial_value=True)
         self.show_contacts = gui.add_checkbox("contacts", initial_value=True)
         self.status = gui.add_markdown("")

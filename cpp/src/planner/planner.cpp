@@ -120,17 +120,20 @@ void Planner::check_clear(const Configuration& c, const char* when) const {
   for (int m = 0; m < hand_.fingers(); ++m)
     for (int n = 0; n < N; ++n) {
       const Touch t = sensing_->capsule(c.joints[hand_.joint_index(m, n)], c.joints[hand_.joint_index(m, n + 1)], hand_.link_radius(), delta);
-      // (A skin may answer a link whose axis lies inside O with no finite depth: -inf.)
-      if (t.gap <= delta)
+      // A gap of -r or less is no depth: the skins answer a link whose axis enters O with -r (or
+      // -inf where it lies wholly inside), and a skin may answer NaN, refused too.
+      if (!(t.gap > delta))
         invalid(std::string("the hand touches or penetrates the object ") + when + ": link " + std::to_string(n) +
                 " of finger " + std::to_string(m) +
-                (std::isfinite(t.gap) ? " has a gap of " + fmt(t.gap) + " m" : std::string(" lies inside it")) +
+                (std::isnan(t.gap)                      ? std::string(" has no gap (NaN)")
+                 : t.gap <= -hand_.link_radius()        ? std::string("'s axis enters it")
+                                                        : " has a gap of " + fmt(t.gap) + " m") +
                 "; start the palm farther from the object");
     }
   const double pg = sensing_->palm(c.palm, hand_.palm_radius(), hand_.palm_thickness(), delta);
-  if (pg <= delta)
+  if (!(pg > delta))
     invalid(std::string("the palm touches, penetrates or lies inside the object ") + when +
-            (std::isfinite(pg) ? " (gap " + fmt(pg) + " m)" : std::string(" (inside it)")) +
+            (std::isfinite(pg) ? " (gap " + fmt(pg) + " m)" : std::string()) +
             "; start the palm farther from the object");
 }
 
