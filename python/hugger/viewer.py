@@ -31,6 +31,9 @@ import numpy as np
 from . import _palette, analysis
 from ._palette import rgb255
 from ._checks import whole
+from ._files import write_atomic
+from ._rotation import quaternion_wxyz
+from .trajectory import Trajectory
 
 #: The slowest playback the page's control offers (frames per second); the fastest is render's
 #: limit, hugger.viz.backend.MAX_FPS.
@@ -41,9 +44,7 @@ def _max_fps() -> float:
     from .viz.backend import MAX_FPS  # (hugger.viz imports this module)
 
     return MAX_FPS
-from ._files import write_atomic
-from ._rotation import quaternion_wxyz
-from .trajectory import Trajectory
+
 
 __all__ = ["Viewer", "capsule_mesh", "export_scene", "palm_mesh", "scene_nodes", "view"]
 
