@@ -380,6 +380,17 @@ def test_timeout_stops_with_a_valid_partial_trajectory(hand, sphere, checker, tm
     assert hugger.Trajectory.load(path).status == "timeout"
 
 
+@pytest.mark.parametrize("turn", [400.0, -181.0, float("nan"), float("inf"), "sixty"])
+def test_a_start_turned_past_half_a_turn_is_refused(hand, sphere, turn):
+    # start_pose and default_case (hugger plan --turn) share the rule: -180 to 180 degrees
+    with pytest.raises(ValueError, match=r"turn_deg \(--turn\) must be"):
+        hugger.scenarios.start_pose(sphere, hand, [0, 0, 0], turn_deg=turn)
+    with pytest.raises(ValueError, match=r"turn_deg \(--turn\) must be"):
+        hugger.scenarios.default_case("sphere", hand, turn_deg=turn)
+    np.testing.assert_array_equal(hugger.scenarios.start_pose(sphere, hand, [0, 0, 0], turn_deg=180),
+                                  hugger.scenarios.start_pose(sphere, hand, [0, 0, 0], turn_deg=180.0))
+
+
 def test_hugger_plan_refuses_an_unknown_parameter_as_plan_many_does(hand, sphere):
     for call in (lambda: hugger.plan(hand, sphere, [0, 0, 0], START, stepp=1e-3),
                  lambda: hugger.plan_many([(hand, sphere, [0, 0, 0], START)], stepp=1e-3)):

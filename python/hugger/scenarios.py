@@ -47,10 +47,22 @@ def safe_distance(obj: Object, hand: Hand, target: Any, margin: float = 0.005) -
     return body + hand_radius + margin
 
 
+def _turn(turn_deg: Any) -> float:
+    """A start's turn in degrees: a number from -180 to 180 (the one rule of start_pose and default_case)."""
+    try:
+        x = float(turn_deg)
+    except (TypeError, ValueError):
+        raise ValueError(f"turn_deg (--turn) must be a number, got {turn_deg!r}") from None
+    if not (math.isfinite(x) and -180.0 <= x <= 180.0):
+        raise ValueError(f"turn_deg (--turn) must be within [-180, 180] degrees, got {turn_deg!r}")
+    return x
+
+
 def start_pose(obj: Object, hand: Hand, target: Any, direction: Any = (0.0, 0.0, 1.0), turn_deg: float = 0.0,
                distance: float | None = None) -> np.ndarray:
     """The palm at ``distance`` (default :func:`safe_distance`) from T along ``direction``, facing T,
-    then turned by ``turn_deg`` about its own y axis so that Phase 1 has work to do."""
+    then turned by ``turn_deg`` (-180 to 180) about its own y axis so that Phase 1 has work to do."""
+    turn_deg = _turn(turn_deg)
     t = np.asarray(target, dtype=np.float64).reshape(3)
     d = _unit("direction", direction)
     dist = safe_distance(obj, hand, t) if distance is None else float(distance)
@@ -130,7 +142,9 @@ def default_case(spec: str | os.PathLike[str], hand: Hand | None = None, scale: 
     ``plan_many([default_case(...), ...])`` plans it as the command would.
 
     ``target`` overrides T; ``start`` the palm centre; ``normal`` the palm normal (default: towards T;
-    given without ``start``, the palm starts at the safe distance from T against it, facing T).
+    given without ``start``, the palm starts at the safe distance from T against it, facing T);
+    ``turn_deg`` (-180 to 180, not with ``start`` or ``normal``) turns the default start away from T
+    about the palm's y axis, as :func:`start_pose` does.
     """
     hand = hand if hand is not None else Hand()
     name, obj, repairs = load_object(spec, scale)
@@ -143,8 +157,7 @@ def default_case(spec: str | os.PathLike[str], hand: Hand | None = None, scale: 
         t = interior_target(obj)
     if not bool(obj.inside(t[None])[0]):
         raise ValueError(f"target T {t.tolist()} is not inside {name}")
-    if not (math.isfinite(turn_deg) and -180.0 <= turn_deg <= 180.0):
-        raise ValueError(f"turn_deg (--turn) must be within [-180, 180] degrees, got {turn_deg!r}")
+    turn_deg = _turn(turn_deg)
     if turn_deg and (start is not None or normal is not None):
         raise ValueError("turn_deg (--turn) applies to the default start only, not with start or normal")
     if start is None and normal is None:
