@@ -27,11 +27,16 @@ from pathlib import Path
 
 import numpy as np
 
+import sys
+
 import hugger
 from hugger import physics
 from hugger._files import write_atomic
 
-from hugger import baselines
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_args import split_names  # noqa: E402
+
+from hugger import baselines  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 
@@ -181,8 +186,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-validate", action="store_true", help="skip the MuJoCo hold test")
     args = ap.parse_args(argv)
     selection = None
-    if args.objects is not None:  # repeats dropped, order kept (as bench_args.comma_names)
-        selection = list(dict.fromkeys(s.strip() for s in args.objects.split(",") if s.strip()))
+    if args.objects is not None:  # names or paths: no list of them to check against
+        selection = split_names(args.objects)
         if not selection:
             ap.error("--objects: no object named (give built-in names, mesh stems or mesh paths)")
     try:

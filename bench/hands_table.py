@@ -49,7 +49,6 @@ def _short(failure: str) -> str:
 THUMB, THUMB_OPTION = "thumb URDF", "thumb_urdf"
 
 
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=None, help="also write the markdown table and its summary here")

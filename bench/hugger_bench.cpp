@@ -391,6 +391,10 @@ int parse_repeats(const char* text) {
 
 int main(int argc, char** argv) {
   const auto all = scenarios();
+  auto find_scenario = [&](const std::string& name) -> const Scenario* {  // nullptr: none of that name
+    auto it = std::find_if(all.begin(), all.end(), [&](const Scenario& s) { return s.name == name; });
+    return it == all.end() ? nullptr : &*it;
+  };
   std::vector<std::string> chosen;
   int repeats = 5;
   bool json = false, fork_each = true, allow_debug = false, list = false;
@@ -407,7 +411,7 @@ int main(int argc, char** argv) {
       }
     }
     else if (a == "--json") json = true;
-    else if (a == "--skin" && i + 1 < argc) {
+    else if (a == "--skin" && has_value) {
       const std::string k = argv[++i];
       if (k == "both") skins = {"mesh", "section"};
       else if (k == "mesh" || k == "section") skins = {k};
@@ -422,12 +426,12 @@ int main(int argc, char** argv) {
       // The scenario's object as Wavefront OBJ, every coordinate to 17 significant digits
       // (round-trips exactly), to compare with the Python built-in (hugger.objects.curvy()).
       const std::string name = argv[++i], path = argv[++i];
-      auto it = std::find_if(all.begin(), all.end(), [&](const Scenario& s) { return s.name == name; });
-      if (it == all.end()) {
+      const Scenario* sc = find_scenario(name);
+      if (sc == nullptr) {
         std::fprintf(stderr, "hugger_bench: unknown scenario '%s'\n", name.c_str());
         return 2;
       }
-      const Mesh m = it->mesh();
+      const Mesh m = sc->mesh();
       FILE* f = std::fopen(path.c_str(), "w");
       if (!f) {
         std::fprintf(stderr, "hugger_bench: cannot write %s\n", path.c_str());
@@ -445,7 +449,8 @@ int main(int argc, char** argv) {
       }
       return 0;
     }
-    else if (a == "--list") list = true; else if (a == "--help" || a == "-h") {
+    else if (a == "--list") list = true;
+    else if (a == "--help" || a == "-h") {
       usage(all, stdout);
       return 0;
     } else {
@@ -474,13 +479,13 @@ int main(int argc, char** argv) {
   }
   std::vector<const Scenario*> todo;
   for (const auto& name : chosen) {
-    auto it = std::find_if(all.begin(), all.end(), [&](const Scenario& s) { return s.name == name; });
-    if (it == all.end()) {
+    const Scenario* sc = find_scenario(name);
+    if (sc == nullptr) {
       std::fprintf(stderr, "hugger_bench: unknown scenario '%s'\n", name.c_str());
       usage(all, stderr);
       return 2;
     }
-    todo.push_back(&*it);
+    todo.push_back(sc);
   }
   if (todo.empty())
     for (const auto& s : all) todo.push_back(&s);

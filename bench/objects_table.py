@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import functools
 import io
 import sys
 import tempfile
@@ -31,11 +30,9 @@ from bench_args import comma_names  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from helpers import SHARED, checker_unavailable, load_checker  # noqa: E402
 
-_checker = functools.lru_cache(maxsize=None)(load_checker)  # loaded once, not once per plan
-
 
 def checker_verdict(path: Path) -> str:
-    mod = _checker()
+    mod = load_checker()
     with contextlib.redirect_stdout(io.StringIO()):
         return "pass" if mod.main([str(path)]) == 0 else "FAIL"
 

@@ -60,7 +60,6 @@ def digest(skin: str, rules: list[str], objects: list[str]) -> str:
     return h.hexdigest()
 
 
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     builtins = list(hugger.objects.names())

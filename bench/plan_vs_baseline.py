@@ -42,7 +42,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import datetime
-import functools
 import hashlib
 import io
 import json
@@ -66,7 +65,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import plan_digest  # noqa: E402
 from helpers import CHECKER, checker_unavailable, load_checker  # noqa: E402
 
-_checker = functools.lru_cache(maxsize=None)(load_checker)  # loaded once, not once per plan
 SKINS = ("mesh", "section")
 PLANNERS = (*SKINS, "baseline")
 
@@ -97,7 +95,7 @@ def digest(traj: hugger.Trajectory) -> str:
 
 def checker_verdict(path: Path) -> tuple[bool, list[str]]:
     """Run check_trajectory.py's own main (every check, motion included) on ``path``."""
-    mod = _checker()
+    mod = load_checker()
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
         code = mod.main([str(path), "--json"])

@@ -152,9 +152,12 @@ def main(argv: list[str] | None = None) -> int:
     hand = hugger.Hand()
     checker = None
     if args.check:
-        from helpers import CHECKER, load_checker
+        from helpers import checker_unavailable, load_checker
 
-        checker = load_checker() if CHECKER.is_file() else None
+        reason = checker_unavailable()
+        if reason:
+            print(f"note: {reason}", file=sys.stderr)
+        checker = None if reason else load_checker()
     rows = []
     cases = []
     if not args.only_generated:

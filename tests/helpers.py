@@ -2,6 +2,7 @@
 comparison, mesh files."""
 from __future__ import annotations
 
+import functools
 import importlib.util
 import math
 import subprocess
@@ -96,7 +97,8 @@ def checker_unavailable() -> str | None:
     return None
 
 
-def load_checker():
+@functools.lru_cache(maxsize=None)
+def load_checker():  # loaded once per process, not once per plan
     spec = importlib.util.spec_from_file_location("check_trajectory", CHECKER)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

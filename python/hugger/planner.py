@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import json
-from typing import Any, Iterator, Mapping, cast
+from typing import Any, Iterator, Mapping, Sequence, cast
 
 import numpy as np
 
@@ -47,13 +47,14 @@ DEFAULT_SKIN = "section"
 PARAMS = ("step", "epsilon", "contact_tolerance", "max_iterations", "rules", "skin")
 
 
-def check_params(params: Mapping[str, Any], what: str = "planner parameters") -> None:
+def check_params(params: Mapping[str, Any], what: str = "planner parameters", also: Sequence[str] = ()) -> None:
     """Raise ValueError, saying what is wrong, unless ``params`` are planner parameters (names of
-    PARAMS, values None or as Planner takes them) with values Planner would take: the check of
-    many plans before any is made. (Planner checks contact_tolerance against the scene too.)"""
-    bad = set(params) - set(PARAMS)
+    PARAMS, or of ``also``, which are not checked further; values None or as Planner takes them)
+    with values Planner would take: the check of many plans before any is made. (Planner checks
+    contact_tolerance against the scene too.)"""
+    bad = set(params) - set(PARAMS) - set(also)
     if bad:
-        raise ValueError(f"unknown {what} {sorted(bad)}; expected some of {list(PARAMS)}")
+        raise ValueError(f"unknown {what} {sorted(bad)}; expected some of {[*PARAMS, *also]}")
     skin = params.get("skin")
     if skin is not None and skin not in SKINS:
         raise ValueError(f"skin must be one of {list(SKINS)} or None (the default), got {skin!r}")
@@ -215,8 +216,6 @@ def plan(hand: Hand, obj: Object, target: Any, palm_pose: Any, timeout: float | 
     """Plan in one call: ``Planner(hand, obj, target, palm_pose, **params).plan(timeout)``
     (``timeout`` bounds ``plan()``: the constructor's Phase 1 and regions come before it)."""
     limit = _timeout(timeout)  # checked before any planning
-    known = (*PARAMS, "record_object")
-    unknown = sorted(set(params) - set(known))
-    if unknown:  # as plan_many says it (Planner itself: Python's TypeError for an unknown keyword)
-        raise ValueError(f"unknown planner parameters {unknown}; expected some of {list(known)}")
+    # plan_many's check (Planner itself: Python's TypeError for an unknown keyword)
+    check_params(params, also=("record_object",))
     return Planner(hand, obj, target, palm_pose, **params).plan(limit)

@@ -134,13 +134,15 @@ bool tail_to_head(const Sensing& sensing, const SnakeRequest& req, const Vec2& r
   const auto old = stack_copy(chain);
   chain[0] = root;
   if (folded != nullptr) *folded = false;
-  const double sep2 = req.self_separation * req.self_separation;
+  // fold_early's squared separation, less a margin far above rounding that leaves ties to the test
+  // of the placed link below (0: no early test)
+  const double early2 = req.fold_early && req.self_separation > 0.0
+                            ? req.self_separation * req.self_separation * (1.0 - 1e-9)
+                            : 0.0;
   for (int n = 0; n < N; ++n) {
     // A joint already that close to the link before the last (the others were tested against the
     // link ending at it) folds every link from it: refused before the link is asked of the skin.
-    // The margin, far above rounding, leaves ties to the test of the placed link below.
-    if (n >= 2 && req.fold_early && req.self_separation > 0.0 &&
-        joint_near_link(chain[n], chain[n - 1], chain[n - 2], sep2 * (1.0 - 1e-9))) {
+    if (n >= 2 && early2 > 0.0 && joint_near_link(chain[n], chain[n - 1], chain[n - 2], early2)) {
       if (folded != nullptr) *folded = true;
       return false;
     }

@@ -206,8 +206,11 @@ void PlaneRegion::finish() {
   // The chains may move out by what the arcs' flattening left of the tolerance (at least half).
   simplify(flatten_ - std::min(arc_deviation_, 0.5 * flatten_));
   build_bvh();
-  for (auto& h : hints_) h.store(-1, std::memory_order_relaxed);  // no segment found yet
   build_cells();
+  // reach()'s hints: none found yet; cells 8 of the label grid's a side (every query in slot 0
+  // where there is no grid)
+  for (auto& h : hints_) h.store(-1, std::memory_order_relaxed);
+  hint_scale_ = cell_ > 0.0 ? 0.125 / cell_ : 0.0;
   link_segments();
   build_loop();
 }
@@ -862,7 +865,6 @@ void PlaneRegion::build_cells() {
   const double size = (hi - lo).maxCoeff();
   if (!(size > 0.0) || !std::isfinite(size)) return;
   cell_ = size / kCells;
-  hint_scale_ = 0.125 / cell_;
   cells_lo_ = lo - Vec2::Constant(cell_);
   for (int a = 0; a < 2; ++a) cells_n_[a] = static_cast<int>(std::ceil((hi[a] - lo[a]) / cell_)) + 3;
   const int nx = cells_n_[0], ny = cells_n_[1];
