@@ -172,3 +172,15 @@ def test_the_installed_version_is_the_package_s():
     import importlib.metadata
 
     assert importlib.metadata.version("hugger") == hugger.__version__ == hugger._types.VERSION
+
+
+def test_dir_lists_the_lazy_submodules_without_loading_them():
+    import subprocess
+    import sys
+
+    # A fresh interpreter: other tests may have loaded the submodules already.
+    code = ("import sys, hugger; names = dir(hugger); "
+            "print(all(n in names for n in ('viz', 'physics', 'dataset', 'Dataset', 'Planner')), "
+            "'annotations' in names, 'hugger.viz' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["True", "False", "False"]

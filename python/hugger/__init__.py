@@ -12,8 +12,6 @@ this package holds the Python API::
     traj = planner.plan()
     traj.save("plan.npz")
 """
-from __future__ import annotations
-
 from typing import Any as _Any
 
 from . import hands, objects, scenarios, skins
@@ -44,6 +42,12 @@ def __getattr__(name: str) -> _Any:
 
         return importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    """What the package holds, the lazily loaded submodules and ``Dataset`` included (for tab
+    completion), without loading them."""
+    return sorted(set(globals()) | set(_LAZY) | {"Dataset"})
 
 __all__ = [
     "CONTACT",
