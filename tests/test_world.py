@@ -243,3 +243,30 @@ def test_size_thresholds_are_the_documented_ones():
     no_warnings(hugger.Object, v * (1.01 * lo / extent(1.0)), f)
     with pytest.warns(UserWarning, match="small"):
         hugger.Object(v * (0.99 * lo / extent(1.0)), f)
+
+
+@pytest.mark.parametrize("far", [1e3, 1e9, 1e15, 1e300])
+def test_points_far_outside_are_outside(far):
+    # Far away every triangle is as near as any other to rounding: the answer must not depend on
+    # which one the nearest search finds.
+    o = hugger.objects.sphere(0.04)
+    rng = np.random.default_rng(7)
+    dirs = rng.normal(size=(20, 3))
+    pts = far * dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
+    assert not o.inside(pts).any()
+    assert (o.signed_distance(pts) > 0).all()
+    assert (o.closest(pts)["distance"] > 0).all()
+
+
+@pytest.mark.parametrize("method", ["inside", "signed_distance", "closest"])
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_query_points_must_be_finite(method, bad):
+    o = hugger.objects.sphere(0.04)
+    with pytest.raises(ValueError, match="points must be finite.*row 1"):
+        getattr(o, method)([[0.0, 0.0, 0.0], [bad, 0.0, 0.0]])
+
+
+def test_segment_distance_ends_must_be_finite():
+    o = hugger.objects.sphere(0.04)
+    with pytest.raises(ValueError, match="b must be finite"):
+        o.segment_distance(np.zeros((1, 3)), np.array([[np.nan, 0.0, 0.0]]))

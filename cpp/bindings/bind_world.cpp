@@ -44,7 +44,7 @@ void bind_world(py::module_& m) {
       .def(
           "inside",
           [](const Object& o, const ArrayD& points) {
-            const PointsN3 p = to_rows<PointsN3>(points, "points");
+            const PointsN3 p = finite_points(points, "points");
             Eigen::Array<bool, Eigen::Dynamic, 1> out(p.rows());
             for (Eigen::Index i = 0; i < p.rows(); ++i) out(i) = o.inside(p.row(i).transpose());
             return out;
@@ -53,7 +53,7 @@ void bind_world(py::module_& m) {
       .def(
           "signed_distance",
           [](const Object& o, const ArrayD& points) {
-            const PointsN3 p = to_rows<PointsN3>(points, "points");
+            const PointsN3 p = finite_points(points, "points");
             Eigen::VectorXd out(p.rows());
             for (Eigen::Index i = 0; i < p.rows(); ++i) out(i) = o.nearest(p.row(i), p.row(i)).signed_distance;
             return out;
@@ -62,7 +62,7 @@ void bind_world(py::module_& m) {
       .def(
           "closest",
           [](const Object& o, const ArrayD& points, double max_distance) {
-            const PointsN3 p = to_rows<PointsN3>(points, "points");
+            const PointsN3 p = finite_points(points, "points");
             HUGGER_CHECK_ARGUMENT(max_distance >= 0.0, "max_distance must be >= 0, got " << max_distance);
             const Eigen::Index n = p.rows();
             Eigen::VectorXd dist(n);
@@ -99,9 +99,9 @@ void bind_world(py::module_& m) {
       .def(
           "segment_distance",
           [](const Object& o, const ArrayD& a, const ArrayD& b) {
-            const PointsN3 pa = to_rows<PointsN3>(a, "a");
+            const PointsN3 pa = finite_points(a, "a");
             check_shape(b, {pa.rows(), 3}, "b");
-            const PointsN3 pb = to_rows<PointsN3>(b, "b");
+            const PointsN3 pb = finite_points(b, "b");
             Eigen::VectorXd out(pa.rows());
             py::gil_scoped_release release;
             for (Eigen::Index i = 0; i < pa.rows(); ++i) out(i) = o.nearest(pa.row(i), pb.row(i)).signed_distance;

@@ -71,6 +71,16 @@ Rows to_rows(const Array& a, const char* name) {
   return Eigen::Map<const Rows>(a.data(), a.shape(0), 3);
 }
 
+/// An (n, 3) array of query points, each finite (a NaN or infinite point has no answer).
+inline PointsN3 finite_points(const ArrayD& a, const char* name) {
+  PointsN3 p = to_rows<PointsN3>(a, name);
+  for (Eigen::Index i = 0; i < p.rows(); ++i)
+    if (!p.row(i).allFinite())
+      throw py::value_error(std::string(name) + " must be finite, got a NaN or infinite coordinate at row " +
+                            std::to_string(i));
+  return p;
+}
+
 /// An array of shape (..., 3) as its points in order (finger-major joints, say).
 inline std::vector<Vec3> to_vec3s(const ArrayD& a) {
   std::vector<Vec3> out;

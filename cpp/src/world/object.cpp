@@ -288,7 +288,15 @@ void Object::build_surface() {
   vertex_normals_ = angle_weighted_normals(vertices_, faces_, face_normals_);
 }
 
+bool Object::beyond_bounds(const Vec3& p) const {
+  const Aabb& box = bounds();
+  return (p.array() < box.lo.array()).any() || (p.array() > box.hi.array()).any();
+}
+
 double Object::sign_at(const Vec3& query, const Vec3& on_mesh, int triangle, TriangleFeature f) const {
+  // Outside O's box is outside O. (Far away, at 1e15 m, every triangle is as near as any other
+  // to rounding, and the nearest one found could face away.)
+  if (beyond_bounds(query)) return 1.0;
   // The feature's pseudo-normal: a face's own, an edge's the sum of its two faces' (edge k runs
   // from corner k to k + 1, its other face is neighbors_[k]), a vertex's angle-weighted one.
   const int k = static_cast<int>(f);
@@ -322,6 +330,7 @@ SignedNearest Object::nearest(const Vec3& a, const Vec3& b, double max_distance)
 }
 
 bool Object::inside(const Vec3& p) const {
+  if (beyond_bounds(p)) return false;
   const NearestResult r = bvh_.nearest(p, p);
   if (r.triangle < 0 || r.distance == 0.0) return false;
   return sign_at(p, r.on_mesh, r.triangle, r.feature) < 0.0;
@@ -345,6 +354,7 @@ bool Object::inside_off_surface(const Vec3& p) const {
 }
 
 bool Object::inside_by_rays(const Vec3& p) const {
+  if (beyond_bounds(p)) return false;
   // Three fixed, generic directions: a ray grazing an edge or a vertex can miscount; two rays
   // cannot both do so at a generic point.
   static const Vec3 dirs[3] = {Vec3(0.5377, 0.8622, 0.3188).normalized(), Vec3(-0.7269, 0.1423, -0.6718).normalized(),

@@ -70,6 +70,8 @@ class Object {
   /// past its indices (the constructor's list).
   void build_surface();
   bool inside_by_rays(const Vec3& p) const;
+  /// p lies outside O's bounding box (so outside O).
+  bool beyond_bounds(const Vec3& p) const;
   double sign_at(const Vec3& query, const Vec3& on_mesh, int triangle, TriangleFeature f) const;
 
   PointsN3 vertices_;
