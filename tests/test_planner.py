@@ -547,6 +547,23 @@ def test_gil_is_released_during_phase_1_in_the_constructor(hand, sphere):
 
 # --- bounded resources ------------------------------------------------------------------------
 
+@pytest.mark.parametrize("distance, step", [(1000.0, None), (0.2, 1e-8), (1e16, None)])
+def test_an_approach_of_too_many_steps_is_refused_before_planning(hand, sphere, distance, step):
+    # Each step of the approach is a configuration, all made in one iteration whatever the timeout:
+    # a start that needs more than kMaxIncrements of them is refused (a timeout would not stop it).
+    params = {} if step is None else {"step": step, "contact_tolerance": step / 2}
+    with pytest.raises(ValueError, match="the approach would need more than 100000 steps"):
+        hugger.Planner(hand, sphere, [0, 0, 0], hugger.look_at([0, 0, distance], [0, 0, 0]), **params)
+
+
+def test_an_approach_just_within_the_limit_plans(hand, sphere):
+    # 0.15 m from T at a step of 1.6 um: 93,750 steps at most, accepted.
+    p = hugger.Planner(hand, sphere, [0, 0, 0], hugger.look_at([0, 0, 0.15], [0, 0, 0]), step=1.6e-6,
+                       contact_tolerance=8e-7, max_iterations=1)
+    p.plan()
+    assert 1 < len(p.trajectory()) <= 100001
+
+
 def _rss_bytes() -> int:
     with open("/proc/self/statm") as fh:
         return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")

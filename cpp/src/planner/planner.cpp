@@ -156,8 +156,11 @@ void Planner::plan_phase1(const Pose& start) {
   const double alpha = std::atan2(axis_raw.norm(), p.dot(t));
   if (alpha > 1e-12) {
     const Vec3 axis = axis_raw.norm() > 1e-12 * t.norm() ? Vec3(axis_raw.normalized()) : Vec3(start.linear().col(0));
-    const long n = std::max(1L, static_cast<long>(std::ceil(alpha * hand_.extended_radius() / params_.step)));
-    if (n > 10000000) invalid("Phase 1 would need more than 10^7 increments: the step is too small for this hand");
+    const double increments = std::ceil(alpha * hand_.extended_radius() / params_.step);  // before any cast
+    if (!(increments <= static_cast<double>(kMaxIncrements)))
+      invalid("Phase 1 would need more than " + std::to_string(kMaxIncrements) +
+              " increments: the step is too small for this hand");
+    const long n = std::max(1L, static_cast<long>(increments));
     for (long k = 1; k <= n; ++k) {
       Pose palm = start;
       palm.linear() = Eigen::AngleAxisd(alpha * static_cast<double>(k) / static_cast<double>(n), axis).toRotationMatrix() *
@@ -172,6 +175,11 @@ void Planner::plan_phase1(const Pose& start) {
   // Phase 2 state: each finger in its plane, fixed in the world while the palm translates.
   palm2_ = history_.back().palm;
   eta_target_ = std::max(0.0, (target_ - palm2_.translation()).dot(palm2_.linear().col(2)));
+  // The approach advances at most to T, a step s at a time (approach()).
+  if (eta_target_ / params_.step > static_cast<double>(kMaxIncrements))
+    invalid("the approach would need more than " + std::to_string(kMaxIncrements) + " steps: the palm is " +
+            fmt(eta_target_) + " m from T along its normal, with a step of " + fmt(params_.step) +
+            " m; start nearer the object or take a larger step");
   for (int m = 0; m < hand_.fingers(); ++m) {
     planes_.push_back(hand_.plane(palm2_, m));
     chains_.push_back(hand_.rest_chain(m));  // the rim hand's rest is straight: (R, 0), (R, L0), ...

@@ -36,6 +36,10 @@ Rules rules_from_string(const std::string& name);
 
 /// Largest max_iterations accepted (a plan that long would take hours).
 constexpr long kMaxIterations = 1000000000;
+/// The most configurations Phase 1's turn, or the approach before any contact, may take: each is
+/// one step s of the hand (about 2 KB of history), and each is made within one call, whatever the
+/// timeout. A start that needs more is refused (start nearer, or take a larger step).
+constexpr long kMaxIncrements = 100000;
 
 /// Planner parameters. NaN selects the documented default; any other value must be positive.
 struct PlannerParams {
