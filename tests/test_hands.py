@@ -388,3 +388,49 @@ def test_robot_files_are_told_apart_by_their_root_element(tmp_path, capfd):
                         str(tmp_path / "x.npz")], capture_output=True, text=True)
     assert r.returncode == 2 and r.stderr.startswith("hugger: error:") and "not well-formed XML" in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
+
+
+def _edited_urdf(tmp_path: Path, old: str, new: str, count: int = 1) -> Path:
+    """The parallel gripper's URDF without its embedded hand (so the file is read as written), with
+    `old` replaced by `new` (`count` times)."""
+    import re
+
+    text = re.sub(r"<!-- hugger-hand .*? -->", "", hands.to_urdf(hands.preset("parallel_3link")), flags=re.S)
+    assert text.count(old) >= count, old
+    path = tmp_path / "edited.urdf"
+    path.write_text(text.replace(old, new, count))
+    return path
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ('<link name="f0_l1">', '<link name="f0_l0">', "two links are called 'f0_l0'"),
+    ('<parent link="palm"/><child link="f0_l0"/>', '<parent link="f0_l2"/><child link="f0_l0"/>',
+     "the joints form a cycle through link"),
+    ('<parent link="palm"/><child link="f0_l0"/>', '<parent link="ghost"/><child link="f0_l0"/>',
+     "joint 'f0_j0' names parent link 'ghost', which the file does not have"),
+    ('lower="-0.3490658503988659" upper="1.7453292519943295"', 'lower="1.0" upper="-1.0"',
+     "joint 'f0_j0' has limits lower = 1.0 > upper = -1.0"),
+])
+def test_a_urdf_that_is_no_tree_or_has_inverted_limits_is_refused(tmp_path, old, new, message):
+    path = _edited_urdf(tmp_path, old, new)
+    with pytest.raises(ValueError, match=message):
+        hands.load(path)
+
+
+def test_a_urdf_without_finger_cylinders_warns_and_takes_a_given_radius(tmp_path):
+    import re
+
+    # every finger link's collision a box instead of a cylinder (the palm keeps its own)
+    path = _edited_urdf(tmp_path, "<robot", "<robot")
+    path.write_text(re.sub(r'<cylinder radius="0.006" length="[0-9.e-]+"/>', '<box size="0.01 0.01 0.01"/>',
+                           path.read_text()))
+    with pytest.warns(UserWarning, match="no collision cylinder or capsule on the finger links"):
+        assert hands.load(path).link_radius == 0.0
+    assert hands.load(path, link_radius=0.005).link_radius == 0.005
+    r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--hand", str(path), "--link-radius", "0.005",
+                        "--out", str(tmp_path / "x.npz"), "--json"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert hugger.Trajectory.load(tmp_path / "x.npz").hand["link_radius"] == 0.005
+    r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--hand", "barrett_bh8", "--link-radius",
+                        "0.005", "--out", str(tmp_path / "y.npz")], capture_output=True, text=True)
+    assert r.returncode == 2 and "cannot be combined" in r.stderr

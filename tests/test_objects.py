@@ -168,6 +168,17 @@ def test_a_mesh_with_a_hole_is_refused(tmp_path):
         objects.load(path)
 
 
+@pytest.mark.parametrize("index", [99, -7])
+def test_a_face_indexing_no_vertex_is_refused(tmp_path, index):
+    # An ASCII PLY whose last face names a vertex the file does not have.
+    path = tmp_path / "oob.ply"
+    path.write_text("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                    "property float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n"
+                    "0 0 0\n0.05 0 0\n0 0.05 0\n0 0 0.05\n3 0 2 1\n3 0 1 3\n3 0 3 2\n" + f"3 1 2 {index}\n")
+    with pytest.raises(ValueError, match=f"oob.ply: object face 3 indexes vertex {index}, outside 0..3"):
+        objects.load(path)
+
+
 def test_unreadable_and_missing_files(tmp_path):
     bad = tmp_path / "junk.stl"
     bad.write_bytes(b"\x00\x01 not a mesh")

@@ -138,10 +138,16 @@ def _hand(args: argparse.Namespace) -> Hand:
     defaults = {k: p.default for k, p in inspect.signature(hugger.Hand).parameters.items()}
     given = [k for k in defaults if getattr(args, k, None) is not None]
     if getattr(args, "hand", None):
+        from . import hands
+
+        # A URDF or MJCF file may leave the links' radius to be given (its collisions are meshes).
+        extra = {"link_radius": args.link_radius} if "link_radius" in given and args.hand not in hands.PRESETS \
+            and os.path.splitext(args.hand)[1].lower() in (".urdf", ".xml", ".mjcf") else {}
+        given = [k for k in given if k not in extra]
         if given:
             options = ", ".join("--" + k.replace("_", "-") for k in given)
-            raise UsageError(f"--hand gives the whole hand; {options} cannot be combined with it")
-        from . import hands
+            raise UsageError(f"--hand gives the whole hand; {options} cannot be combined with it"
+                             + (" (a URDF or MJCF file takes --link-radius)" if "link_radius" in given else ""))
 
         fixed = {}
         for item in args.fixed_joint:
@@ -154,7 +160,7 @@ def _hand(args: argparse.Namespace) -> Hand:
                 raise UsageError(f"--fixed-joint must be NAME=RAD, got {item!r}")
             if sum(other.partition("=")[0] == name for other in args.fixed_joint) > 1:
                 raise UsageError(f"--fixed-joint holds {name!r} more than once")
-        return hands.load(args.hand, fixed_joints=fixed or None)
+        return hands.load(args.hand, fixed_joints=fixed or None, **extra)
     if getattr(args, "fixed_joint", None):
         raise UsageError("--fixed-joint needs --hand FILE")
     shape: dict[str, Any] = {k: getattr(args, k) if k in given else v for k, v in defaults.items()}

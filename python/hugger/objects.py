@@ -339,6 +339,8 @@ def _repair(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[
     repairs: list[str] = []
     if not np.all(np.isfinite(v)):
         return v, f, repairs  # Object says which vertex
+    if f.size and (f.min() < 0 or f.max() >= len(v)):
+        return v, f, repairs  # Object says which face (trimesh would fail on the index)
     mesh = trimesh.Trimesh(v, f, process=False)
     mesh.merge_vertices()
     v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces, dtype=np.int64)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, cast
 
@@ -164,6 +165,34 @@ def _exact(source: str, hand: Hand) -> Hand:
     return embedded if embedded.same_as(hand, 1e-9) else hand
 
 
+def _check_tree(source: str, links: list[str], joints: list[tuple[str, str, str]]) -> None:
+    """A URDF's links and joints (name, parent, child) form a tree: names are unique, every joint
+    joins two links of the file, no link is the child of two joints, and none lies on a cycle."""
+    for kind, names in (("links", links), ("joints", [name for name, _, _ in joints])):
+        seen: set[str] = set()
+        for name in names:
+            if name in seen:
+                raise ValueError(f"{source}: two {kind} are called {name!r}")
+            seen.add(name)
+    known = set(links)
+    parent_of: dict[str, str] = {}
+    for name, parent, child in joints:
+        for role, link in (("parent", parent), ("child", child)):
+            if link not in known:
+                raise ValueError(f"{source}: joint {name!r} names {role} link {link!r}, which the file does not have")
+        if child in parent_of:
+            raise ValueError(f"{source}: link {child!r} is the child of two joints ({parent_of[child]!r} and {name!r})")
+        parent_of[child] = name
+    parent_link = {child: parent for _, parent, child in joints}
+    for link in links:  # each link's parents lead to a root, or round a cycle
+        path, at = set(), link
+        while at in parent_link:
+            if at in path:
+                raise ValueError(f"{source}: the joints form a cycle through link {at!r}")
+            path.add(at)
+            at = parent_link[at]
+
+
 def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | None, palm_radius: float | None,
                       palm_thickness: float | None) -> Hand:
     if not chains:
@@ -223,6 +252,10 @@ def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | No
         limits.append(lim)
     radii = [r for c in chains for r in c.radii]
     if link_radius is None:
+        if not radii:  # meshes, boxes or nothing: no radius to read
+            warnings.warn(f"{source}: no collision cylinder or capsule on the finger links gives their radius; "
+                          f"link_radius = 0 (the links are lines): pass link_radius (hugger plan --link-radius)",
+                          stacklevel=4)
         link_radius = max(radii) if radii else 0.0
     kwargs = {}
     if palm_thickness is not None:
@@ -315,6 +348,7 @@ def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dic
             _within_limits(source, j.name, fixed[j.name], j.limit.lower, j.limit.upper,
                            "m" if j.type == "prismatic" else "rad")
     links = {lk.name: lk for lk in robot.links}
+    _check_tree(source, [lk.name for lk in robot.links], [(j.name, j.parent, j.child) for j in robot.joints])
     child_links = {j.child for j in robot.joints}
     roots = [lk.name for lk in robot.links if lk.name not in child_links]
     if palm_link is None and len(roots) != 1:
@@ -372,6 +406,9 @@ def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dic
             if j.type == "continuous" or lim is None or lim.lower is None or lim.upper is None:
                 c.limits.append((-math.inf, math.inf))
             else:
+                if not float(lim.lower) <= float(lim.upper):
+                    raise ValueError(f"{source}: joint {j.name!r} has limits lower = {lim.lower} > upper = "
+                                     f"{lim.upper} rad")
                 c.limits.append((float(lim.lower), float(lim.upper)))
             c.radii += [r for _, r, _ in cylinders(j.child, f)]
             # follow the finger: through fixed joints to its next revolute joint
