@@ -296,6 +296,20 @@ def test_bad_input(tmp_path, capsys):
         err = capsys.readouterr().err
         assert message in err and err.count("\n") == 1, err
         assert not (tmp_path / "r").exists()
+    # Something answers the address, but ray.init finds no cluster there: one line too.
+    import socket
+    import types
+
+    def no_cluster(**_kwargs):
+        raise ConnectionError("Failed to connect to Ray cluster at that address")
+
+    fake = types.SimpleNamespace(is_initialized=lambda: False, init=no_cluster)
+    with socket.create_server(("127.0.0.1", 0)) as server, pytest.MonkeyPatch.context() as mp:
+        mp.setattr(dataset, "_ray", lambda: fake)
+        address = f"127.0.0.1:{server.getsockname()[1]}"
+        assert main(["generate", "box", "--out", str(tmp_path / "r2"), "--backend", "ray", "--address", address]) == 2
+        err = capsys.readouterr().err
+        assert f"no Ray cluster answers at {address}: Failed to connect" in err and err.count("\n") == 1, err
     with pytest.raises(ValueError, match="twice"):
         dataset.generate(["box"], tmp_path, hands=["5x5", "5x5"])
     for kwargs, message in (({"objects": "box"}, "objects must be a list of names"),

@@ -410,14 +410,29 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
             tasks.append(task)
     _check_index(root, tasks)
     shard_dir = root / "shards"
-    shard_dir.mkdir(parents=True, exist_ok=True)
-    remove_temporaries(shard_dir)  # left by a killed run
     todo = [t for t in tasks if not _shard_done(shard_dir / t["file"], t["key"])]
-    say = log or (lambda s: None)
-    say(f"{len(tasks) - len(todo)} of {len(tasks)} shards already done; making {len(todo)}")
-    done = len(tasks) - len(todo)
-    if progress is not None:
-        progress(done, len(tasks))
+    # Ray first: a cluster that cannot be reached is refused before anything is written.
+    started_here = bool(todo) and backend == "ray" and not ray.is_initialized()
+    if started_here:
+        if address is None:
+            ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+        else:
+            try:
+                ray.init(address=address, log_to_driver=False)
+            except ConnectionError as exc:  # something answered the address check, but no Ray
+                raise ValueError(f"no Ray cluster answers at {address}: {exc}") from None
+    try:
+        shard_dir.mkdir(parents=True, exist_ok=True)
+        remove_temporaries(shard_dir)  # left by a killed run
+        say = log or (lambda s: None)
+        say(f"{len(tasks) - len(todo)} of {len(tasks)} shards already done; making {len(todo)}")
+        done = len(tasks) - len(todo)
+        if progress is not None:
+            progress(done, len(tasks))
+    except BaseException:
+        if started_here:  # (the loop below shuts it down once it runs)
+            ray.shutdown()
+        raise
 
     digests: dict[str, str] = {}  # of the shards written now (kept ones are hashed from disk)
 
@@ -451,12 +466,6 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
                         fut.cancel()
                     raise
     elif todo:
-        started_here = not ray.is_initialized()
-        if started_here:
-            if address is None:
-                ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
-            else:
-                ray.init(address=address, log_to_driver=False)
         try:
             remote = ray.remote(num_cpus=1, max_retries=2)(make_shard)
             waiting: dict[Any, dict[str, Any]] = {}
