@@ -45,6 +45,26 @@ def test_results_in_input_order_and_identical_to_sequential(cases, sequential, t
     assert len({len(t) for t in out}) > 1  # the cases really differ, so order matters
 
 
+@pytest.mark.parametrize("threads", [2, 3])
+def test_cases_sharing_a_noisy_skin_plan_as_in_one_thread(cases, threads):
+    # A SensorModel's noise is one stream: read by threads in turn, the plans would depend on
+    # which thread asked first. Cases sharing it are planned in input order, one after another.
+    def mixed():
+        noisy = hugger.skins.SensorModel(cases[0]["obj"], gap_noise=2e-6, seed=3)
+        other = hugger.skins.SensorModel(cases[2]["obj"], gap_noise=2e-6, seed=4)
+        skins = [noisy, other, None, noisy, other, noisy]
+        return [{**c, "obj": skin if skin is not None else c["obj"]} for c, skin in zip(cases, skins)]
+
+    reference = hugger.plan_many(mixed(), threads=1)
+    done = []
+    for _ in range(3):
+        out = hugger.plan_many(mixed(), threads=threads, progress=lambda d, t: done.append(d))
+        assert all(same(t, r) for t, r in zip(out, reference))
+    assert done == list(range(1, 7)) * 3
+    # the stream matters: the fourth case planned first, on a fresh skin, reads other noise
+    assert not same(reference[3], hugger.plan_many([mixed()[3]], threads=1)[0])
+
+
 def test_plans_pass_the_checker(cases, checker, tmp_path):
     for i, t in enumerate(hugger.plan_many(cases[:2], threads=2)):
         helpers.save_and_check(checker, t, tmp_path / f"plan{i}.npz", samples=30)

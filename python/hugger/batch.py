@@ -99,6 +99,30 @@ def _run(job: _Job) -> Trajectory:
     return Planner(job.hand, job.obj, job.target, job.palm_pose, **job.params).plan(job.timeout)
 
 
+def _run_all(jobs: list[_Job]) -> list[Trajectory | BaseException]:
+    """Plan ``jobs`` one after another; each outcome a trajectory or the case's exception."""
+    out: list[Trajectory | BaseException] = []
+    for job in jobs:
+        try:
+            out.append(_run(job))
+        except Exception as exc:  # reported per case
+            out.append(exc)
+    return out
+
+
+def _groups(jobs: list[_Job]) -> list[list[int]]:
+    """The cases, in groups planned one after another in one thread: the cases sharing a skin
+    object (a :class:`hugger.skins.Sensing`, which may keep state, as a SensorModel's noise does)
+    in input order, so that each reads the skin as a serial run would; every other case alone."""
+    from .skins import Sensing
+
+    groups: dict[Any, list[int]] = {}
+    for i, job in enumerate(jobs):
+        key = ("skin", id(job.obj)) if isinstance(job.obj, Sensing) else ("case", i)
+        groups.setdefault(key, []).append(i)
+    return list(groups.values())
+
+
 def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | None = None,
               progress: Callable[[int, int], Any] | None = None, timeout: float | None = None,
               errors: str = "raise", **params: Any) -> list[Trajectory] | list[Trajectory | CaseError]:
@@ -113,7 +137,9 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
 
     ``threads``: worker threads (default: the CPUs this process may use; 1 plans in the calling
     thread). The engine plans with the GIL released, so threads run in parallel; cases may share
-    a :class:`Hand` and an :class:`Object`.
+    a :class:`Hand` and an :class:`Object`. Cases that share one skin object (a
+    :class:`hugger.skins.Sensing`, which may keep state: a SensorModel's noise) are planned one
+    after another in input order, in one thread, so that the results are those of ``threads=1``.
 
     ``progress(done, total)`` is called in the calling thread after each case finishes.
 
@@ -156,17 +182,20 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
     else:
         from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 
-        with ThreadPoolExecutor(max_workers=min(int(threads), total), thread_name_prefix="hugger") as pool:
-            index_of: dict[Future[Any], int] = {pool.submit(_run, job): i for i, job in enumerate(jobs)}
-            pending = set(index_of)
+        groups = _groups(jobs)
+        with ThreadPoolExecutor(max_workers=min(int(threads), len(groups)), thread_name_prefix="hugger") as pool:
+            group_of: dict[Future[Any], list[int]] = {pool.submit(_run_all, [jobs[i] for i in g]): g for g in groups}
+            pending = set(group_of)
             done = 0
             try:
                 while pending:
                     finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                    for fut in sorted(finished, key=index_of.__getitem__):
+                    for fut in sorted(finished, key=lambda f: group_of[f][0]):
                         error = fut.exception()
-                        done += 1
-                        finish(index_of[fut], error if error is not None else fut.result(), done)
+                        outcomes = [error] * len(group_of[fut]) if error is not None else fut.result()
+                        for i, outcome in zip(group_of[fut], outcomes):
+                            done += 1
+                            finish(i, outcome, done)
             except BaseException:
                 for fut in pending:  # e.g. the progress callback raised: drop what has not started
                     fut.cancel()
