@@ -312,3 +312,11 @@ def test_compare_script_writes_a_table(tmp_path, capsys):
     text = out.read_text()
     assert "| sphere | hug | done |" in text and "| sphere | paper | done |" in text and "| sphere | baseline | done |" in text
     assert "sphere" in capsys.readouterr().out
+
+
+def test_a_direction_whose_simulation_resets_is_not_held(sphere_plan):
+    # A push of 10^12 N blows the accelerations up; MuJoCo then resets the state, with finite
+    # figures of an object at rest. Its warning counter says so: no direction holds.
+    report = physics.validate(sphere_plan, force=1e12)
+    assert not report["held"]
+    assert all(d["diverged"] and not d["held"] for d in report["directions"].values()), report["directions"]

@@ -111,3 +111,13 @@ def test_closed_loop_holds_in_the_six_direction_test(hand, name, offset_mm):
     r = mujoco_skin.simulate(hand, case.obj, case.target, case.palm_pose,
                              offset=offset_mm * 1e-3 * case.palm_pose[:3, 0])
     assert r.status == "done" and r.hold["held"], r.as_dict()
+
+
+def test_a_simulation_that_goes_unstable_is_no_hold(hand):
+    # A push of 10^12 N blows the accelerations up; MuJoCo then resets the state, where the object
+    # sits untouched in a grasp that looks held. The counter of that warning says it happened.
+    case = hugger.scenarios.default_case("sphere", hand)
+    r = mujoco_skin.simulate(hand, case.obj, case.target, case.palm_pose, push=1e12)
+    assert r.hold == {"held": False, "diverged": True}
+    assert r.as_dict()["held"] is False
+

@@ -695,7 +695,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             d = r.as_dict()
             print(f"{mode:6s} status {d['status']:14s} configurations {d['configurations']:5d}  object moved "
                   f"{1000 * d['object_moved_m']:6.2f} mm  links in contact {d['links_in_contact']:2d}  "
-                  f"{'held' if d['held'] else 'NOT held'} in the six-direction test")
+                  + ("the simulation went unstable (MuJoCo reset it): NOT held" if d["hold"].get("diverged") else
+                     f"{'held' if d['held'] else 'NOT held'} in the six-direction test"))
     return EXIT_OK
 
 

@@ -259,7 +259,12 @@ def _finish(sim: Simulation, traj: Any, mode: str, start_centre: np.ndarray) -> 
     T = sim.object_pose()
     moved = dataclasses.replace(traj, object_vertices=sim.obj.vertices @ T[:3, :3].T + T[:3, 3])
     gaps = sim.link_gaps()
-    hold = _ph.validate(moved) if len(traj) else {"held": False}
+    if sim.data.warning[sim.mujoco.mjtWarning.mjWARN_BADQACC].number:
+        # MuJoCo reset the simulation when its accelerations blew up: where it left the object
+        # says nothing of the grasp
+        hold: dict[str, Any] = {"held": False, "diverged": True}
+    else:
+        hold = _ph.validate(moved) if len(traj) else {"held": False}
     return LoopResult(mode=mode, status=traj.status, configurations=len(traj),
                       object_moved_m=float(np.linalg.norm(sim.data.xpos[sim.body] - start_centre)),
                       links_in_contact=int(np.sum(gaps <= CONTACT_DISTANCE)), hold=hold, trajectory=moved)
