@@ -306,3 +306,14 @@ def test_view_command_serves_until_interrupted(plans, monkeypatch, capsys):
     code = cli.main(["view", str(plans[0]), "--no-browser", "--port", "0"])
     out, _ = capsys.readouterr()
     assert code == 0 and "serving 1 plan at http://localhost:" in out and seen == [True]
+
+
+@pytest.mark.parametrize("host, message", [("8.8.8.8", "Cannot assign requested address"),
+                                           ("no.such.host.invalid", "cannot serve on host 'no.such.host.invalid'"),
+                                           ("", "host must be")])
+def test_a_host_no_server_can_listen_on_is_refused_at_once(sphere_plan, host, message):
+    # viser would try port after port there, for ever
+    t0 = time.perf_counter()
+    with pytest.raises(ValueError, match=message):
+        viewer.Viewer(sphere_plan, host=host)
+    assert time.perf_counter() - t0 < 30

@@ -221,6 +221,21 @@ def check_fps(fps: Any) -> float:
     return x
 
 
+def _check_host(host: Any) -> None:
+    """``host`` names an address of this machine: a server can listen there. (viser tries port
+    after port on an address it cannot bind, for ever.)"""
+    import socket
+
+    if not isinstance(host, str) or not host:
+        raise ValueError(f"host must be a host name or an address of this machine, got {host!r}")
+    try:
+        family, kind, proto, _, address = socket.getaddrinfo(host, 0, type=socket.SOCK_STREAM)[0]
+        with socket.socket(family, kind, proto) as probe:
+            probe.bind(address)
+    except (OSError, UnicodeError) as exc:
+        raise ValueError(f"cannot serve on host {host!r}: {getattr(exc, 'strerror', None) or exc}") from None
+
+
 class Viewer:
     """A viser server showing one or more plans (see the module's docstring). ``configuration``
     is the index shown (common to all plans; each plan shows min(k, its K-1)). Stop it with
@@ -233,6 +248,7 @@ class Viewer:
         fps = check_fps(fps)
         if labels is not None and len(labels) != len(plans):
             raise ValueError(f"labels must name each of the {len(plans)} plans, got {len(labels)}")
+        _check_host(host)
         viser = _viser()
         self.plans = plans
         self.fps = float(fps)
