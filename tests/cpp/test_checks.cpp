@@ -113,9 +113,15 @@ TEST(Checks, HandLayoutLimitsMustBeNumbers) {
 TEST(Checks, WhatCrossesTheSensingInterface) {
   EXPECT_EQ(message_of([] { check_capsule_query(Vec3::Zero(), Vec3::UnitX(), 0.0, kInf); }), "");
   EXPECT_EQ(message_of([] { check_capsule_query(Vec3(kNaN, 0, 0), Vec3::UnitX(), 0.0, kInf); }),
-            "a and b must be finite");
+            "a and b must be finite, each coordinate within 1e+06 m of the origin");
+  // Far out, squares overflow and the tolerances fall below the spacing of doubles.
+  EXPECT_EQ(message_of([] { check_capsule_query(Vec3(1e154, 0, 0), Vec3(-1e154, 0, 0), 0.0, kInf); }),
+            "a and b must be finite, each coordinate within 1e+06 m of the origin");
+  EXPECT_EQ(message_of([] { check_capsule_query(Vec3::Zero(), Vec3(0, 0, 1e6), 1e6, kInf); }), "");
+  EXPECT_EQ(message_of([] { check_capsule_query(Vec3::Zero(), Vec3::UnitX(), 2e6, kInf); }),
+            "radius must be a number from 0 to 1e+06 (m), got 2e+06");
   EXPECT_EQ(message_of([] { check_palm_query(0.03, -0.01, 0.0); }),
-            "thickness must be a finite number >= 0 (m), got -0.01");
+            "thickness must be a number from 0 to 1e+06 (m), got -0.01");
   EXPECT_EQ(message_of([] { check_palm_query(0.03, 0.01, kNaN); }), "cap must be a number (m) or inf, got nan");
   EXPECT_EQ(message_of([] { check_gap(kNaN, "Sensing.palm returned"); }),
             "Sensing.palm returned a gap of nan; expected a number (m) or +-inf");

@@ -11,7 +11,8 @@ namespace hugger {
 namespace {
 
 void check_size(double x, const char* name) {
-  HUGGER_CHECK_ARGUMENT(std::isfinite(x) && x >= 0.0, name << " must be a finite number >= 0 (m), got " << x);
+  HUGGER_CHECK_ARGUMENT(std::isfinite(x) && x >= 0.0 && x <= kMaxCoordinate,
+                        name << " must be a number from 0 to " << kMaxCoordinate << " (m), got " << x);
 }
 
 void check_cap(double cap) { HUGGER_CHECK_ARGUMENT(!std::isnan(cap), "cap must be a number (m) or inf, got nan"); }
@@ -19,7 +20,9 @@ void check_cap(double cap) { HUGGER_CHECK_ARGUMENT(!std::isnan(cap), "cap must b
 }  // namespace
 
 void check_capsule_query(const Vec3& a, const Vec3& b, double radius, double cap) {
-  HUGGER_CHECK_ARGUMENT(a.allFinite() && b.allFinite(), "a and b must be finite");
+  HUGGER_CHECK_ARGUMENT(a.allFinite() && b.allFinite() && a.cwiseAbs().maxCoeff() <= kMaxCoordinate &&
+                            b.cwiseAbs().maxCoeff() <= kMaxCoordinate,
+                        "a and b must be finite, each coordinate within " << kMaxCoordinate << " m of the origin");
   check_size(radius, "radius");
   check_cap(cap);
 }
