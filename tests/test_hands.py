@@ -434,3 +434,9 @@ def test_a_urdf_without_finger_cylinders_warns_and_takes_a_given_radius(tmp_path
     r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--hand", "barrett_bh8", "--link-radius",
                         "0.005", "--out", str(tmp_path / "y.npz")], capture_output=True, text=True)
     assert r.returncode == 2 and "cannot be combined" in r.stderr
+
+
+@pytest.mark.parametrize("export", [hands.to_urdf, hands.to_mjcf])
+def test_the_exporters_take_a_hand_only(export):
+    with pytest.raises(ValueError, match="hand must be a hugger.Hand, got str"):
+        export("x")

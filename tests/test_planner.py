@@ -587,3 +587,17 @@ def test_repeated_plans_do_not_leak_memory():
     gc.collect()
     grown = _rss_bytes() - before
     assert grown < 24 * 2**20, f"resident memory grew by {grown / 2**20:.1f} MiB over 25 plans"
+
+
+def test_none_is_the_default_of_every_parameter(hand, sphere):
+    # as plan_many and check_params take it: rules=None is "hug", as step=None is the default step
+    pose = hugger.look_at([0, 0, 0.2], [0, 0, 0])
+    ref = hugger.Planner(hand, sphere, [0, 0, 0], pose).plan()
+    given = dict(step=None, epsilon=None, contact_tolerance=None, max_iterations=None, rules=None, skin=None)
+    assert helpers.same(hugger.Planner(hand, sphere, [0, 0, 0], pose, **given).plan(), ref)
+    assert helpers.same(hugger.plan_many([(hand, sphere, [0, 0, 0], pose)], threads=1, rules=None)[0], ref)
+
+
+def test_look_at_refuses_a_non_finite_up():
+    with pytest.raises(ValueError, match="up must be a finite 3-vector"):
+        hugger.look_at([0, 0, 0.2], [0, 0, 0], up=[np.nan, 0, 0])

@@ -456,3 +456,12 @@ def test_sensor_model_plans_are_collision_free(hand, checker, tmp_path, kw):
     traj = hugger.Planner(hand, skins.SensorModel(obj, seed=3, **kw), [0, 0, 0], start(), record_object=obj).plan()
     assert traj.status in ("done", "max_iterations")
     save_and_check(checker, traj, tmp_path / "s.npz", every=2, motion=True, swept_every=2)
+
+
+def test_a_touch_takes_no_nan_gap_by_its_setter_either():
+    t = hugger.Touch(0.1)
+    with pytest.raises(ValueError, match="Touch was given a gap of nan"):
+        t.gap = float("nan")
+    assert t.gap == 0.1
+    t.gap = -np.inf  # inside, depth not measured: an answer
+    assert t.gap == -np.inf

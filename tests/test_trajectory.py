@@ -277,3 +277,12 @@ def test_pickles_after_object_was_built(tmp_path):
     back = pickle.loads(pickle.dumps(traj))
     assert same(back, traj, arrays=FILE_ARRAYS) and back._object is None and traj._object is not None
     np.testing.assert_array_equal(back.link_gaps(), gaps)
+
+
+def test_configuration_index_is_checked_as_analysis_checks_it(sphere_plan):
+    n = len(sphere_plan)
+    assert sphere_plan.configuration(-1).iteration == n - 1
+    with pytest.raises(IndexError, match=f"configuration k={n} is out of range for a trajectory of {n} configurations"):
+        sphere_plan.configuration(n)
+    with pytest.raises(ValueError, match="k must be a whole configuration index"):
+        sphere_plan.configuration(1.5)

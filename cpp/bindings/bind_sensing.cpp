@@ -91,7 +91,9 @@ void bind_sensing(py::module_& m) {
            }),
            py::arg("gap"), py::arg("on_hand") = Vec3::Zero().eval(), py::arg("on_object") = Vec3::Zero().eval(),
            py::arg("normal") = Vec3::UnitZ().eval())
-      .def_readwrite("gap", &Touch::gap)
+      .def_property(
+          "gap", [](const Touch& t) { return t.gap; },
+          [](Touch& t, double gap) { t.gap = check_gap(gap, "Touch was given"); })
       .def_property(
           "on_hand", [](const Touch& t) { return t.on_hand; },
           [](Touch& t, const py::object& v) { t.on_hand = vec3_of(v, "on_hand"); })

@@ -139,15 +139,11 @@ class Contacts:
 
 
 def _trajectory_index(traj: Any, k: int) -> int:
-    from .trajectory import Trajectory
+    from .trajectory import Trajectory, configuration_index
 
     if not isinstance(traj, Trajectory):
         raise ValueError(f"traj must be a hugger.Trajectory, got {type(traj).__name__}")
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
-        raise ValueError(f"k must be a whole configuration index, got {k!r}")
-    if not -len(traj) <= k < len(traj):
-        raise IndexError(f"configuration k={k} is out of range for a trajectory of {len(traj)} configurations")
-    return int(range(len(traj))[k])
+    return configuration_index(len(traj), k)
 
 
 def _link_spacing(radius: float, length: float) -> float:

@@ -21,6 +21,8 @@ def look_at(position: Any, target: Any, up: Any = None) -> np.ndarray:
         raise ValueError("position and target must be finite and distinct")
     z /= length
     u = np.array([0.0, 0.0, 1.0]) if up is None else np.asarray(up, dtype=np.float64).reshape(3)
+    if not np.all(np.isfinite(u)):
+        raise ValueError(f"up must be a finite 3-vector, got {u.tolist()}")
     if float(_stable.norm(np.cross(u, z))) < 1e-6:
         u = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     x = np.cross(u, z)
@@ -89,7 +91,8 @@ class Planner:
     ``palm_pose`` (4, 4) is the initial palm pose T_WP (fingers extended). Defaults:
     ``step`` = shortest link / 20, ``epsilon`` = step / 10, ``contact_tolerance`` = 1e-4 m,
     ``max_iterations`` = 20000 Phase 2 iterations, ``rules`` = ``"hug"`` (``"paper"``: the 1994
-    method with the documented decisions only; see docs/algorithm.md), ``skin`` = ``"section"``
+    method with the documented decisions only; see docs/algorithm.md; None, as for the others,
+    is the default), ``skin`` = ``"section"``
     (how an Object is sensed: exact 2D geometry in each finger plane; see docs/performance.md)
     or ``"mesh"`` (exact 3D queries, the reference, slower). Raises ``ValueError`` for bad input, T
     outside O, or a hand that touches O at the start or while turning in Phase 1.
@@ -101,7 +104,7 @@ class Planner:
 
     def __init__(self, hand: Hand, obj: Any, target: Any, palm_pose: Any, step: float | None = None,
                  epsilon: float | None = None, contact_tolerance: float | None = None,
-                 max_iterations: int | None = None, rules: str = "hug", skin: str | None = None,
+                 max_iterations: int | None = None, rules: str | None = "hug", skin: str | None = None,
                  record_object: Object | None = None) -> None:
         if not isinstance(hand, Hand):
             raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
@@ -121,7 +124,7 @@ class Planner:
         # The engine checks the parameters (the rules too), the skin's name, T and the pose
         # (ValueError saying what is wrong), then plans Phase 1.
         params = _core.PlannerParams(step=step, epsilon=epsilon, contact_tolerance=contact_tolerance,
-                                     max_iterations=max_iterations, rules=rules)
+                                     max_iterations=max_iterations, rules="hug" if rules is None else rules)
         from .skins.sensor import SensorModel
 
         if isinstance(sensing, SensorModel):  # (the engine would find every part touching at the start)

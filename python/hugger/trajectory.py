@@ -44,6 +44,16 @@ _STRINGS = ("hand_json", "params_json", "status")
 EMPTY = "the trajectory holds no configuration (a plan starts with C_init)"
 
 
+def configuration_index(count: int, k: Any) -> int:
+    """Index ``k`` (negative counts from the end) of a trajectory of ``count`` configurations:
+    ``ValueError`` for what is no whole number, ``IndexError`` naming the range otherwise."""
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
+        raise ValueError(f"k must be a whole configuration index, got {k!r}")
+    if not -count <= k < count:
+        raise IndexError(f"configuration k={k} is out of range for a trajectory of {count} configurations")
+    return int(range(count)[k])
+
+
 @dataclass(frozen=True)
 class Trajectory:
     """A plan: K configurations of a hand with M fingers of N links, and what it grasped.
@@ -260,7 +270,7 @@ class Trajectory:
 
     def configuration(self, k: int) -> Configuration:
         """Configuration k (negative counts from the end)."""
-        k = range(len(self))[k]
+        k = configuration_index(len(self), k)
         return Configuration(palm_pose=self.palm_pose[k], joints=self.joints[k], angles=self.angles[k],
                              tip_state=self.tip_state[k], phase=int(self.phase[k]), iteration=k)
 

@@ -463,6 +463,9 @@ def _finger_geometry(hand: Hand) -> list[tuple[np.ndarray, np.ndarray]]:
 
 
 def _general(hand: Hand) -> Hand:
+    """``hand`` in the general layout (the exporters' input), checked to be a Hand."""
+    if not isinstance(hand, Hand):
+        raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
     if hand.general:
         return hand
     phi = hand.finger_angles
