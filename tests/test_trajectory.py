@@ -286,3 +286,12 @@ def test_configuration_index_is_checked_as_analysis_checks_it(sphere_plan):
         sphere_plan.configuration(n)
     with pytest.raises(ValueError, match="k must be a whole configuration index"):
         sphere_plan.configuration(1.5)
+
+
+def test_a_save_that_fails_names_the_file_asked_for(sphere_plan, tmp_path):
+    # not the temporary file the write goes through
+    (tmp_path / "plan.npz").mkdir()
+    with pytest.raises(OSError) as err:
+        sphere_plan.save(tmp_path / "plan.npz")
+    assert err.value.filename == str(tmp_path / "plan.npz") and ".part" not in str(err.value)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plan.npz"]  # nothing left beside it

@@ -24,9 +24,12 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     try:
         yield tmp_path
         os.replace(tmp_path, final)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp_path.unlink()
+        if isinstance(exc, OSError) and exc.filename == str(tmp_path) and exc.errno is not None:
+            # the same error, naming the file asked for rather than the temporary one
+            raise type(exc)(exc.errno, exc.strerror, str(final)) from None
         raise
 
 

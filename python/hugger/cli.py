@@ -188,10 +188,17 @@ def _load(path: str) -> Trajectory:
 # --- output paths: an existing directory, the right suffix, written atomically ------------------
 
 def _parent_exists(out: Path, option: str = "--out") -> None:
-    """A UsageError (exit 2) unless the directory ``out`` goes into exists: nothing is created
-    silently."""
+    """A UsageError (exit 2) unless the directory ``out`` goes into exists (nothing is created
+    silently) and takes a new file: said before the work, not after it."""
     if not out.parent.is_dir():
         raise UsageError(f"{option}: no such directory {str(out.parent)!r} (create it first)")
+    import tempfile
+
+    try:
+        with tempfile.TemporaryFile(dir=out.parent):
+            pass
+    except OSError as exc:
+        raise UsageError(f"{option}: cannot write in {str(out.parent)!r}: {exc.strerror or exc}") from None
 
 
 def _out_path(value: str, suffixes: Sequence[str], option: str = "--out") -> Path:
