@@ -198,6 +198,7 @@ def test_mesh_files_are_read_once_per_process(tmp_path, monkeypatch):
     (["hands", "--bogus"], "see 'hugger hands --help'"),
     (["generate", "sphere", "--out", "no/such/dir/gen"], "no such directory 'no/such/dir'"),
     (["info", "."], ". is a folder, not a trajectory file"),
+    (["info", os.devnull], f"{os.devnull} is not a regular file, not a trajectory file"),
     *([(["plan", "sphere", "--out", "/proc/x.npz"], "--out: cannot write in '/proc'")]  # before planning
       if os.path.isdir("/proc/self") else []),
 ])

@@ -217,9 +217,22 @@ def test_default_case_options():
         scenarios.default_case("torus", hand, target=[0, 0, 0])
     with pytest.raises(ValueError, match="non-zero"):
         scenarios.default_case("sphere", hand, normal=[0, 0, 0])
+    # a normal whose square over- or underflows is a direction all the same (no numpy warning:
+    # pytest makes warnings errors)
+    for scale in (1e300, 1e-320):
+        case = scenarios.default_case("sphere", hand, normal=[scale, scale, 0.0])
+        assert np.allclose(case.palm_pose[:3, 2], [2 ** -0.5, 2 ** -0.5, 0])
 
 
 def test_interior_target_of_a_ring_is_in_the_tube():
     t = scenarios.interior_target(objects.torus())
     assert objects.torus().inside(t[None])[0]
     assert np.hypot(t[0], t[1]) == pytest.approx(0.04, abs=0.006)
+
+
+@pytest.mark.parametrize("scale", [1e7, 1e300])
+def test_a_mesh_scaled_beyond_the_coordinate_bound_is_refused_by_its_vertex(tmp_path, scale):
+    path = tmp_path / "ico.stl"
+    trimesh.creation.icosphere().export(path)
+    with pytest.raises(ValueError, match="ico.stl: object vertex .* lies beyond 1e\\+06 m"):
+        objects.load(path, scale=scale)

@@ -180,8 +180,10 @@ def _load(path: str) -> Trajectory:
 
     if os.path.isdir(path):
         raise UsageError(f"{path} is a folder, not a trajectory file (.npz)")
-    if not os.path.isfile(path):
+    if not os.path.exists(path):
         raise UsageError(f"no such trajectory file: {path}")
+    if not os.path.isfile(path):
+        raise UsageError(f"{path} is not a regular file, not a trajectory file (.npz)")
     return hugger.Trajectory.load(path)
 
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from . import _stable
 from ._checks import positive, whole
-from .world import Object
+from .world import MAX_COORDINATE, Object
 
 
 #: The most subdivisions of the icosphere the generators take: 20 * 4**8 = 1,310,720 triangles.
@@ -337,8 +337,8 @@ def _repair(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[
     import trimesh
 
     repairs: list[str] = []
-    if not np.all(np.isfinite(v)):
-        return v, f, repairs  # Object says which vertex
+    if not np.all(np.isfinite(v)) or (v.size and np.abs(v).max() > MAX_COORDINATE):
+        return v, f, repairs  # Object says which vertex (trimesh's merge would lose them)
     if f.size and (f.min() < 0 or f.max() >= len(v)):
         return v, f, repairs  # Object says which face (trimesh would fail on the index)
     mesh = trimesh.Trimesh(v, f, process=False)

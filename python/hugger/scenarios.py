@@ -210,7 +210,11 @@ def _finite(name: str, value: Any) -> np.ndarray:
 
 def _unit(name: str, value: Any) -> np.ndarray:
     a = _finite(name, value)
-    n = float(_stable.norm(a))
-    if n == 0.0:
+    if not np.any(a):
         raise ValueError(f"{name} must be a non-zero vector")
+    with np.errstate(over="ignore", under="ignore"):
+        n = float(_stable.norm(a))
+    if not 1e-150 < n < 1e150:  # its square over- or underflowed: scaled first (others keep their bits)
+        a = a / np.abs(a).max()
+        n = float(_stable.norm(a))
     return a / n
