@@ -28,7 +28,8 @@ def test_rules_parameter():
     pose = hugger.scenarios.start_pose(obj, hand, np.zeros(3))
     assert hugger.Planner(hand, obj, np.zeros(3), pose).params["rules"] == "hug"
     assert hugger.Planner(hand, obj, np.zeros(3), pose, rules="paper").params["rules"] == "paper"
-    for bad in ("Paper", "", None, 1):
+    assert hugger.Planner(hand, obj, np.zeros(3), pose, rules=None).params["rules"] == "hug"  # None: the default
+    for bad in ("Paper", "", 1):
         with pytest.raises(ValueError, match="rules must be one of"):
             hugger.Planner(hand, obj, np.zeros(3), pose, rules=bad)
     traj = hugger.Planner(hand, obj, np.zeros(3), pose, rules="paper").plan()
