@@ -152,6 +152,36 @@ def test_workers_end_when_their_run_is_killed_outright(tmp_path):
             os.killpg(proc.pid, signal.SIGKILL)
 
 
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads the workers from Linux's /proc")
+def test_sigint_to_the_run_alone_stops_it_and_its_workers_at_once(tmp_path):
+    # A scheduler or `kill -INT` signals the run, not its workers: they are stopped, not waited
+    # for (each of these shards takes tens of seconds).
+    cmd = [sys.executable, "-m", "hugger", "generate", "curvy", "apple", "--approaches", "26", "--validate",
+           "--out", str(tmp_path / "ds"), "--workers", "2"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+                            preexec_fn=_child_setup)
+    try:
+        deadline = time.monotonic() + 120
+        workers: set[int] = set()
+        while time.monotonic() < deadline and proc.poll() is None and len(workers) < 2:
+            workers = {p for p in _children(proc.pid) if "spawn_main" in _proc(p, "cmdline")}
+            time.sleep(0.05)
+        assert len(workers) == 2, "the run ended before its workers started"
+        time.sleep(1.0)  # into the shards' work
+        t0 = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=60) == 130
+        assert time.monotonic() - t0 < 10, "the run waited for its workers' shards"
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and any(_running(p) for p in workers):
+            time.sleep(0.05)
+        assert not [p for p in workers if _running(p)]
+        assert not (tmp_path / "ds" / "index.json").exists()
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+
+
 def test_other_settings_in_the_same_folder_are_refused(reference, tmp_path):
     import shutil
 
@@ -385,3 +415,58 @@ def test_a_temporary_left_by_a_killed_writer_is_removed_on_resume(reference, tmp
     assert main(["generate", *OBJECTS, "--approaches", "3", "--out", str(out), "--workers", "1"]) == 0
     assert not left.exists()
     assert shard_bytes(out) == shard_bytes(reference)
+
+
+def test_settings_no_hand_can_plan_with_and_a_hand_given_twice_are_refused_before_any_shard(tmp_path, capsys):
+    out = tmp_path / "ds"
+    # the 5x5 hand takes a 15 mm step, the 4x3 one of 1 cm links does not: nothing is made
+    assert main(["generate", "sphere", "box", "--hands", "5x5", "4x3:link_length=0.01", "--step", "0.015",
+                 "--approaches", "3", "--workers", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "hand '4x3_link_length0.01': step (0.015 m) must not exceed the shortest link (0.01 m)" in err
+    assert err.count("\n") == 1 and not out.exists()
+    assert main(["generate", "sphere", "--epsilon", "1", "--approaches", "3", "--out", str(out)]) == 2
+    assert "epsilon (1 m) must not exceed step" in capsys.readouterr().err and not out.exists()
+    # one hand under two specs
+    assert main(["generate", "sphere", "--hands", "5x5", "5x5:link_length=0.02", "--approaches", "2",
+                 "--out", str(out)]) == 2
+    assert "the hands '5x5' and '5x5_link_length0.02' are the same hand" in capsys.readouterr().err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"scale": None}, "scale must be a number"), ({"scale": "a"}, "scale must be a number"),
+    ({"objects": [None]}, "each object must be a built-in name or a mesh file's path"),
+    ({"objects": [3]}, "each object must be"), ({"out": None}, "out must be a folder's path"),
+    ({"params": [1]}, "params must be a mapping"), ({"command": "hugger generate"}, "command must be a list of strings"),
+])
+def test_bad_python_arguments_are_value_errors(tmp_path, kwargs, message):
+    args = {"objects": ["sphere"], "out": tmp_path / "ds", "approaches": 2, **kwargs}
+    with pytest.raises(ValueError, match=message):
+        dataset.generate(**args)
+    assert not (tmp_path / "ds").exists()
+
+
+def test_a_shard_records_its_rule_set(tmp_path):
+    out = tmp_path / "ds"
+    dataset.generate(["sphere"], out, approaches=2, rules="paper", workers=1)
+    ds = hugger.Dataset(out)
+    assert json.loads(str(ds.shard(0)["params_json"]))["rules"] == "paper"
+    assert ds.trajectory(0).params["rules"] == "paper"
+
+
+def test_a_dataset_of_a_relative_mesh_path_reads_from_any_folder_and_a_missing_shard_is_named(tmp_path, monkeypatch):
+    import trimesh
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "meshes").mkdir()
+    trimesh.creation.icosphere(subdivisions=2, radius=0.04).export(tmp_path / "meshes" / "ball.stl")
+    dataset.generate(["meshes/ball.stl"], "ds", approaches=2, workers=1)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    ds = hugger.Dataset(tmp_path / "ds")
+    assert ds.trajectory(0).status == ds[0].status
+    (tmp_path / "ds" / "shards" / "ball__5x5.npz").unlink()
+    with pytest.raises(ValueError, match="ball__5x5.npz is missing; 'hugger generate' with the command in index.json"):
+        hugger.Dataset(tmp_path / "ds")

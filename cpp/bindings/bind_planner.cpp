@@ -274,6 +274,10 @@ void bind_planner(py::module_& m) {
                              "The parameters in force, defaults resolved")
       .def_property_readonly("stats", [](PyPlanner& p) { return p.planner->stats(); }, "The plan's counters");
 
+  m.def("resolve_params", [](const HandModel& hand, const PlannerParams& params) { return resolve_params(hand, params); },
+        py::arg("hand"), py::arg("params"),
+        "The parameters a Planner of ``hand`` plans with, defaults resolved; ValueError for a step longer "
+        "than the hand's shortest link, a contact_tolerance not below the step, an epsilon above it.");
   m.def("check_timeout", [](const py::object& seconds) { return check_timeout(real_number(seconds, "timeout")); },
         py::arg("seconds"), "``seconds`` as a float: raise ValueError unless it is a positive finite number.");
 }

@@ -9,7 +9,7 @@ import numpy.typing
 import typing
 __all__: list[str] = ['Configuration', 'HandModel', 'History', 'Object', 'Planner', 'PlannerParams', 'PlannerStats',
                       'QualityResult', 'Sensing', 'SimulatedWorld', 'Touch', 'check_pose', 'check_timeout',
-                      'grasp_quality']
+                      'grasp_quality', 'resolve_params']
 class HandModel:
     """
     Immutable hand: M fingers of N links on a round palm (metres).
@@ -439,6 +439,10 @@ def check_pose(pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], na
 def check_timeout(seconds: typing.Any) -> float:
     """
     ``seconds`` as a float: raise ValueError unless it is a positive finite number.
+    """
+def resolve_params(hand: HandModel, params: PlannerParams) -> PlannerParams:
+    """
+    The parameters a Planner of ``hand`` plans with, defaults resolved; ValueError for a step longer than the hand's shortest link, a contact_tolerance not below the step, an epsilon above it.
     """
 
 

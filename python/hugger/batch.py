@@ -88,7 +88,7 @@ def _job(index: int, case: Any, hand: Hand | None, params: dict[str, Any], timeo
     if obj is None or target is None or pose is None:
         raise ValueError(f"case {index}: obj, target and palm_pose are all required")
     try:  # as the planner would refuse them, before anything is planned
-        check_params(own, "parameters")
+        check_params({**params, **own}, "parameters", hand=c_hand if isinstance(c_hand, Hand) else None)
         _core.check_pose(np.asarray(pose, dtype=np.float64))
     except (TypeError, ValueError) as exc:
         raise ValueError(f"case {index}: {exc}") from None

@@ -25,7 +25,7 @@ import zipfile
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Mapping, Sequence
 
 import numpy as np
 
@@ -164,7 +164,10 @@ def make_shard(task: dict[str, Any]) -> bytes:
     a: dict[str, Any] = {
         "format_version": np.int64(SHARD_FORMAT), "task_sha256": np.str_(_task_key(task)),
         "object_name": np.str_(ob["name"]), "object_sha256": np.str_(ob["sha256"]),
-        "hand_json": np.str_(hand.to_json()), "params_json": np.str_(json.dumps(task["params"], sort_keys=True)),
+        # the rule set is the task's own (its key keeps None among the parameters): recorded here too,
+        # so that a shard read on its own says how it was planned
+        "hand_json": np.str_(hand.to_json()),
+        "params_json": np.str_(json.dumps({**task["params"], "rules": task["rules"]}, sort_keys=True)),
         "target": np.asarray(case.target, dtype=np.float64), "best": np.int64(result.best),
         "direction": np.stack([c.direction for c in result.candidates]).astype(np.float64),
         "status": np.array([c.status for c in result.candidates], dtype=np.str_),
@@ -225,6 +228,8 @@ def _open_shard(path: Path) -> Iterator[Any]:
         return ValueError(f"{path} is not a whole shard ({why}); 'hugger generate' with the command in "
                           f"index.json makes it again")
 
+    if not path.is_file():
+        raise ValueError(f"{path} is missing; 'hugger generate' with the command in index.json makes it again")
     with open(path, "rb") as fh:
         try:
             z = np.load(fh, allow_pickle=False)
@@ -362,6 +367,16 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         raise ValueError("give at least one object")
     if not hands:
         raise ValueError("give at least one hand")
+    for o in objects:
+        if not isinstance(o, (str, os.PathLike)):
+            raise ValueError(f"each object must be a built-in name or a mesh file's path, got {o!r}")
+    if not isinstance(out, (str, os.PathLike)):
+        raise ValueError(f"out must be a folder's path, got {out!r}")
+    scale = _checks.positive("scale", scale)
+    if params is not None and not isinstance(params, Mapping):
+        raise ValueError(f"params must be a mapping of planner parameters, got {type(params).__name__}")
+    if command is not None and (isinstance(command, (str, bytes)) or not all(isinstance(c, str) for c in command)):
+        raise ValueError(f"command must be a list of strings (the command line's words), got {command!r}")
     validate = _checks.flag("validate", validate)
     force = _checks.flag("force", force)
     _checks.callback("log", log, "log(line)")
@@ -401,6 +416,15 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     from .hand import Hand
 
     hand_entries = [{"label": label, "kwargs": kwargs, "json": Hand(**kwargs).to_json()} for label, kwargs in hand_list]
+    for label, kwargs in hand_list:  # the parameters against each hand, before any shard is made
+        try:
+            check_params(params, hand=Hand(**kwargs))
+        except ValueError as exc:
+            raise ValueError(f"hand {label!r}: {exc}") from None
+    for i, entry in enumerate(hand_entries):  # the same hand under another spec (5x5, 5x5:link_length=0.02)
+        same = next((e["label"] for e in hand_entries[:i] if e["json"] == entry["json"]), None)
+        if same is not None:
+            raise ValueError(f"the hands {same!r} and {entry['label']!r} are the same hand")
     for ob, safe_name in zip(obj_list, names):
         for entry in hand_entries:
             task: dict[str, Any] = {"format": SHARD_FORMAT, "object": ob, "hand": entry, "approaches": int(approaches),
@@ -452,7 +476,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         else:
             from concurrent.futures import FIRST_COMPLETED, wait
 
-            from ._pool import process_pool
+            from ._pool import process_pool, stop_pool
 
             with process_pool(workers, len(todo)) as pool:
                 pending = {pool.submit(make_shard, t): t for t in todo}
@@ -462,8 +486,13 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
                         for fut in sorted(ready, key=lambda f: pending[f]["file"]):
                             finished(pending.pop(fut), fut.result())
                 except BaseException:
-                    for fut in pending:
-                        fut.cancel()
+                    # Interrupted (Ctrl-C, or SIGINT to this process alone): the shards made
+                    # meanwhile are kept, the others stopped at once rather than waited for.
+                    with contextlib.suppress(Exception):
+                        for fut in sorted(pending, key=lambda f: pending[f]["file"]):
+                            if fut.done() and not fut.cancelled() and fut.exception() is None:
+                                finished(pending[fut], fut.result())
+                    stop_pool(pool)
                     raise
     elif todo:
         try:
@@ -485,7 +514,9 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         "command": list(command) if command is not None else None,
         "parameters": {"approaches": int(approaches), "validate": bool(validate), "rules": rules, "scale": float(scale),
                        "planner": params},
-        "objects": obj_list,
+        # a mesh file's absolute path beside the path as given (which the shards' keys hold): the
+        # dataset is then read from any folder
+        "objects": [o if o["builtin"] else {**o, "abspath": os.path.abspath(o["path"])} for o in obj_list],
         "hands": hand_entries,
         "shards": [{"file": f"shards/{t['file']}", "object": t["object"]["name"], "hand": t["hand"]["label"],
                     "task_sha256": t["key"],
@@ -600,9 +631,12 @@ class Dataset:
         if entry is None:
             raise ValueError(f"no object {name!r} in this dataset")
         if not entry["builtin"]:
-            path = entry["path"]
-            if not os.path.isabs(path) and not os.path.isfile(path) and (self.root / path).is_file():
-                path = str(self.root / path)
+            # as given, else where it was when the dataset was made, else beside the dataset
+            tried = [entry["path"], entry.get("abspath"), str(self.root / entry["path"])]
+            path = next((p for p in tried if p is not None and os.path.isfile(p)), None)
+            if path is None:
+                raise ValueError(f"the mesh file {entry['path']!r} of object {name!r} is not found (tried "
+                                 f"{', '.join(repr(p) for p in tried if p is not None)})")
             if _sha256_file(path) != entry["sha256"]:
                 raise ValueError(f"{path} is not the mesh this dataset was made from (content hash differs)")
             entry = {**entry, "path": path}

@@ -49,11 +49,13 @@ DEFAULT_SKIN = "section"
 PARAMS = ("step", "epsilon", "contact_tolerance", "max_iterations", "rules", "skin")
 
 
-def check_params(params: Mapping[str, Any], what: str = "planner parameters", also: Sequence[str] = ()) -> None:
+def check_params(params: Mapping[str, Any], what: str = "planner parameters", also: Sequence[str] = (),
+                 hand: Hand | None = None) -> None:
     """Raise ValueError, saying what is wrong, unless ``params`` are planner parameters (names of
     PARAMS, or of ``also``, which are not checked further; values None or as Planner takes them)
-    with values Planner would take: the check of many plans before any is made. (Planner checks
-    contact_tolerance against the scene too.)"""
+    with values Planner would take: the check of many plans before any is made. With ``hand``,
+    also against that hand (a step no longer than its shortest link, contact_tolerance below the
+    step, epsilon at most the step). (Planner checks contact_tolerance against the scene too.)"""
     bad = set(params) - set(PARAMS) - set(also)
     if bad:
         raise ValueError(f"unknown {what} {sorted(bad)}; expected some of {[*PARAMS, *also]}")
@@ -61,9 +63,11 @@ def check_params(params: Mapping[str, Any], what: str = "planner parameters", al
     if skin is not None and skin not in SKINS:
         raise ValueError(f"skin must be one of {list(SKINS)} or None (the default), got {skin!r}")
     rules = params.get("rules")
-    _core.PlannerParams(step=params.get("step"), epsilon=params.get("epsilon"),
-                        contact_tolerance=params.get("contact_tolerance"),
-                        max_iterations=params.get("max_iterations"), rules="hug" if rules is None else rules)
+    checked = _core.PlannerParams(step=params.get("step"), epsilon=params.get("epsilon"),
+                                  contact_tolerance=params.get("contact_tolerance"),
+                                  max_iterations=params.get("max_iterations"), rules="hug" if rules is None else rules)
+    if hand is not None:
+        _core.resolve_params(hand._core, checked)
 
 
 def _timeout(value: Any) -> float | None:

@@ -83,27 +83,32 @@ double farthest_joint(const Chain& c) {
 
 }  // namespace
 
+PlannerParams resolve_params(const HandModel& hand, const PlannerParams& params) {
+  check_params(params);
+  PlannerParams out = params;
+  double shortest = kInf;
+  for (int m = 0; m < hand.fingers(); ++m)
+    for (int n = 0; n < hand.links(); ++n) shortest = std::min(shortest, hand.link_length(m, n));
+  out.step = resolve(params.step, shortest / 20.0);
+  HUGGER_CHECK_ARGUMENT(out.step <= shortest, "step (" << out.step << " m) must not exceed the shortest link ("
+                                                       << shortest << " m)");
+  out.contact_tolerance = params.contact_tolerance_or_default();
+  HUGGER_CHECK_ARGUMENT(out.contact_tolerance < out.step, "contact_tolerance (" << out.contact_tolerance
+                                                                                << " m) must be smaller than step ("
+                                                                                << out.step << " m)");
+  out.epsilon = resolve(params.epsilon, out.step / 10.0);
+  HUGGER_CHECK_ARGUMENT(out.epsilon <= out.step,
+                        "epsilon (" << out.epsilon << " m) must not exceed step (" << out.step << " m)");
+  return out;
+}
+
 Planner::Planner(HandModel hand, std::shared_ptr<const Sensing> sensing, const Vec3& target, const Pose& palm_pose,
                  PlannerParams params)
     : hand_(std::move(hand)), sensing_(std::move(sensing)), target_(target), params_(params) {
   HUGGER_CHECK_ARGUMENT(sensing_, "the planner needs a sensing interface");
   HUGGER_CHECK_ARGUMENT(target_.allFinite(), "target must be a finite 3-vector, got (" << target_.x() << ", "
                                                                                       << target_.y() << ", " << target_.z() << ")");
-  check_params(params);
-  double shortest = kInf;
-  for (int m = 0; m < hand_.fingers(); ++m)
-    for (int n = 0; n < hand_.links(); ++n) shortest = std::min(shortest, hand_.link_length(m, n));
-  params_.step = resolve(params.step, shortest / 20.0);
-  HUGGER_CHECK_ARGUMENT(params_.step <= shortest, "step (" << params_.step << " m) must not exceed the shortest link ("
-                                                           << shortest << " m)");
-  params_.contact_tolerance = params.contact_tolerance_or_default();
-  HUGGER_CHECK_ARGUMENT(params_.contact_tolerance < params_.step, "contact_tolerance (" << params_.contact_tolerance
-                                                                                        << " m) must be smaller than step ("
-                                                                                        << params_.step << " m)");
-  params_.epsilon = resolve(params.epsilon, params_.step / 10.0);
-  HUGGER_CHECK_ARGUMENT(params_.epsilon <= params_.step,
-                        "epsilon (" << params_.epsilon << " m) must not exceed step (" << params_.step << " m)");
-
+  params_ = resolve_params(hand_, params);
   check_pose(palm_pose.matrix(), "palm_pose");
   // Re-orthonormalise so that every emitted pose is rigid to machine precision.
   const Mat3 R = palm_pose.linear();

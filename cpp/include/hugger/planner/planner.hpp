@@ -57,8 +57,13 @@ struct PlannerParams {
 
 /// Throws std::invalid_argument for a parameter no plan can use: a step, epsilon or
 /// contact_tolerance that is neither NaN (the default) nor positive and finite, or max_iterations
-/// outside 1 .. kMaxIterations. (How they relate to each other and to the hand, the Planner checks.)
+/// outside 1 .. kMaxIterations. (How they relate to each other and to the hand, resolve_params checks.)
 void check_params(const PlannerParams& params);
+/// `params` with their defaults resolved for `hand` (step: the shortest link / 20; epsilon:
+/// step / 10; contact_tolerance), checked against it: step <= the shortest link,
+/// contact_tolerance < step, epsilon <= step (std::invalid_argument otherwise). What a Planner of
+/// this hand plans with; callable before any plan (a batch of plans is checked up front).
+PlannerParams resolve_params(const HandModel& hand, const PlannerParams& params);
 /// A wall-clock limit for Planner::plan given by a caller: positive and finite seconds (plan
 /// itself takes kInf for no limit). Throws std::invalid_argument otherwise; returns `seconds`.
 double check_timeout(double seconds);
