@@ -559,3 +559,20 @@ def test_files_without_provenance_still_load(sphere_file, tmp_path, capsys):
     np.savez_compressed(tmp_path / "bad.npz", **bad)
     with pytest.raises(ValueError, match="must be JSON objects"):
         hugger.Trajectory.load(tmp_path / "bad.npz")
+
+
+def test_progress_bar_moves_with_the_time_and_notes_print_above_it():
+    import time
+
+    tty = _Tty()
+    with Progress("shards", total=2, stream=tty, delay=0.0) as p:
+        p.update(0)
+        p.note("hugger: 0 of 2 shards already done; making 2")
+        time.sleep(0.35)  # no update meanwhile: the bar is redrawn all the same
+    text = tty.getvalue()
+    assert "hugger: 0 of 2 shards already done; making 2\n" in text
+    assert text.count("0/2") >= 3  # drawn again as the time went by
+    pipe = io.StringIO()
+    with Progress("shards", total=2, stream=pipe, delay=0.0) as p:
+        p.note("a line")
+    assert pipe.getvalue() == "a line\n"  # a note prints in a pipe too; no bar there

@@ -7,12 +7,16 @@ import time
 from typing import TextIO
 
 
+_MARKS = "|/-\\"  # the spinner
+
+
 class Progress:
-    """``with Progress("rendering", total=n) as p: p.update(i)``; with ``total=None`` a spinner with
-    the elapsed time runs on a background thread (the work may hold no GIL, as the planner does).
+    """``with Progress("rendering", total=n) as p: p.update(i)``; a background thread redraws the
+    bar (or, with ``total=None``, a spinner) with the elapsed time, so that it moves while the work
+    runs (which may hold no GIL, as the planner does). ``p.note(line)`` prints a line above it.
 
     Nothing is drawn unless ``stream`` is a terminal, nor before ``delay`` seconds have passed,
-    so quick work and scripted use print nothing extra.
+    so quick work and scripted use print nothing extra (notes still print).
     """
 
     def __init__(self, label: str, total: int | None = None, stream: TextIO | None = None, delay: float = 1.0,
@@ -22,14 +26,16 @@ class Progress:
         self.enabled = enabled if enabled is not None else bool(getattr(self.stream, "isatty", lambda: False)())
         self._start = 0.0
         self._done = 0
+        self._tick = 0
         self._drawn = False
+        self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
     def __enter__(self) -> Progress:
         self._start = time.perf_counter()
-        if self.enabled and self.total is None:
-            self._thread = threading.Thread(target=self._spin, daemon=True)
+        if self.enabled:
+            self._thread = threading.Thread(target=self._run, daemon=True)
             self._thread.start()
         return self
 
@@ -38,24 +44,37 @@ class Progress:
         if total is not None:
             self.total = total
         self._done = done
-        if self.enabled and self.total and time.perf_counter() - self._start >= self.delay:
-            frac = min(1.0, done / self.total)
+        self._redraw()
+
+    def note(self, line: str) -> None:
+        """``line`` on a line of its own above the bar (a ``log(line)`` callback)."""
+        with self._lock:
+            if self._drawn:
+                self.stream.write("\r\x1b[K")
+                self._drawn = False
+            self.stream.write(line + "\n")
+            self.stream.flush()
+        self._redraw()
+
+    def _text(self, elapsed: float) -> str:
+        if self.total:
+            frac = min(1.0, self._done / self.total)
             bar = "#" * int(30 * frac) + "-" * (30 - int(30 * frac))
-            self._draw(f"{self.label} [{bar}] {done}/{self.total} {time.perf_counter() - self._start:.1f}s")
+            return f"{self.label} [{bar}] {self._done}/{self.total} {elapsed:.1f}s"
+        return f"{self.label} {_MARKS[self._tick % 4]} {elapsed:.1f}s"
 
-    def _spin(self) -> None:
-        marks = "|/-\\"
-        i = 0
+    def _redraw(self) -> None:
+        elapsed = time.perf_counter() - self._start
+        if self.enabled and elapsed >= self.delay:
+            with self._lock:
+                self.stream.write("\r" + self._text(elapsed) + "\x1b[K")
+                self.stream.flush()
+                self._drawn = True
+
+    def _run(self) -> None:
         while not self._stop.wait(0.1):
-            elapsed = time.perf_counter() - self._start
-            if elapsed >= self.delay:
-                self._draw(f"{self.label} {marks[i % 4]} {elapsed:.1f}s")
-                i += 1
-
-    def _draw(self, text: str) -> None:
-        self.stream.write("\r" + text + "\x1b[K")
-        self.stream.flush()
-        self._drawn = True
+            self._tick += 1
+            self._redraw()
 
     def __exit__(self, *exc: object) -> None:
         self._stop.set()

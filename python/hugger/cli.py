@@ -558,11 +558,11 @@ def cmd_generate(args: argparse.Namespace) -> int:
     from .scenarios import ImplausibleSize
 
     _parent_exists(Path(args.out))  # the dataset's folder is made by dataset.generate
-    interactive = sys.stderr.isatty()
-    log = None if interactive else _note  # plain lines in logs, a bar on a terminal
     argv = args._argv
     try:
         with Progress("generating shards", total=1, delay=0.0) as p:
+            # plain lines in logs; on a terminal the same lines above a bar that shows the time go by
+            log = (lambda line: p.note(f"hugger: {line}")) if p.enabled else _note
             index = dataset.generate(args.objects, args.out, approaches=args.approaches, hands=args.hands or ["5x5"],
                                      validate=args.validate, workers=args.workers, backend=args.backend,
                                      address=args.address, scale=args.scale, params=_params(args),
