@@ -336,6 +336,7 @@ def test_bad_input(tmp_path, capsys):
     fake = types.SimpleNamespace(is_initialized=lambda: False, init=no_cluster)
     with socket.create_server(("127.0.0.1", 0)) as server, pytest.MonkeyPatch.context() as mp:
         mp.setattr(dataset, "_ray", lambda: fake)
+        mp.setattr(dataset, "_probe_ray", lambda address: None)  # (its own test: below)
         address = f"127.0.0.1:{server.getsockname()[1]}"
         assert main(["generate", "box", "--out", str(tmp_path / "r2"), "--backend", "ray", "--address", address]) == 2
         err = capsys.readouterr().err
@@ -470,3 +471,19 @@ def test_a_dataset_of_a_relative_mesh_path_reads_from_any_folder_and_a_missing_s
     (tmp_path / "ds" / "shards" / "ball__5x5.npz").unlink()
     with pytest.raises(ValueError, match="ball__5x5.npz is missing; 'hugger generate' with the command in index.json"):
         hugger.Dataset(tmp_path / "ds")
+
+
+def test_an_address_where_something_else_listens_is_refused_within_the_probe_s_time(tmp_path, monkeypatch, capsys):
+    # ray.init retries for ever there and ignores Ctrl-C: a child process tries, and is ended.
+    pytest.importorskip("ray", reason="the cluster extra is not installed (pip install 'hugger[cluster]')")
+    import socket
+
+    monkeypatch.setattr(dataset, "RAY_PROBE_TIMEOUT", 15.0)
+    with socket.create_server(("127.0.0.1", 0)) as server:
+        address = f"127.0.0.1:{server.getsockname()[1]}"
+        t0 = time.monotonic()
+        assert main(["generate", "box", "--out", str(tmp_path / "r"), "--backend", "ray", "--address", address]) == 2
+        assert time.monotonic() - t0 < 40
+    err = capsys.readouterr().err
+    assert f"no Ray cluster answers at {address}" in err and err.count("\n") == 1, err
+    assert not (tmp_path / "r").exists()

@@ -327,7 +327,31 @@ def _check_ray_address(address: Any) -> str:
             pass
     except OSError as exc:
         raise ValueError(f"no Ray cluster answers at {address}: {exc.strerror or exc}") from None
+    _probe_ray(address)
     return address
+
+
+#: How long a Ray client is given to join the cluster at an address before it is refused (s).
+RAY_PROBE_TIMEOUT = 60.0
+
+
+def _probe_ray(address: str) -> None:
+    """Join the cluster at ``address`` from a child process, which is ended after
+    :data:`RAY_PROBE_TIMEOUT`: where something other than Ray listens, ``ray.init`` retries for ever
+    and ignores Ctrl-C, which must not happen to this process."""
+    import subprocess
+    import sys
+
+    code = "import sys, ray; ray.init(address=sys.argv[1], log_to_driver=False, logging_level='ERROR')"
+    try:
+        done = subprocess.run([sys.executable, "-c", code, address], capture_output=True, text=True,
+                              timeout=RAY_PROBE_TIMEOUT)
+    except subprocess.TimeoutExpired:
+        raise ValueError(f"no Ray cluster answers at {address} within {RAY_PROBE_TIMEOUT:g} s (something else "
+                         f"listens there?)") from None
+    if done.returncode != 0:
+        lines = [line for line in done.stderr.splitlines() if line.strip()]
+        raise ValueError(f"no Ray cluster answers at {address}: {lines[-1] if lines else 'ray.init failed'}")
 
 
 def _ray() -> Any:
