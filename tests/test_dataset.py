@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -127,25 +128,35 @@ def _running(pid: int) -> bool:
     return bool(stat) and stat.rsplit(")", 1)[1].split()[0] != "Z"
 
 
+def _start_with_two_workers(cmd: list[str], **popen: Any) -> tuple[subprocess.Popen[bytes], set[int]]:
+    """Start ``cmd`` (a run of two workers) in its own session; it and its workers' pids once both run."""
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True, **popen)
+    deadline = time.monotonic() + 120
+    workers: set[int] = set()
+    while time.monotonic() < deadline and proc.poll() is None and len(workers) < 2:
+        workers = {p for p in _children(proc.pid) if "spawn_main" in _proc(p, "cmdline")}
+        time.sleep(0.05)
+    return proc, workers
+
+
+def _left_running(workers: set[int], within: float = 30.0) -> list[int]:
+    """The workers still running after up to ``within`` seconds."""
+    deadline = time.monotonic() + within
+    while time.monotonic() < deadline and any(_running(p) for p in workers):
+        time.sleep(0.05)
+    return [p for p in workers if _running(p)]
+
+
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers end with their parent through Linux's prctl")
 def test_workers_end_when_their_run_is_killed_outright(tmp_path):
     # SIGKILL to the run alone (not its process group): it cannot shut its pool down.
-    cmd = [sys.executable, "-m", "hugger", "generate", *OBJECTS, "--approaches", "3", "--out", str(tmp_path / "ds"),
-           "--workers", "2"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    proc, workers = _start_with_two_workers([sys.executable, "-m", "hugger", "generate", *OBJECTS, "--approaches",
+                                             "3", "--out", str(tmp_path / "ds"), "--workers", "2"])
     try:
-        deadline = time.monotonic() + 120
-        workers: set[int] = set()
-        while time.monotonic() < deadline and proc.poll() is None and len(workers) < 2:
-            workers = {p for p in _children(proc.pid) if "spawn_main" in _proc(p, "cmdline")}
-            time.sleep(0.05)
         assert len(workers) == 2, "the run ended before its workers started"
         proc.kill()
         proc.wait(timeout=60)
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline and any(_running(p) for p in workers):
-            time.sleep(0.05)
-        left = [p for p in workers if _running(p)]
+        left = _left_running(workers)
         assert not left, f"workers {left} outlived their run"
     finally:
         with contextlib.suppress(ProcessLookupError):
@@ -156,26 +167,17 @@ def test_workers_end_when_their_run_is_killed_outright(tmp_path):
 def test_sigint_to_the_run_alone_stops_it_and_its_workers_at_once(tmp_path):
     # A scheduler or `kill -INT` signals the run, not its workers: they are stopped, not waited
     # for (each of these shards takes tens of seconds).
-    cmd = [sys.executable, "-m", "hugger", "generate", "curvy", "apple", "--approaches", "26", "--validate",
-           "--out", str(tmp_path / "ds"), "--workers", "2"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
-                            preexec_fn=_child_setup)
+    proc, workers = _start_with_two_workers([sys.executable, "-m", "hugger", "generate", "curvy", "apple",
+                                             "--approaches", "26", "--validate", "--out", str(tmp_path / "ds"),
+                                             "--workers", "2"], preexec_fn=_child_setup)
     try:
-        deadline = time.monotonic() + 120
-        workers: set[int] = set()
-        while time.monotonic() < deadline and proc.poll() is None and len(workers) < 2:
-            workers = {p for p in _children(proc.pid) if "spawn_main" in _proc(p, "cmdline")}
-            time.sleep(0.05)
         assert len(workers) == 2, "the run ended before its workers started"
         time.sleep(1.0)  # into the shards' work
         t0 = time.monotonic()
         proc.send_signal(signal.SIGINT)
         assert proc.wait(timeout=60) == 130
         assert time.monotonic() - t0 < 10, "the run waited for its workers' shards"
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline and any(_running(p) for p in workers):
-            time.sleep(0.05)
-        assert not [p for p in workers if _running(p)]
+        assert not _left_running(workers)
         assert not (tmp_path / "ds" / "index.json").exists()
     finally:
         with contextlib.suppress(ProcessLookupError):
