@@ -40,8 +40,6 @@ _ARRAYS = {
     "phase": (1, "iu"),
 }
 _STRINGS = ("hand_json", "params_json", "status")
-#: The statuses a plan may end with (Planner.status), and ``running`` for one saved mid-plan.
-STATUSES = ("running", "done", "stalled", "max_iterations", "timeout", "error")
 #: Why a trajectory of no configuration is refused: by load(), save() and summary().
 EMPTY = "the trajectory holds no configuration (a plan starts with C_init)"
 
@@ -253,8 +251,6 @@ class Trajectory:
                              f"or both empty (0, 3) for an object-free plan, got {verts.shape} and {faces.shape}")
         if not object_free and (faces.min() < 0 or faces.max() >= len(verts)):
             raise ValueError(f"{source}: object_faces index vertices outside 0..{len(verts) - 1}")
-        if strings["status"] not in STATUSES:
-            raise ValueError(f"{source}: status {strings['status']!r} is none of {', '.join(STATUSES)}")
         for key, allowed in (("tip_state", "0 FROZEN, 1 CONTACT, 2 DONE"), ("phase", "0, 1 or 2")):
             a = arrays[key]
             if a.min() < 0 or a.max() > 2:
