@@ -204,3 +204,14 @@ def test_empty_and_not_iterable():
     assert hugger.plan_many([], threads=2) == []
     with pytest.raises(ValueError, match="iterable"):
         hugger.plan_many(5)
+
+
+def test_cases_sharing_a_stateless_skin_run_in_parallel(cases, monkeypatch):
+    # grouped are only the cases whose shared skin keeps state: a mesh skin's are not
+    from hugger import batch
+
+    mesh = hugger.skins.MeshSkin(cases[0]["obj"])
+    noisy = hugger.skins.SensorModel(cases[0]["obj"], gap_noise=2e-6)
+    jobs = [batch._job(i, {**c, "obj": skin}, None, {}, None)
+            for i, (c, skin) in enumerate(zip(cases, [mesh, mesh, noisy, mesh, noisy, cases[5]["obj"]]))]
+    assert batch._groups(jobs) == [[0], [1], [2, 4], [3], [5]]

@@ -111,14 +111,13 @@ def _run_all(jobs: list[_Job]) -> list[Trajectory | BaseException]:
 
 
 def _groups(jobs: list[_Job]) -> list[list[int]]:
-    """The cases, in groups planned one after another in one thread: the cases sharing a skin
-    object (a :class:`hugger.skins.Sensing`, which may keep state, as a SensorModel's noise does)
-    in input order, so that each reads the skin as a serial run would; every other case alone."""
-    from .skins import Sensing
-
+    """The cases, in groups planned one after another in one thread: the cases sharing a skin that
+    keeps state (``keeps_state``: a SensorModel's noise stream) in input order, so that each reads
+    the skin as a serial run would; every other case alone (stateless skins, compiled or not, are
+    shared by threads in parallel)."""
     groups: dict[Any, list[int]] = {}
     for i, job in enumerate(jobs):
-        key = ("skin", id(job.obj)) if isinstance(job.obj, Sensing) else ("case", i)
+        key = ("skin", id(job.obj)) if getattr(job.obj, "keeps_state", False) else ("case", i)
         groups.setdefault(key, []).append(i)
     return list(groups.values())
 
@@ -137,9 +136,10 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
 
     ``threads``: worker threads (default: the CPUs this process may use; 1 plans in the calling
     thread). The engine plans with the GIL released, so threads run in parallel; cases may share
-    a :class:`Hand` and an :class:`Object`. Cases that share one skin object (a
-    :class:`hugger.skins.Sensing`, which may keep state: a SensorModel's noise) are planned one
-    after another in input order, in one thread, so that the results are those of ``threads=1``.
+    a :class:`Hand`, an :class:`Object` and a skin. Cases that share a skin which keeps state
+    (``keeps_state = True``: a SensorModel's noise stream) are planned one after another in input
+    order, in one thread, so that the results are those of ``threads=1``; ``progress`` then
+    reports them when the last of them ends.
 
     ``progress(done, total)`` is called in the calling thread after each case finishes.
 

@@ -189,6 +189,9 @@ class Simulation:
 class MujocoSkin(_core.Sensing):
     """The skin of a :class:`Simulation`: gaps by ``mj_geomDistance`` against the simulated object."""
 
+    #: It senses a simulation that moves on between queries (see SensorModel.keeps_state).
+    keeps_state = True
+
     def __init__(self, sim: Simulation) -> None:
         super().__init__()
         self.sim = sim

@@ -41,6 +41,10 @@ class SensorModel(Sensing):
     its mesh world) with a sensing ``range``, ``gap_noise``, ``normal_noise`` and
     ``taxel_spacing``; ``seed`` fixes the noise. Counts its queries in ``queries``."""
 
+    #: Its answers depend on the queries before them (one noise stream): hugger.plan_many plans the
+    #: cases that share one such skin one after another, in input order.
+    keeps_state = True
+
     def __init__(self, skin: Any, range: float = math.inf, gap_noise: float = 0.0, normal_noise: float = 0.0,  # noqa: A002
                  taxel_spacing: float | None = None, seed: int = 0) -> None:
         super().__init__()
