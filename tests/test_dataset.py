@@ -441,7 +441,9 @@ def test_settings_no_hand_can_plan_with_and_a_hand_given_twice_are_refused_befor
     ({"scale": None}, "scale must be a number"), ({"scale": "a"}, "scale must be a number"),
     ({"objects": [None]}, "each object must be a built-in name or a mesh file's path"),
     ({"objects": [3]}, "each object must be"), ({"out": None}, "out must be a folder's path"),
-    ({"params": [1]}, "params must be a mapping"), ({"command": "hugger generate"}, "command must be a list of strings"),
+    ({"params": [1]}, "params must be a mapping"), ({"command": "hugger generate"}, "command must be a list"),
+    ({"command": ["hugger", 3]}, "command must be a list of strings"), ({"command": 3}, "command must be a list"),
+    ({"objects": 3}, "objects must be a list"), ({"hands": 3}, "hands must be a list"),
 ])
 def test_bad_python_arguments_are_value_errors(tmp_path, kwargs, message):
     args = {"objects": ["sphere"], "out": tmp_path / "ds", "approaches": 2, **kwargs}
@@ -452,7 +454,9 @@ def test_bad_python_arguments_are_value_errors(tmp_path, kwargs, message):
 
 def test_a_shard_records_its_rule_set(tmp_path):
     out = tmp_path / "ds"
-    dataset.generate(["sphere"], out, approaches=2, rules="paper", workers=1)
+    # (objects and the command line as iterators: read once, recorded whole)
+    dataset.generate(iter(["sphere"]), out, approaches=2, rules="paper", workers=1, command=iter(["hugger", "x"]))
+    assert json.loads((out / "index.json").read_text())["command"] == ["hugger", "x"]
     ds = hugger.Dataset(out)
     assert json.loads(str(ds.shard(0)["params_json"]))["rules"] == "paper"
     assert ds.trajectory(0).params["rules"] == "paper"

@@ -191,16 +191,18 @@ def _load(path: str) -> Trajectory:
 
 def _parent_exists(out: Path, option: str = "--out") -> None:
     """A UsageError (exit 2) unless the directory ``out`` goes into exists (nothing is created
-    silently) and takes a new file: said before the work, not after it."""
+    silently) and takes a new file there (an existing folder ``out``, what is written goes into
+    it: it must take one): said before the work, not after it."""
     if not out.parent.is_dir():
         raise UsageError(f"{option}: no such directory {str(out.parent)!r} (create it first)")
     import tempfile
 
+    where = out if out.is_dir() else out.parent
     try:
-        with tempfile.TemporaryFile(dir=out.parent):
+        with tempfile.TemporaryFile(dir=where):
             pass
     except OSError as exc:
-        raise UsageError(f"{option}: cannot write in {str(out.parent)!r}: {exc.strerror or exc}") from None
+        raise UsageError(f"{option}: cannot write in {str(where)!r}: {exc.strerror or exc}") from None
 
 
 def _out_path(value: str, suffixes: Sequence[str], option: str = "--out") -> Path:

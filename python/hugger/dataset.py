@@ -327,7 +327,6 @@ def _check_ray_address(address: Any) -> str:
             pass
     except OSError as exc:
         raise ValueError(f"no Ray cluster answers at {address}: {exc.strerror or exc}") from None
-    _probe_ray(address)
     return address
 
 
@@ -374,8 +373,9 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     every grasp. ``workers``: processes (``local``, default the CPUs available) or the Ray tasks
     in flight (``ray``). ``backend="ray"`` runs one Ray task per shard on ``ray.init(address)``
     (a local Ray when ``address`` is None; an address where nothing answers within
-    :data:`RAY_CONNECT_TIMEOUT` is refused). Shards already present are kept; the index is written
-    last. ``command``: the command line recorded in the index. A mesh file whose size is
+    :data:`RAY_CONNECT_TIMEOUT` is refused, and so is one where a Ray client tried in a child
+    process joins no cluster within :data:`RAY_PROBE_TIMEOUT`, before the first shard). Shards
+    already present are kept; the index is written last. ``command``: the command line recorded in the index. A mesh file whose size is
     implausible for a hand (millimetres read as metres: :data:`hugger.hand.PLAUSIBLE_SIZE`) is
     refused (``ValueError``) unless ``force``.
     """
@@ -384,9 +384,18 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     approach_directions(approaches)  # checks K
     if backend not in ("local", "ray"):
         raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
-    for name, value in (("objects", objects), ("hands", hands)):  # a string is one name, not a list
-        if isinstance(value, (str, bytes, os.PathLike)):
+    lists: dict[str, list[Any]] = {}
+    for name, value in (("objects", objects), ("hands", hands), ("command", command)):
+        if value is None and name == "command":
+            continue
+        if isinstance(value, (str, bytes, os.PathLike)):  # a string is one name, not a list
             raise ValueError(f"{name} must be a list of names, got the single {value!r} (write [{value!r}])")
+        try:
+            lists[name] = list(value)  # once: an iterator is read here only
+        except TypeError:
+            raise ValueError(f"{name} must be a list of names, got {value!r}") from None
+    objects, hands = lists["objects"], lists["hands"]
+    command = lists.get("command")
     if not objects:
         raise ValueError("give at least one object")
     if not hands:
@@ -399,7 +408,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     scale = _checks.positive("scale", scale)
     if params is not None and not isinstance(params, Mapping):
         raise ValueError(f"params must be a mapping of planner parameters, got {type(params).__name__}")
-    if command is not None and (isinstance(command, (str, bytes)) or not all(isinstance(c, str) for c in command)):
+    if command is not None and not all(isinstance(c, str) for c in command):
         raise ValueError(f"command must be a list of strings (the command line's words), got {command!r}")
     validate = _checks.flag("validate", validate)
     force = _checks.flag("force", force)
@@ -409,11 +418,11 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         raise NotADirectoryError(f"{out} is a file; a dataset is a folder (give a new folder, or the folder of a "
                                  f"dataset to finish)")
     workers = _checks.workers("workers", workers)
+    if address is not None and backend != "ray":
+        raise ValueError("an address applies to the Ray backend only")
+    ray: Any = _ray() if backend == "ray" else None  # the extra named first
     if address is not None:
-        if backend != "ray":
-            raise ValueError("an address applies to the Ray backend only")
         _check_ray_address(address)
-    ray: Any = _ray() if backend == "ray" else None
     from .planner import PARAMS, check_params
 
     params = dict(params or {})
@@ -439,15 +448,20 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     tasks: list[dict[str, Any]] = []
     from .hand import Hand
 
-    hand_entries = [{"label": label, "kwargs": kwargs, "json": Hand(**kwargs).to_json()} for label, kwargs in hand_list]
-    for label, kwargs in hand_list:  # the parameters against each hand, before any shard is made
+    built = [(label, kwargs, Hand(**kwargs)) for label, kwargs in hand_list]
+    hand_entries = [{"label": label, "kwargs": kwargs, "json": hand.to_json()} for label, kwargs, hand in built]
+    for label, _, hand in built:  # the parameters against each hand, before any shard is made
         try:
-            check_params(params, hand=Hand(**kwargs))
+            check_params(params, hand=hand)
         except ValueError as exc:
             raise ValueError(f"hand {label!r}: {exc}") from None
-    for i, entry in enumerate(hand_entries):  # the same hand under another spec (5x5, 5x5:link_length=0.02)
+    # The same hand under two specs (5x5, 5x5:link_length=0.02) would make the same grasps twice;
+    # a dataset made so before this check is still finished by its own command.
+    index_path = Path(out) / "index.json"
+    listed = {h.get("label") for h in _read_index(index_path).get("hands", [])} if index_path.is_file() else set()
+    for i, entry in enumerate(hand_entries):
         same = next((e["label"] for e in hand_entries[:i] if e["json"] == entry["json"]), None)
-        if same is not None:
+        if same is not None and not {same, entry["label"]} <= listed:
             raise ValueError(f"the hands {same!r} and {entry['label']!r} are the same hand")
     for ob, safe_name in zip(obj_list, names):
         for entry in hand_entries:
@@ -465,6 +479,8 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         if address is None:
             ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
         else:
+            if address not in ("auto", "local"):
+                _probe_ray(address)
             try:
                 ray.init(address=address, log_to_driver=False)
             except ConnectionError as exc:  # something answered the address check, but no Ray
@@ -655,14 +671,15 @@ class Dataset:
         if entry is None:
             raise ValueError(f"no object {name!r} in this dataset")
         if not entry["builtin"]:
-            # as given, else where it was when the dataset was made, else beside the dataset
-            tried = [entry["path"], entry.get("abspath"), str(self.root / entry["path"])]
-            path = next((p for p in tried if p is not None and os.path.isfile(p)), None)
+            # as given, else where it was when the dataset was made, else beside the dataset: the
+            # first of these that is the mesh it was made from
+            tried = [p for p in (entry["path"], entry.get("abspath"), str(self.root / entry["path"])) if p is not None]
+            found = [p for p in tried if os.path.isfile(p)]
+            path = next((p for p in found if _sha256_file(p) == entry["sha256"]), None)
             if path is None:
                 raise ValueError(f"the mesh file {entry['path']!r} of object {name!r} is not found (tried "
-                                 f"{', '.join(repr(p) for p in tried if p is not None)})")
-            if _sha256_file(path) != entry["sha256"]:
-                raise ValueError(f"{path} is not the mesh this dataset was made from (content hash differs)")
+                                 f"{', '.join(repr(p) for p in tried)})" if not found else
+                                 f"{found[0]} is not the mesh this dataset was made from (content hash differs)")
             entry = {**entry, "path": path}
         return load_object(entry["path"], entry["scale"])[1]
 
