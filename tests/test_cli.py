@@ -576,3 +576,16 @@ def test_progress_bar_moves_with_the_time_and_notes_print_above_it():
     with Progress("shards", total=2, stream=pipe, delay=0.0) as p:
         p.note("a line")
     assert pipe.getvalue() == "a line\n"  # a note prints in a pipe too; no bar there
+
+
+def test_a_warning_while_a_bar_is_drawn_prints_above_it(monkeypatch):
+    from hugger import _progress
+
+    tty = _Tty()
+    monkeypatch.setattr(sys, "stderr", tty)
+    with Progress("shards", total=2, delay=0.0) as p:
+        p.update(0)
+        cli._show_warning(UserWarning("repaired ball"), UserWarning, "x.py", 1)
+    text = tty.getvalue()
+    assert "\r\x1b[Khugger: warning: repaired ball\n" in text  # the bar's line cleared first
+    assert not _progress._ACTIVE

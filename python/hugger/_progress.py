@@ -9,6 +9,21 @@ from typing import TextIO
 
 _MARKS = "|/-\\"  # the spinner
 
+#: The progress displays drawing now, the innermost last: lines printed meanwhile go above them.
+_ACTIVE: list[Progress] = []
+
+
+def print_line(text: str, stream: TextIO | None = None) -> None:
+    """``text`` on a line of its own on ``stream`` (standard error by default), above the bar of a
+    progress display drawing there (so that a warning is not glued to the bar)."""
+    stream = stream if stream is not None else sys.stderr
+    drawing = next((p for p in reversed(_ACTIVE) if p.stream is stream), None)
+    if drawing is not None:
+        drawing.note(text)
+    else:
+        stream.write(text + "\n")
+        stream.flush()
+
 
 class Progress:
     """``with Progress("rendering", total=n) as p: p.update(i)``; a background thread redraws the
@@ -35,6 +50,7 @@ class Progress:
     def __enter__(self) -> Progress:
         self._start = time.perf_counter()
         if self.enabled:
+            _ACTIVE.append(self)
             self._thread = threading.Thread(target=self._run, daemon=True)
             self._thread.start()
         return self
@@ -80,6 +96,8 @@ class Progress:
         self._stop.set()
         if self._thread is not None:
             self._thread.join()
+        if self in _ACTIVE:
+            _ACTIVE.remove(self)
         if self._drawn:
             self.stream.write("\r\x1b[K")
             self.stream.flush()

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Mapping, NoReturn, Sequence, TextIO
 
 from ._files import atomic_path, write_atomic
-from ._progress import Progress
+from ._progress import Progress, print_line
 from ._core import RULES, SKINS
 from ._types import VERSION
 
@@ -265,7 +265,7 @@ def _print_table(d: dict[str, Any], stream: TextIO | None = None) -> None:
 
 
 def _note(message: str) -> None:
-    print(f"hugger: {message}", file=sys.stderr)
+    print_line(f"hugger: {message}")
 
 
 def _plan(case: Case, hand: Hand, params: dict[str, Any], label: str,
@@ -564,11 +564,10 @@ def cmd_generate(args: argparse.Namespace) -> int:
     try:
         with Progress("generating shards", total=1, delay=0.0) as p:
             # plain lines in logs; on a terminal the same lines above a bar that shows the time go by
-            log = (lambda line: p.note(f"hugger: {line}")) if p.enabled else _note
             index = dataset.generate(args.objects, args.out, approaches=args.approaches, hands=args.hands or ["5x5"],
                                      validate=args.validate, workers=args.workers, backend=args.backend,
                                      address=args.address, scale=args.scale, params=_params(args),
-                                     command=["hugger", *argv], log=log, progress=p.update, force=args.force)
+                                     command=["hugger", *argv], log=_note, progress=p.update, force=args.force)
     except ImplausibleSize as exc:
         raise UsageError(f"{exc.what}; refused (give --scale, or --force to make its shards anyway)") from None
     grasps = len(index["shards"]) * int(index["parameters"]["approaches"])
@@ -878,7 +877,7 @@ def _count(text: str) -> int:
 
 def _show_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
                   file: TextIO | None = None, line: str | None = None) -> None:
-    print(f"hugger: warning: {message}", file=sys.stderr)
+    print_line(f"hugger: warning: {message}")  # above a progress bar being drawn
 
 
 def main(argv: Sequence[str] | None = None) -> int:
