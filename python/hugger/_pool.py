@@ -43,13 +43,16 @@ def process_pool(workers: int, jobs: int) -> Any:
                                initializer=_end_with_parent, initargs=(os.getpid(),))
 
 
-
 def stop_pool(pool: Any) -> None:
-    """Stop ``pool`` now: the jobs not started are cancelled and the workers still running one are
-    ended (SIGTERM) rather than waited for, so that an interrupted caller stops at once. (The
-    executor keeps its processes in ``_processes``; without it, only the cancelling.)"""
-    processes = getattr(pool, "_processes", None) or {}
-    for process in list(processes.values()):
+    """Stop ``pool`` without waiting: the jobs not started are cancelled and the workers still
+    running one are ended (SIGTERM), so that an interrupted caller stops at once. Python 3.14's
+    ``terminate_workers``; before it, the processes the executor keeps in ``_processes`` (an
+    attribute every version since 3.2 has; without it, only the cancelling)."""
+    terminate = getattr(pool, "terminate_workers", None)
+    if terminate is not None:
+        with contextlib.suppress(Exception):
+            terminate()
+    for process in list((getattr(pool, "_processes", None) or {}).values()):
         with contextlib.suppress(OSError, ValueError, AttributeError):
             process.terminate()
     pool.shutdown(wait=False, cancel_futures=True)

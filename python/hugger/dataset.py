@@ -518,22 +518,23 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
 
             from ._pool import process_pool, stop_pool
 
-            with process_pool(workers, len(todo)) as pool:
-                pending = {pool.submit(make_shard, t): t for t in todo}
-                try:
-                    while pending:
-                        ready, _ = wait(pending, return_when=FIRST_COMPLETED)
-                        for fut in sorted(ready, key=lambda f: pending[f]["file"]):
-                            finished(pending.pop(fut), fut.result())
-                except BaseException:
-                    # Interrupted (Ctrl-C, or SIGINT to this process alone): the shards made
-                    # meanwhile are kept, the others stopped at once rather than waited for.
-                    with contextlib.suppress(Exception):
-                        for fut in sorted(pending, key=lambda f: pending[f]["file"]):
-                            if fut.done() and not fut.cancelled() and fut.exception() is None:
-                                finished(pending[fut], fut.result())
-                    stop_pool(pool)
-                    raise
+            pool = process_pool(workers, len(todo))  # not a `with`: an interrupted run does not wait
+            pending = {pool.submit(make_shard, t): t for t in todo}
+            try:
+                while pending:
+                    ready, _ = wait(pending, return_when=FIRST_COMPLETED)
+                    for fut in sorted(ready, key=lambda f: pending[f]["file"]):
+                        finished(pending.pop(fut), fut.result())
+            except BaseException:
+                # Interrupted (Ctrl-C, or SIGINT to this process alone): the shards made
+                # meanwhile are kept, the others stopped at once rather than waited for.
+                with contextlib.suppress(Exception):
+                    for fut in sorted(pending, key=lambda f: pending[f]["file"]):
+                        if fut.done() and not fut.cancelled() and fut.exception() is None:
+                            finished(pending[fut], fut.result())
+                stop_pool(pool)
+                raise
+            pool.shutdown(wait=True)
     elif todo:
         try:
             remote = ray.remote(num_cpus=1, max_retries=2)(make_shard)
