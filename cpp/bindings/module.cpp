@@ -20,6 +20,7 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "Hugger engine: hand kinematics, the simulated world and the planner (C++17)";
   // The engine's limits, each owned by its C++ constant.
   m.attr("RIGID_TOLERANCE") = hugger::kRigidTolerance;
+  m.attr("MAX_COORDINATE") = hugger::kMaxCoordinate;
   m.attr("MAX_FINGERS") = hugger::kMaxFingers;
   m.attr("MAX_LINKS") = hugger::kMaxLinks;
   m.attr("MAX_ITERATIONS") = hugger::kMaxIterations;

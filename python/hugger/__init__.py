@@ -49,6 +49,7 @@ def __dir__() -> list[str]:
     completion), without loading them."""
     return sorted(set(globals()) | set(_LAZY) | {"Dataset"})
 
+
 __all__ = [
     "CONTACT",
     "Candidate",

@@ -448,6 +448,8 @@ def resolve_params(hand: HandModel, params: PlannerParams) -> PlannerParams:
 
 #: A palm pose is rigid when |R^T R - I| and |det R - 1| are at most this (the engine's rule).
 RIGID_TOLERANCE: float
+#: Largest coordinate or size (m) of an object's vertex or a skin query.
+MAX_COORDINATE: float
 #: Largest number of fingers M and of links per finger N of a hand.
 MAX_FINGERS: int
 MAX_LINKS: int

@@ -146,8 +146,8 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
     ``errors``: ``"raise"`` (default) plans every case, then raises :class:`PlanManyError`
     naming each failed case (its index, exception type and message; ``.errors`` and
     ``.results`` hold the details) if any failed; ``"return"`` puts a :class:`CaseError` in
-    place of each failed case's trajectory. Malformed cases and bad arguments raise
-    ``ValueError`` before anything is planned.
+    place of each failed case's trajectory. Malformed cases and bad arguments (parameters a case's
+    hand cannot plan with among them) raise ``ValueError`` before anything is planned.
     """
     if errors not in ("raise", "return"):
         raise ValueError(f"errors must be 'raise' or 'return', got {errors!r}")

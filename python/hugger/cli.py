@@ -73,7 +73,8 @@ class _Parser(argparse.ArgumentParser):
 
 def _hand_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("hand (defaults: the paper's 5 x 5 hand)")
-    # Defaults None: _hand() fills in hugger.Hand's defaults, and refuses these options beside --hand.
+    # Defaults None: _hand() fills in hugger.Hand's defaults, and refuses these options beside --hand
+    # (but --link-radius beside a URDF or MJCF file, whose links' radius it gives).
     g.add_argument("--fingers", type=int, help="M, number of fingers (default 5)")
     g.add_argument("--links", type=int, help="N, links per finger (default 5)")
     g.add_argument("--link-length", type=float, help="link length, m (default 0.02)")
@@ -83,7 +84,7 @@ def _hand_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--hand", metavar="FILE|PRESET",
                    help="a preset hand (see 'hugger hands'), a URDF or MJCF file (.urdf, .xml, .mjcf: told apart by "
                         "the root element) or a hand JSON file; replaces the options above, which are refused "
-                        "beside it (URDF/MJCF need hugger[hands])")
+                        "beside it but --link-radius with a URDF or MJCF file (URDF/MJCF need hugger[hands])")
     g.add_argument("--fixed-joint", action="append", default=[], metavar="NAME=RAD",
                    help="with --hand FILE: hold this joint at RAD (repeatable; e.g. a spread joint)")
 
@@ -142,7 +143,7 @@ def _hand(args: argparse.Namespace) -> Hand:
 
         # A URDF or MJCF file may leave the links' radius to be given (its collisions are meshes).
         extra = {"link_radius": args.link_radius} if "link_radius" in given and args.hand not in hands.PRESETS \
-            and os.path.splitext(args.hand)[1].lower() in (".urdf", ".xml", ".mjcf") else {}
+            and os.path.splitext(args.hand)[1].lower() in hands.ROBOT_SUFFIXES else {}
         given = [k for k in given if k not in extra]
         if given:
             options = ", ".join("--" + k.replace("_", "-") for k in given)

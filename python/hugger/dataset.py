@@ -385,7 +385,8 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     if backend not in ("local", "ray"):
         raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
     lists: dict[str, list[Any]] = {}
-    for name, value in (("objects", objects), ("hands", hands), ("command", command)):
+    given: tuple[tuple[str, Any], ...] = (("objects", objects), ("hands", hands), ("command", command))
+    for name, value in given:
         if value is None and name == "command":
             continue
         if isinstance(value, (str, bytes, os.PathLike)):  # a string is one name, not a list

@@ -14,7 +14,7 @@ from .hand import _real_array, implausible_size
 #: the engine's tolerances are absolute (1e-7 m .. 1e-4 m), which float64 resolves only while
 #: coordinates stay well below 1e6 m (there the spacing of doubles is already 1e-10 m). Move a
 #: georeferenced mesh to a local origin first.
-MAX_COORDINATE = 1e6
+MAX_COORDINATE: float = _core.MAX_COORDINATE  # the engine's kMaxCoordinate, also the bound of skin queries
 
 
 def _face_indices(faces: Any, nv: int) -> np.ndarray:
@@ -107,12 +107,14 @@ class Object:
         return cast(np.ndarray, ref + (vol[:, None] * tri.sum(axis=1) / 4.0).sum(axis=0) / vol.sum())
 
     def inside(self, points: Any) -> np.ndarray:
-        """Bool (n,): strictly inside O, for points (n, 3) or one point (3,)."""
+        """Bool (n,): strictly inside O, for points (n, 3) or one point (3,); ``ValueError`` for a
+        point that is not finite."""
         p = np.asarray(points, dtype=np.float64)
         return self._core.inside(p.reshape(-1, 3)).reshape(p.shape[:-1])
 
     def signed_distance(self, points: Any) -> np.ndarray:
-        """Signed distance to the surface (negative inside) for points (n, 3) or (3,)."""
+        """Signed distance to the surface (negative inside) for points (n, 3) or (3,); ``ValueError``
+        for a point that is not finite."""
         p = np.asarray(points, dtype=np.float64)
         return self._core.signed_distance(p.reshape(-1, 3)).reshape(p.shape[:-1])
 
@@ -121,7 +123,7 @@ class Object:
         (n, 3), outward unit ``normal`` (n, 3) of its triangle, and the ``triangle`` index (n,).
         Points farther than ``max_distance`` (m) from the surface may be skipped, which is faster:
         their distance is then +inf or -inf (the sign still says outside or inside), point and
-        normal NaN, triangle -1."""
+        normal NaN, triangle -1. ``ValueError`` for a point that is not finite."""
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         try:
             bound = float(max_distance)
@@ -130,7 +132,8 @@ class Object:
         return self._core.closest(p, bound)  # the core checks the value
 
     def segment_distance(self, a: Any, b: Any) -> np.ndarray:
-        """Signed distance (n,) of segments [a_i, b_i] to O (<= 0 when crossing the surface)."""
+        """Signed distance (n,) of segments [a_i, b_i] to O (<= 0 when crossing the surface);
+        ``ValueError`` for an end that is not finite."""
         return self._core.segment_distance(np.asarray(a, dtype=np.float64).reshape(-1, 3),
                                            np.asarray(b, dtype=np.float64).reshape(-1, 3))
 

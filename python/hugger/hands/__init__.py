@@ -18,6 +18,10 @@ __all__ = ["PRESETS", "Preset", "preset", "from_urdf", "from_mjcf", "to_urdf", "
            "load"]
 
 
+#: The suffixes of the robot description files a hand is read from (URDF or MJCF, by the root element).
+ROBOT_SUFFIXES = (".urdf", ".xml", ".mjcf")
+
+
 def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = None, **kwargs: Any) -> Hand:
     """A hand from a preset name, or a ``.urdf``, ``.xml``/``.mjcf`` or ``.json`` file. An XML
     file is read as URDF or MJCF by its root element (``<robot>`` or ``<mujoco>``), whatever its
@@ -30,12 +34,12 @@ def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = N
             raise ValueError(f"fixed_joints hold joints of a URDF or MJCF file; the preset {text!r} has none to hold")
         return preset(text)
     ext = os.path.splitext(text)[1].lower()
-    if ext not in (".urdf", ".xml", ".mjcf", ".json"):
+    if ext not in (*ROBOT_SUFFIXES, ".json"):
         raise ValueError(f"hand {text!r} is neither a preset ({', '.join(PRESETS)}) nor a .urdf, .xml/.mjcf or "
                          f".json file")
     if not os.path.isfile(text):
         raise ValueError(f"hand file {text!r} does not exist")
-    if ext in (".urdf", ".xml", ".mjcf"):
+    if ext in ROBOT_SUFFIXES:
         # The root element says which (a URDF may well be called .xml); a file not well-formed
         # before it goes by its extension, to the reader's own message.
         tag = xml_root(text)
