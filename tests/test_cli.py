@@ -589,3 +589,17 @@ def test_a_warning_while_a_bar_is_drawn_prints_above_it(monkeypatch):
     text = tty.getvalue()
     assert "\r\x1b[Khugger: warning: repaired ball\n" in text  # the bar's line cleared first
     assert not _progress._ACTIVE
+
+
+def test_a_line_goes_above_the_bar_that_is_drawn_when_displays_nest(monkeypatch):
+    from hugger import _progress
+
+    tty = _Tty()
+    monkeypatch.setattr(sys, "stderr", tty)
+    with Progress("outer", total=2, delay=0.0) as outer:
+        outer.update(1)
+        with Progress("inner", total=2, delay=60.0):  # not drawn yet
+            _progress.print_line("hugger: warning: x")
+    text = tty.getvalue()
+    assert "\r\x1b[Khugger: warning: x\n" in text and "0.0s\x1b[Khugger" not in text
+    assert text.endswith("\r\x1b[K") and not _progress._ACTIVE  # cleared at the end, nothing drawn after

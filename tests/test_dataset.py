@@ -303,7 +303,7 @@ def test_ray_backend_gives_the_same_shards(reference, tmp_path):
     assert shard_bytes(out) == shard_bytes(reference)
 
 
-def test_bad_input(tmp_path, capsys):
+def test_bad_input(tmp_path, capsys, monkeypatch):
     assert main(["generate", "box", "--out", str(tmp_path), "--hands", "5y5"]) == 2
     assert "hand spec" in capsys.readouterr().err
     a_file = tmp_path / "plan.npz"
@@ -319,7 +319,11 @@ def test_bad_input(tmp_path, capsys):
     assert main(["generate", "nothing.stl", "--out", str(tmp_path)]) == 2
     assert main(["generate", "box", "--out", str(tmp_path), "--address", "x:1"]) == 2
     assert "applies to the Ray backend" in capsys.readouterr().err
-    # An address where nothing answers is refused at once, not retried for minutes by ray.init.
+    # An address where nothing answers is refused at once, not retried for minutes by ray.init
+    # (before Ray is asked for anything: a stand-in where the extra is not installed).
+    import types
+
+    monkeypatch.setattr(dataset, "_ray", lambda: types.SimpleNamespace())
     for address, message in (("nonsense", "HOST:PORT"), ("127.0.0.1:1", "no Ray cluster answers at 127.0.0.1:1"),
                              ("ray://127.0.0.1:1", "no Ray cluster answers"), ("host:99999", "HOST:PORT"),
                              ("http://127.0.0.1:1", "HOST:PORT"), ("a:b:1", "HOST:PORT"),
@@ -330,7 +334,6 @@ def test_bad_input(tmp_path, capsys):
         assert not (tmp_path / "r").exists()
     # Something answers the address, but ray.init finds no cluster there: one line too.
     import socket
-    import types
 
     def no_cluster(**_kwargs):
         raise ConnectionError("Failed to connect to Ray cluster at that address")

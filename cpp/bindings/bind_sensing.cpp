@@ -114,7 +114,9 @@ void bind_sensing(py::module_& m) {
       m, "Sensing",
       "The whole-sensitive skin: the planner learns the object only through it. Subclass it (calling "
       "``super().__init__()``) and define ``capsule(a, b, radius, cap) -> Touch`` and ``palm(pose, radius, "
-      "thickness, cap) -> float``; ``capsule_clear(a, b, radius, a_outside) -> bool`` may be overridden.")
+      "thickness, cap) -> float``; ``capsule_clear(a, b, radius, a_outside) -> bool`` may be overridden. A "
+      "skin whose answers depend on the queries before them sets the class attribute ``keeps_state = True`` "
+      "(hugger.plan_many then plans the cases sharing it one after another).")
       .def(py::init<>())
       .def(
           "capsule",

@@ -4,7 +4,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
-from typing import Any
+from typing import Any, Iterator
 
 #: prctl's option that sends the calling process a signal when its parent ends (Linux).
 _PR_SET_PDEATHSIG = 1
@@ -56,3 +56,17 @@ def stop_pool(pool: Any) -> None:
         with contextlib.suppress(OSError, ValueError, AttributeError):
             process.terminate()
     pool.shutdown(wait=False, cancel_futures=True)
+
+
+@contextlib.contextmanager
+def running_pool(workers: int, jobs: int) -> Iterator[Any]:
+    """:func:`process_pool` for a ``with`` block: shut down waiting for its jobs when the block
+    ends normally, stopped at once (:func:`stop_pool`) when it raises (Ctrl-C, say), so that an
+    interrupted caller does not wait for work it will drop."""
+    pool = process_pool(workers, jobs)
+    try:
+        yield pool
+    except BaseException:
+        stop_pool(pool)
+        raise
+    pool.shutdown(wait=True)

@@ -17,7 +17,7 @@ def print_line(text: str, stream: TextIO | None = None) -> None:
     """``text`` on a line of its own on ``stream`` (standard error by default), above the bar of a
     progress display drawing there (so that a warning is not glued to the bar)."""
     stream = stream if stream is not None else sys.stderr
-    drawing = next((p for p in reversed(_ACTIVE) if p.stream is stream), None)
+    drawing = next((p for p in reversed(_ACTIVE) if p.stream is stream and p._drawn), None)
     if drawing is not None:
         drawing.note(text)
     else:
@@ -83,6 +83,8 @@ class Progress:
         elapsed = time.perf_counter() - self._start
         if self.enabled and elapsed >= self.delay:
             with self._lock:
+                if self._stop.is_set():  # ended (a note from another thread may come late): nothing more
+                    return
                 self.stream.write("\r" + self._text(elapsed) + "\x1b[K")
                 self.stream.flush()
                 self._drawn = True
@@ -93,11 +95,14 @@ class Progress:
             self._redraw()
 
     def __exit__(self, *exc: object) -> None:
-        self._stop.set()
+        with self._lock:
+            self._stop.set()
+            if self in _ACTIVE:
+                _ACTIVE.remove(self)
         if self._thread is not None:
             self._thread.join()
-        if self in _ACTIVE:
-            _ACTIVE.remove(self)
-        if self._drawn:
-            self.stream.write("\r\x1b[K")
-            self.stream.flush()
+        with self._lock:
+            if self._drawn:
+                self.stream.write("\r\x1b[K")
+                self.stream.flush()
+                self._drawn = False

@@ -656,8 +656,8 @@ def cmd_export_urdf(args: argparse.Namespace) -> int:
     _configuration(traj, args.configuration)
     hand = hugger.Hand.from_dict(traj.hand)
     angles = traj.angles[args.configuration]
-    out = _out_path(args.out, (".urdf", ".xml", ".mjcf"))
-    text = to_mjcf(hand, angles) if out.suffix.lower() in (".xml", ".mjcf") else to_urdf(hand, angles)
+    out = _out_path(args.out, hugger.hands.ROBOT_SUFFIXES)
+    text = to_urdf(hand, angles) if out.suffix.lower() == ".urdf" else to_mjcf(hand, angles)
     write_atomic(out, text)
     if args.json:
         print(json.dumps({"out": str(out), "joint_values": grasp_joint_values(hand, angles)}))

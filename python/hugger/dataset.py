@@ -341,6 +341,8 @@ def _probe_ray(address: str) -> None:
     import subprocess
     import sys
 
+    if address in ("auto", "local"):  # (a cluster found, or started, on this machine: no address to try)
+        return
     code = "import sys, ray; ray.init(address=sys.argv[1], log_to_driver=False, logging_level='ERROR')"
     try:
         done = subprocess.run([sys.executable, "-c", code, address], capture_output=True, text=True,
@@ -375,9 +377,9 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     (a local Ray when ``address`` is None; an address where nothing answers within
     :data:`RAY_CONNECT_TIMEOUT` is refused, and so is one where a Ray client tried in a child
     process joins no cluster within :data:`RAY_PROBE_TIMEOUT`, before the first shard). Shards
-    already present are kept; the index is written last. ``command``: the command line recorded in the index. A mesh file whose size is
-    implausible for a hand (millimetres read as metres: :data:`hugger.hand.PLAUSIBLE_SIZE`) is
-    refused (``ValueError``) unless ``force``.
+    already present are kept; the index is written last. ``command``: the command line recorded
+    in the index. A mesh file whose size is implausible for a hand (millimetres read as metres:
+    :data:`hugger.hand.PLAUSIBLE_SIZE`) is refused (``ValueError``) unless ``force``.
     """
     from .search import approach_directions
 
@@ -389,12 +391,14 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     for name, value in given:
         if value is None and name == "command":
             continue
+        what = "strings (the command line's words)" if name == "command" else "names"
         if isinstance(value, (str, bytes, os.PathLike)):  # a string is one name, not a list
-            raise ValueError(f"{name} must be a list of names, got the single {value!r} (write [{value!r}])")
+            hint = "" if name == "command" else f" (write [{value!r}])"
+            raise ValueError(f"{name} must be a list of {what}, got the single {value!r}{hint}")
         try:
             lists[name] = list(value)  # once: an iterator is read here only
         except TypeError:
-            raise ValueError(f"{name} must be a list of names, got {value!r}") from None
+            raise ValueError(f"{name} must be a list of {what}, got {value!r}") from None
     objects, hands = lists["objects"], lists["hands"]
     command = lists.get("command")
     if not objects:
@@ -457,12 +461,13 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         except ValueError as exc:
             raise ValueError(f"hand {label!r}: {exc}") from None
     # The same hand under two specs (5x5, 5x5:link_length=0.02) would make the same grasps twice;
-    # a dataset made so before this check is still finished by its own command.
-    index_path = Path(out) / "index.json"
-    listed = {h.get("label") for h in _read_index(index_path).get("hands", [])} if index_path.is_file() else set()
+    # a dataset made so before this check (shards of both in its folder) is still finished by its
+    # own command.
+    shard_names = [p.name for p in (Path(out) / "shards").glob("*.npz")] if (Path(out) / "shards").is_dir() else []
     for i, entry in enumerate(hand_entries):
         same = next((e["label"] for e in hand_entries[:i] if e["json"] == entry["json"]), None)
-        if same is not None and not {same, entry["label"]} <= listed:
+        made = [any(n.endswith(f"__{label}.npz") for n in shard_names) for label in (same, entry["label"])]
+        if same is not None and not all(made):
             raise ValueError(f"the hands {same!r} and {entry['label']!r} are the same hand")
     for ob, safe_name in zip(obj_list, names):
         for entry in hand_entries:
@@ -480,8 +485,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         if address is None:
             ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
         else:
-            if address not in ("auto", "local"):
-                _probe_ray(address)
+            _probe_ray(address)
             try:
                 ray.init(address=address, log_to_driver=False)
             except ConnectionError as exc:  # something answered the address check, but no Ray
@@ -517,25 +521,25 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         else:
             from concurrent.futures import FIRST_COMPLETED, wait
 
-            from ._pool import process_pool, stop_pool
+            from ._pool import running_pool
 
-            pool = process_pool(workers, len(todo))  # not a `with`: an interrupted run does not wait
-            pending = {pool.submit(make_shard, t): t for t in todo}
-            try:
-                while pending:
-                    ready, _ = wait(pending, return_when=FIRST_COMPLETED)
-                    for fut in sorted(ready, key=lambda f: pending[f]["file"]):
-                        finished(pending.pop(fut), fut.result())
-            except BaseException:
-                # Interrupted (Ctrl-C, or SIGINT to this process alone): the shards made
-                # meanwhile are kept, the others stopped at once rather than waited for.
-                with contextlib.suppress(Exception):
-                    for fut in sorted(pending, key=lambda f: pending[f]["file"]):
-                        if fut.done() and not fut.cancelled() and fut.exception() is None:
-                            finished(pending[fut], fut.result())
-                stop_pool(pool)
-                raise
-            pool.shutdown(wait=True)
+            # Interrupted (Ctrl-C, or SIGINT to this process alone), the pool is stopped at once
+            # rather than waited for (running_pool), and the shards made meanwhile are kept.
+            with running_pool(workers, len(todo)) as pool:
+                pending: dict[Any, dict[str, Any]] = {}
+                try:
+                    for t in todo:
+                        pending[pool.submit(make_shard, t)] = t
+                    while pending:
+                        ready, _ = wait(pending, return_when=FIRST_COMPLETED)
+                        for fut in sorted(ready, key=lambda f: pending[f]["file"]):
+                            finished(pending.pop(fut), fut.result())
+                except BaseException:
+                    with contextlib.suppress(Exception):
+                        for fut in sorted(pending, key=lambda f: pending[f]["file"]):
+                            if fut.done() and not fut.cancelled() and fut.exception() is None:
+                                finished(pending[fut], fut.result())
+                    raise
     elif todo:
         try:
             remote = ray.remote(num_cpus=1, max_retries=2)(make_shard)

@@ -259,7 +259,9 @@ def _verify(order: Sequence[Candidate], trajs: Sequence[Trajectory | None], coun
     checked candidates (in the order checked), each with ``held`` (and ``robust``,
     ``held_fraction`` when ``robust``) filled in."""
     from . import physics
-    from ._pool import process_pool
+    import contextlib
+
+    from ._pool import running_pool
     from .physics.hold import NOMINAL_FORCE as force
     from .physics.hold import PERTURBATIONS, _validate_job
 
@@ -269,7 +271,7 @@ def _verify(order: Sequence[Candidate], trajs: Sequence[Trajectory | None], coun
     done = planned
     checked: list[Candidate] = []
     pool: Any = None
-    try:
+    with contextlib.ExitStack() as pools:  # the pool, once made, stopped at once if interrupted
         for c in order[:count]:
             traj = trajs[c.index]
             assert traj is not None
@@ -285,7 +287,7 @@ def _verify(order: Sequence[Candidate], trajs: Sequence[Trajectory | None], coun
                     jobs: list[tuple[Trajectory, int, dict[str, Any]]] = [
                         (traj, -1, {**PERTURBATIONS[n], "force": force}) for n in others]
                     if workers > 1 and pool is None:  # one pool for every candidate checked
-                        pool = process_pool(workers, len(jobs))
+                        pool = pools.enter_context(running_pool(workers, len(jobs)))
                     found = (pool.map(_validate_job, jobs) if pool is not None
                              else (physics.validate(replace(j[0]), j[1], **j[2]) for j in jobs))
                     for r in found:
@@ -303,9 +305,6 @@ def _verify(order: Sequence[Candidate], trajs: Sequence[Trajectory | None], coun
             last = checked[-1]
             if (last.robust if robust else last.held):
                 break
-    finally:
-        if pool is not None:
-            pool.shutdown()
     if progress is not None and done != total:  # stopped early: the work is complete
         progress(done, done)
     last = checked[-1]

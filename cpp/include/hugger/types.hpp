@@ -20,8 +20,9 @@ using MatrixX = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::Row
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kPi = 3.14159265358979323846;
 /// The largest coordinate or size (m) a query of a skin takes, and an object's vertex (Python's
-/// hugger.world.MAX_COORDINATE, which checks the vertices, is this): beyond it the absolute tolerances (1e-7 .. 1e-4 m) are below the spacing
-/// of doubles, and squares overflow long before 1e308.
+/// hugger.world.MAX_COORDINATE, which checks the vertices, is this): beyond it the absolute
+/// tolerances (1e-7 .. 1e-4 m) are below the spacing of doubles, and squares overflow long
+/// before 1e308.
 constexpr double kMaxCoordinate = 1e6;
 /// A palm pose is rigid when |R^T R - I| (largest entry) and |det R - 1| are at most this.
 /// The one owner of the rule: Python reads it as hugger._core.RIGID_TOLERANCE.

@@ -10,7 +10,7 @@ from typing import Any, cast
 import numpy as np
 
 from .._checks import positive as _positive, workers as _workers
-from .._pool import process_pool
+from .._pool import running_pool
 from .._types import CONTACT_DISTANCE
 from ._common import _index, _mujoco, _trajectory
 from .decompose import COACD_SETTINGS, CONVEX_RATIO, convex_pieces
@@ -172,7 +172,7 @@ def _run_jobs(jobs: list[tuple[Any, int, dict[str, Any]]], workers: int) -> list
     if workers <= 1 or len(jobs) <= 1:
         return [_validate_job(j) for j in jobs]
     # Processes, not threads: MuJoCo holds the GIL through a whole mj_step batch.
-    with process_pool(workers, len(jobs)) as pool:
+    with running_pool(workers, len(jobs)) as pool:  # stopped at once when interrupted
         return list(pool.map(_validate_job, jobs))
 
 
