@@ -602,4 +602,29 @@ def test_a_line_goes_above_the_bar_that_is_drawn_when_displays_nest(monkeypatch)
             _progress.print_line("hugger: warning: x")
     text = tty.getvalue()
     assert "\r\x1b[Khugger: warning: x\n" in text and "0.0s\x1b[Khugger" not in text
-    assert text.endswith("\r\x1b[K") and not _progress._ACTIVE  # cleared at the end, nothing drawn after
+    tail = text.rsplit("\n", 1)[-1]  # after the last line: no bar left on the screen
+    assert (tail == "" or tail.endswith("\r\x1b[K")) and not _progress._ACTIVE
+
+
+def test_lines_from_threads_are_never_glued_to_a_bar(monkeypatch):
+    import threading
+
+    from hugger import _progress
+
+    tty = _Tty()
+    monkeypatch.setattr(sys, "stderr", tty)
+    with Progress("bar", total=2, delay=0.0) as p:
+        p.update(1)
+
+        def lines() -> None:
+            for i in range(3000):
+                _progress.print_line(f"L{i}")
+
+        threads = [threading.Thread(target=lines) for _ in range(4)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+    text = tty.getvalue()
+    assert text.count("\x1b[KL") + text.count("\nL") == 12000  # each line starts on a cleared or new line
+    assert "s\x1b[KL" not in text.replace("\r\x1b[KL", "")  # never right after a bar

@@ -48,14 +48,15 @@ def stop_pool(pool: Any) -> None:
     running one are ended (SIGTERM), so that an interrupted caller stops at once. Python 3.14's
     ``terminate_workers``; before it, the processes the executor keeps in ``_processes`` (an
     attribute every version since 3.2 has; without it, only the cancelling)."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)  # first: quick, and nothing queued runs after it
     terminate = getattr(pool, "terminate_workers", None)
     if terminate is not None:
         with contextlib.suppress(Exception):
             terminate()
-    for process in list((getattr(pool, "_processes", None) or {}).values()):
+    for process in processes:
         with contextlib.suppress(OSError, ValueError, AttributeError):
             process.terminate()
-    pool.shutdown(wait=False, cancel_futures=True)
 
 
 @contextlib.contextmanager
@@ -66,7 +67,7 @@ def running_pool(workers: int, jobs: int) -> Iterator[Any]:
     pool = process_pool(workers, jobs)
     try:
         yield pool
-    except BaseException:
+        pool.shutdown(wait=True)
+    except BaseException:  # (a Ctrl-C during that wait too)
         stop_pool(pool)
         raise
-    pool.shutdown(wait=True)

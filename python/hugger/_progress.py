@@ -11,16 +11,20 @@ _MARKS = "|/-\\"  # the spinner
 
 #: The progress displays drawing now, the innermost last: lines printed meanwhile go above them.
 _ACTIVE: list[Progress] = []
+#: Every write of a display, and of a line printed while one runs, is made under this lock: a line
+#: from another thread is never glued to a bar.
+_WRITE = threading.Lock()
 
 
 def print_line(text: str, stream: TextIO | None = None) -> None:
-    """``text`` on a line of its own on ``stream`` (standard error by default), above the bar of a
-    progress display drawing there (so that a warning is not glued to the bar)."""
+    """``text`` on a line of its own on ``stream`` (standard error by default), above the bars of
+    the progress displays drawing there (so that a warning is not glued to a bar)."""
     stream = stream if stream is not None else sys.stderr
-    drawing = next((p for p in reversed(_ACTIVE) if p.stream is stream and p._drawn), None)
-    if drawing is not None:
-        drawing.note(text)
-    else:
+    with _WRITE:
+        for p in _ACTIVE:
+            if p.stream is stream and p._drawn:  # (displays on one stream share its last line)
+                stream.write("\r\x1b[K")
+                p._drawn = False
         stream.write(text + "\n")
         stream.flush()
 
@@ -43,14 +47,14 @@ class Progress:
         self._done = 0
         self._tick = 0
         self._drawn = False
-        self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
     def __enter__(self) -> Progress:
         self._start = time.perf_counter()
         if self.enabled:
-            _ACTIVE.append(self)
+            with _WRITE:
+                _ACTIVE.append(self)
             self._thread = threading.Thread(target=self._run, daemon=True)
             self._thread.start()
         return self
@@ -64,12 +68,7 @@ class Progress:
 
     def note(self, line: str) -> None:
         """``line`` on a line of its own above the bar (a ``log(line)`` callback)."""
-        with self._lock:
-            if self._drawn:
-                self.stream.write("\r\x1b[K")
-                self._drawn = False
-            self.stream.write(line + "\n")
-            self.stream.flush()
+        print_line(line, self.stream)
         self._redraw()
 
     def _text(self, elapsed: float) -> str:
@@ -82,7 +81,7 @@ class Progress:
     def _redraw(self) -> None:
         elapsed = time.perf_counter() - self._start
         if self.enabled and elapsed >= self.delay:
-            with self._lock:
+            with _WRITE:
                 if self._stop.is_set():  # ended (a note from another thread may come late): nothing more
                     return
                 self.stream.write("\r" + self._text(elapsed) + "\x1b[K")
@@ -95,13 +94,13 @@ class Progress:
             self._redraw()
 
     def __exit__(self, *exc: object) -> None:
-        with self._lock:
+        with _WRITE:
             self._stop.set()
             if self in _ACTIVE:
                 _ACTIVE.remove(self)
         if self._thread is not None:
             self._thread.join()
-        with self._lock:
+        with _WRITE:
             if self._drawn:
                 self.stream.write("\r\x1b[K")
                 self.stream.flush()
