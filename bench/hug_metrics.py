@@ -36,7 +36,7 @@ from hugger import analysis, scenarios
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from helpers import checker_unavailable, load_checker, random_rotation as _rotation  # noqa: E402
+from helpers import checker_or_note, random_rotation as _rotation  # noqa: E402
 
 KINDS = ("sphere", "ellipsoid", "box", "cylinder", "blob")
 RULES = ("paper", "hug")
@@ -139,10 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.cases < 1:
         ap.error(f"--cases must be at least 1, got {args.cases}")
-    reason = checker_unavailable() if args.check else None
-    if reason:
-        print(f"note: {reason}", file=sys.stderr)
-    checker = load_checker() if args.check and not reason else None
+    checker = checker_or_note() if args.check else None
     result = {}
     for rules in RULES:
         rows = [run_case(seed, rules, checker) for seed in range(args.cases)]

@@ -152,12 +152,9 @@ def main(argv: list[str] | None = None) -> int:
     hand = hugger.Hand()
     checker = None
     if args.check:
-        from helpers import checker_unavailable, load_checker
+        from helpers import checker_or_note
 
-        reason = checker_unavailable()
-        if reason:
-            print(f"note: {reason}", file=sys.stderr)
-        checker = None if reason else load_checker()
+        checker = checker_or_note()
     rows = []
     cases = []
     if not args.only_generated:

@@ -105,6 +105,16 @@ def load_checker():  # loaded once per process, not once per plan
     return mod
 
 
+def checker_or_note():
+    """The checker where it can run; else None, having said why on standard error (a script's
+    --check then plans on without it)."""
+    reason = checker_unavailable()
+    if reason:
+        print(f"note: {reason}", file=sys.stderr)
+        return None
+    return load_checker()
+
+
 def check_file(checker, path: Path, every: int = 1, motion: bool = False,
                swept_every: int = 1) -> tuple[bool, list[str], dict]:
     """Run the independent checker on a saved trajectory; (ok, failures, figures). With ``motion``

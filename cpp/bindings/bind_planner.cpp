@@ -113,9 +113,9 @@ std::optional<double> length_or_none(double x) { return std::isnan(x) ? std::nul
 void bind_planner(py::module_& m) {
   py::class_<PlannerParams>(m, "PlannerParams",
                             "The planner's parameters (docs/python.md). None selects the documented default: step = "
-                            "shortest link / 20, epsilon = step / 10, contact_tolerance = 1e-4 m. The engine checks "
-                            "them (hugger/planner/planner.hpp: check_params); a Planner's params have the defaults "
-                            "resolved.")
+                            "shortest link / 20, epsilon = step / 10, contact_tolerance = 1e-4 m, rules = hug. The "
+                            "engine checks them (hugger/planner/planner.hpp: check_params); a Planner's params have "
+                            "the defaults resolved.")
       .def(py::init([](const py::object& step, const py::object& epsilon, const py::object& contact_tolerance,
                        const py::object& max_iterations, const py::object& rules) {
              PlannerParams p;
@@ -123,9 +123,11 @@ void bind_planner(py::module_& m) {
              p.epsilon = optional_length(epsilon, "epsilon");
              p.contact_tolerance = optional_length(contact_tolerance, "contact_tolerance");
              if (!max_iterations.is_none()) p.max_iterations = whole_number(max_iterations, "max_iterations");
-             // not a string: the engine's message, with the value as Python shows it
-             p.rules = rules_from_string(py::isinstance<py::str>(rules) ? rules.cast<std::string>()
-                                                                       : py::repr(rules).cast<std::string>());
+             // None: the default, as for the others; not a string: the engine's message, with the
+             // value as Python shows it
+             if (!rules.is_none())
+               p.rules = rules_from_string(py::isinstance<py::str>(rules) ? rules.cast<std::string>()
+                                                                         : py::repr(rules).cast<std::string>());
              check_params(p);
              return p;
            }),

@@ -201,9 +201,9 @@ class SimulatedWorld(Sensing):
         ...
 class PlannerParams:
     """
-    The planner's parameters (docs/python.md). None selects the documented default: step = shortest link / 20, epsilon = step / 10, contact_tolerance = 1e-4 m. The engine checks them (hugger/planner/planner.hpp: check_params); a Planner's params have the defaults resolved.
+    The planner's parameters (docs/python.md). None selects the documented default: step = shortest link / 20, epsilon = step / 10, contact_tolerance = 1e-4 m, rules = hug. The engine checks them (hugger/planner/planner.hpp: check_params); a Planner's params have the defaults resolved.
     """
-    def __init__(self, *, step: typing.SupportsFloat | None = None, epsilon: typing.SupportsFloat | None = None, contact_tolerance: typing.SupportsFloat | None = None, max_iterations: typing.SupportsInt | None = None, rules: str = 'hug') -> None:
+    def __init__(self, *, step: typing.SupportsFloat | None = None, epsilon: typing.SupportsFloat | None = None, contact_tolerance: typing.SupportsFloat | None = None, max_iterations: typing.SupportsInt | None = None, rules: str | None = 'hug') -> None:
         ...
     def __repr__(self) -> str:
         ...

@@ -577,10 +577,14 @@ def cmd_generate(args: argparse.Namespace) -> int:
 
 
 def _configuration(traj: Trajectory, k: int) -> None:
-    """Refuse a --configuration index outside the trajectory (negative ones count from the end)."""
-    n = len(traj)
-    if not -n <= k < n:
-        raise UsageError(f"--configuration {k} is out of range for {n} configurations")
+    """Refuse a --configuration index outside the trajectory (negative ones count from the end),
+    by trajectory.configuration_index's rule."""
+    from .trajectory import configuration_index
+
+    try:
+        configuration_index(len(traj), k)
+    except IndexError:
+        raise UsageError(f"--configuration {k} is out of range for {len(traj)} configurations") from None
 
 
 def cmd_export_mjcf(args: argparse.Namespace) -> int:

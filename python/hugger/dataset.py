@@ -355,12 +355,46 @@ def _probe_ray(address: str) -> None:
         raise ValueError(f"no Ray cluster answers at {address}: {lines[-1] if lines else 'ray.init failed'}")
 
 
+@contextlib.contextmanager
+def _ray_session(ray: Any, address: str | None, workers: int) -> Iterator[None]:
+    """Ray for the block (``ray`` None: no Ray needed): started here unless it runs already, on
+    ``address`` (tried first: _probe_ray) or locally with ``workers`` CPUs, and shut down when the
+    block ends if it was started here."""
+    if ray is None or ray.is_initialized():
+        yield
+        return
+    if address is None:
+        ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+    else:
+        _probe_ray(address)
+        try:
+            ray.init(address=address, log_to_driver=False)
+        except ConnectionError as exc:  # something answered the address check, but no Ray
+            raise ValueError(f"no Ray cluster answers at {address}: {exc}") from None
+    try:
+        yield
+    finally:
+        ray.shutdown()
+
+
 def _ray() -> Any:
     try:
         import ray
     except ImportError:
         raise ImportError("--backend ray needs Ray: pip install 'hugger[cluster]'") from None
     return ray
+
+
+def _names(name: str, value: Any, what: str = "names") -> list[Any]:
+    """``value`` (a list, or any iterable, read here once) as a list; a ValueError naming ``name``
+    for a single string (one name, not a list of them) or for what is no iterable."""
+    if isinstance(value, (str, bytes, os.PathLike)):
+        hint = f" (write [{value!r}])" if what == "names" else ""
+        raise ValueError(f"{name} must be a list of {what}, got the single {value!r}{hint}")
+    try:
+        return list(value)
+    except TypeError:
+        raise ValueError(f"{name} must be a list of {what}, got {value!r}") from None
 
 
 def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: int = 26, hands: Sequence[str] = ("5x5",),
@@ -386,21 +420,8 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     approach_directions(approaches)  # checks K
     if backend not in ("local", "ray"):
         raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
-    lists: dict[str, list[Any]] = {}
-    given: tuple[tuple[str, Any], ...] = (("objects", objects), ("hands", hands), ("command", command))
-    for name, value in given:
-        if value is None and name == "command":
-            continue
-        what = "strings (the command line's words)" if name == "command" else "names"
-        if isinstance(value, (str, bytes, os.PathLike)):  # a string is one name, not a list
-            hint = "" if name == "command" else f" (write [{value!r}])"
-            raise ValueError(f"{name} must be a list of {what}, got the single {value!r}{hint}")
-        try:
-            lists[name] = list(value)  # once: an iterator is read here only
-        except TypeError:
-            raise ValueError(f"{name} must be a list of {what}, got {value!r}") from None
-    objects, hands = lists["objects"], lists["hands"]
-    command = lists.get("command")
+    objects, hands = _names("objects", objects), _names("hands", hands)
+    command = None if command is None else _names("command", command, "strings (the command line's words)")
     if not objects:
         raise ValueError("give at least one object")
     if not hands:
@@ -450,6 +471,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     if len(set(names)) != len(names):
         raise ValueError(f"two objects share a name: {sorted(x for x in names if names.count(x) > 1)}")
     root = Path(out)
+    shard_dir = root / "shards"
     tasks: list[dict[str, Any]] = []
     from .hand import Hand
 
@@ -463,7 +485,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     # The same hand under two specs (5x5, 5x5:link_length=0.02) would make the same grasps twice;
     # a dataset made so before this check (shards of both in its folder) is still finished by its
     # own command.
-    shard_names = [p.name for p in (Path(out) / "shards").glob("*.npz")] if (Path(out) / "shards").is_dir() else []
+    shard_names = [p.name for p in shard_dir.glob("*.npz")]  # (none where the folder is not yet)
     for i, entry in enumerate(hand_entries):
         same = next((e["label"] for e in hand_entries[:i] if e["json"] == entry["json"]), None)
         made = [any(n.endswith(f"__{label}.npz") for n in shard_names) for label in (same, entry["label"])]
@@ -477,20 +499,10 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
             task["key"] = _task_key(task)
             tasks.append(task)
     _check_index(root, tasks)
-    shard_dir = root / "shards"
     todo = [t for t in tasks if not _shard_done(shard_dir / t["file"], t["key"])]
-    # Ray first: a cluster that cannot be reached is refused before anything is written.
-    started_here = bool(todo) and backend == "ray" and not ray.is_initialized()
-    if started_here:
-        if address is None:
-            ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
-        else:
-            _probe_ray(address)
-            try:
-                ray.init(address=address, log_to_driver=False)
-            except ConnectionError as exc:  # something answered the address check, but no Ray
-                raise ValueError(f"no Ray cluster answers at {address}: {exc}") from None
-    try:
+    # Ray first: a cluster that cannot be reached is refused before anything is written (and a Ray
+    # started here is shut down however the block ends).
+    with _ray_session(ray if todo else None, address, workers):
         shard_dir.mkdir(parents=True, exist_ok=True)
         remove_temporaries(shard_dir)  # left by a killed run
         say = log or (lambda s: None)
@@ -498,50 +510,45 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         done = len(tasks) - len(todo)
         if progress is not None:
             progress(done, len(tasks))
-    except BaseException:
-        if started_here:  # (the loop below shuts it down once it runs)
-            ray.shutdown()
-        raise
 
-    digests: dict[str, str] = {}  # of the shards written now (kept ones are hashed from disk)
+        digests: dict[str, str] = {}  # of the shards written now (kept ones are hashed from disk)
 
-    def finished(task: dict[str, Any], data: bytes) -> None:
-        nonlocal done
-        write_atomic(shard_dir / task["file"], data)
-        digests[task["file"]] = hashlib.sha256(data).hexdigest()
-        done += 1
-        say(f"shard {done}/{len(tasks)} written: {task['file']}")
-        if progress is not None:
-            progress(done, len(tasks))
+        def finished(task: dict[str, Any], data: bytes) -> None:
+            nonlocal done
+            write_atomic(shard_dir / task["file"], data)
+            digests[task["file"]] = hashlib.sha256(data).hexdigest()
+            done += 1
+            say(f"shard {done}/{len(tasks)} written: {task['file']}")
+            if progress is not None:
+                progress(done, len(tasks))
 
-    if todo and backend == "local":
-        if workers == 1 or len(todo) == 1:
-            for t in todo:
-                finished(t, make_shard(t))
-        else:
-            from concurrent.futures import FIRST_COMPLETED, wait
+        if todo and backend == "local":
+            if workers == 1 or len(todo) == 1:
+                for t in todo:
+                    finished(t, make_shard(t))
+            else:
+                from concurrent.futures import FIRST_COMPLETED, wait
 
-            from ._pool import running_pool
+                from ._pool import running_pool
 
-            # Interrupted (Ctrl-C, or SIGINT to this process alone), the pool is stopped at once
-            # rather than waited for (running_pool), and the shards made meanwhile are kept.
-            with running_pool(workers, len(todo)) as pool:
-                pending: dict[Any, dict[str, Any]] = {}
-                try:
-                    for t in todo:
-                        pending[pool.submit(make_shard, t)] = t
-                    while pending:
-                        ready, _ = wait(pending, return_when=FIRST_COMPLETED)
-                        for fut in sorted(ready, key=lambda f: pending[f]["file"]):
-                            finished(pending.pop(fut), fut.result())
-                except BaseException:
-                    with contextlib.suppress(Exception):
-                        for fut in sorted(pending, key=lambda f: pending[f]["file"]):
-                            if fut.done() and not fut.cancelled() and fut.exception() is None:
-                                finished(pending[fut], fut.result())
-                    raise
-    elif todo:
-        try:
+                # Interrupted (Ctrl-C, or SIGINT to this process alone), the pool is stopped at once
+                # rather than waited for (running_pool), and the shards made meanwhile are kept.
+                with running_pool(workers, len(todo)) as pool:
+                    pending: dict[Any, dict[str, Any]] = {}
+                    try:
+                        for t in todo:
+                            pending[pool.submit(make_shard, t)] = t
+                        while pending:
+                            ready, _ = wait(pending, return_when=FIRST_COMPLETED)
+                            for fut in sorted(ready, key=lambda f: pending[f]["file"]):
+                                finished(pending.pop(fut), fut.result())
+                    except BaseException:
+                        with contextlib.suppress(Exception):
+                            for fut in sorted(pending, key=lambda f: pending[f]["file"]):
+                                if fut.done() and not fut.cancelled() and fut.exception() is None:
+                                    finished(pending[fut], fut.result())
+                        raise
+        elif todo:
             remote = ray.remote(num_cpus=1, max_retries=2)(make_shard)
             waiting: dict[Any, dict[str, Any]] = {}
             queue = list(todo)
@@ -552,9 +559,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
                 ready, _ = ray.wait(list(waiting), num_returns=1)
                 for ref in ready:
                     finished(waiting.pop(ref), ray.get(ref))
-        finally:
-            if started_here:
-                ray.shutdown()
+
     index = {
         "format": DATASET_FORMAT, "format_version": DATASET_VERSION, "hugger_version": VERSION,
         "command": list(command) if command is not None else None,

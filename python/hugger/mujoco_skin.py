@@ -262,9 +262,7 @@ def _finish(sim: Simulation, traj: Any, mode: str, start_centre: np.ndarray) -> 
     T = sim.object_pose()
     moved = dataclasses.replace(traj, object_vertices=sim.obj.vertices @ T[:3, :3].T + T[:3, 3])
     gaps = sim.link_gaps()
-    if sim.data.warning[sim.mujoco.mjtWarning.mjWARN_BADQACC].number:
-        # MuJoCo reset the simulation when its accelerations blew up: where it left the object
-        # says nothing of the grasp
+    if _ph._resets(sim.mujoco, sim.data):  # where a reset left the object says nothing of the grasp
         hold: dict[str, Any] = {"held": False, "diverged": True}
     else:
         hold = _ph.validate(moved) if len(traj) else {"held": False}

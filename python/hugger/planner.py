@@ -62,10 +62,9 @@ def check_params(params: Mapping[str, Any], what: str = "planner parameters", al
     skin = params.get("skin")
     if skin is not None and skin not in SKINS:
         raise ValueError(f"skin must be one of {list(SKINS)} or None (the default), got {skin!r}")
-    rules = params.get("rules")
     checked = _core.PlannerParams(step=params.get("step"), epsilon=params.get("epsilon"),
                                   contact_tolerance=params.get("contact_tolerance"),
-                                  max_iterations=params.get("max_iterations"), rules="hug" if rules is None else rules)
+                                  max_iterations=params.get("max_iterations"), rules=params.get("rules"))
     if hand is not None:
         _core.resolve_params(hand._core, checked)
 
@@ -128,7 +127,7 @@ class Planner:
         # The engine checks the parameters (the rules too), the skin's name, T and the pose
         # (ValueError saying what is wrong), then plans Phase 1.
         params = _core.PlannerParams(step=step, epsilon=epsilon, contact_tolerance=contact_tolerance,
-                                     max_iterations=max_iterations, rules="hug" if rules is None else rules)
+                                     max_iterations=max_iterations, rules=rules)
         from .skins.sensor import SensorModel
 
         if isinstance(sensing, SensorModel):  # (the engine would find every part touching at the start)

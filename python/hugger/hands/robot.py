@@ -175,22 +175,21 @@ def _check_tree(source: str, links: list[str], joints: list[tuple[str, str, str]
                 raise ValueError(f"{source}: two {kind} are called {name!r}")
             seen.add(name)
     known = set(links)
-    parent_of: dict[str, str] = {}
+    up: dict[str, tuple[str, str]] = {}  # link -> (the joint above it, its parent link)
     for name, parent, child in joints:
         for role, link in (("parent", parent), ("child", child)):
             if link not in known:
                 raise ValueError(f"{source}: joint {name!r} names {role} link {link!r}, which the file does not have")
-        if child in parent_of:
-            raise ValueError(f"{source}: link {child!r} is the child of two joints ({parent_of[child]!r} and {name!r})")
-        parent_of[child] = name
-    parent_link = {child: parent for _, parent, child in joints}
+        if child in up:
+            raise ValueError(f"{source}: link {child!r} is the child of two joints ({up[child][0]!r} and {name!r})")
+        up[child] = (name, parent)
     for link in links:  # each link's parents lead to a root, or round a cycle
         path, at = set(), link
-        while at in parent_link:
+        while at in up:
             if at in path:
                 raise ValueError(f"{source}: the joints form a cycle through link {at!r}")
             path.add(at)
-            at = parent_link[at]
+            at = up[at][1]
 
 
 def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | None, palm_radius: float | None,

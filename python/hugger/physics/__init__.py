@@ -68,7 +68,7 @@ from __future__ import annotations
 from typing import Any
 
 from ._common import _coacd as _coacd, _floats as _floats, _index as _index, _mujoco as _mujoco
-from ._common import _trajectory as _trajectory
+from ._common import _resets as _resets, _trajectory as _trajectory
 from .decompose import COACD_SETTINGS as COACD_SETTINGS, CONVEX_RATIO as CONVEX_RATIO
 from .decompose import convex_pieces, default_cache_dir
 from .hold import DIRECTIONS as DIRECTIONS, MAX_DISPLACEMENT as MAX_DISPLACEMENT

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ..trajectory import Trajectory
+from ..trajectory import Trajectory, configuration_index
 
 
 def _mujoco(user: str = "the physics check") -> Any:
@@ -45,9 +45,15 @@ def _trajectory(traj: Any, needs_object: bool = False) -> Trajectory:
 
 
 def _index(traj: Trajectory, k: Any) -> int:
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
-        raise ValueError(f"k must be a whole number, got {k!r}")
-    n = len(traj)
-    if not -n <= int(k) < n:
-        raise ValueError(f"k = {k} is out of range for a trajectory of {n} configurations")
-    return int(k) % n
+    """Configuration ``k`` of ``traj`` as an index (trajectory.configuration_index's rule), every
+    refusal a ValueError (the physics API's, out of range included)."""
+    try:
+        return configuration_index(len(traj), k)
+    except IndexError as exc:
+        raise ValueError(str(exc)) from None
+
+
+def _resets(mujoco: Any, data: Any) -> int:
+    """How often MuJoCo has reset ``data`` since it was made, its accelerations having blown up (it
+    warns, then starts again from the model's initial state: finite figures that mean nothing)."""
+    return int(data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)

@@ -12,7 +12,7 @@ import numpy as np
 from .._checks import positive as _positive, workers as _workers
 from .._pool import running_pool
 from .._types import CONTACT_DISTANCE
-from ._common import _index, _mujoco, _trajectory
+from ._common import _index, _mujoco, _resets, _trajectory
 from .decompose import COACD_SETTINGS, CONVEX_RATIO, convex_pieces
 from .mjcf import (ARMATURE, CONDIM, DAMPRATIO, GRAVITY, IMPRATIO, KP, LINK_DENSITY, ROLLING_FRICTION, SOLIMP, SOLREF,
                    SQUEEZE, TIMESTEP, TORSIONAL_FRICTION, _build_mjcf)
@@ -103,7 +103,6 @@ def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: flo
     mujoco.mj_step(model, data, nstep=int(round(SETTLE / TIMESTEP)))
     mujoco.mj_forward(model, data)
     start = copy.copy(data)
-    bad_acc = mujoco.mjtWarning.mjWARN_BADQACC
     pos_s, quat_s = data.xpos[obj].copy(), data.xquat[obj].copy()
 
     weight = mass * GRAVITY
@@ -117,10 +116,7 @@ def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: flo
         mujoco.mj_forward(model, d)
         disp = float(np.linalg.norm(d.xpos[obj] - pos_s))
         rot = _rotation_deg(quat_s, d.xquat[obj])
-        # MuJoCo resets a simulation whose accelerations blow up (finite figures from the reset
-        # state): its warning counter says so.
-        reset = d.warning[bad_acc].number > start.warning[bad_acc].number
-        if math.isfinite(disp) and math.isfinite(rot) and not reset:
+        if math.isfinite(disp) and math.isfinite(rot) and _resets(mujoco, d) == _resets(mujoco, start):
             directions[name] = {"displacement_m": disp, "rotation_deg": rot,
                                 "held": bool(disp < MAX_DISPLACEMENT and rot < MAX_ROTATION_DEG)}
         else:  # the simulation diverged: no figures, not held
