@@ -465,3 +465,45 @@ def test_a_touch_takes_no_nan_gap_by_its_setter_either():
     assert t.gap == 0.1
     t.gap = -np.inf  # inside, depth not measured: an answer
     assert t.gap == -np.inf
+
+
+class InfInside(skins.SphereSkin):
+    """A sphere read a little below the truth, answering -inf (allowed, docs/skins.md) once a
+    part's axis is inside; it refuses any query at a non-finite point."""
+
+    def __init__(self, radius):
+        super().__init__(radius)
+        self.rng = np.random.default_rng(0)
+        self.inf_answers = 0
+
+    def capsule(self, a, b, radius, cap=math.inf):
+        assert np.isfinite(a).all() and np.isfinite(b).all(), f"asked about {a}, {b}"
+        t = super().capsule(a, b, radius, cap)
+        g = t.gap - self.rng.uniform(0, 2e-5)
+        if g < -radius:
+            self.inf_answers += 1
+            g = -math.inf
+        return skins.Touch(g, t.on_hand, t.on_object, t.normal)
+
+
+def test_a_skin_answering_minus_inf_is_never_asked_about_nan_points():
+    skin = InfInside(0.04)
+    traj = hugger.Planner(hugger.Hand(link_radius=0.0), skin, [0, 0, 0], start()).plan()
+    assert skin.inf_answers > 0  # the case exercises the -inf answers (boundary following's probes)
+    assert traj.status == "done"
+
+
+@pytest.mark.parametrize("normal", [[1e200, 1e200, 0.0], [3e-162, 0.0, 0.0], [1e-170, 1e-170, 0.0], [2.0, 0.0, 0.0]])
+def test_a_python_skins_normal_of_any_finite_size_is_made_unit(normal):
+    class S(hugger.Sensing):
+        def capsule(self, a, b, radius, cap=math.inf):
+            return hugger.Touch(0.01, a, a, normal)
+
+        def palm(self, pose, radius, thickness, cap=math.inf):
+            return 1.0
+
+    # the base class's method asks the skin as the planner does, through the engine's checks
+    n = hugger.Sensing.capsule(S(), np.zeros(3), np.ones(3), 0.001).normal
+    u = np.asarray(normal) / max(normal)
+    np.testing.assert_allclose(n, u / np.linalg.norm(u), rtol=1e-12)
+    assert abs(np.linalg.norm(n) - 1.0) < 1e-15

@@ -41,8 +41,12 @@ double check_gap(double gap, const char* source) {
 Touch check_touch(Touch touch, const char* source) {
   check_gap(touch.gap, source);
   HUGGER_CHECK_ARGUMENT(touch.on_hand.allFinite() && touch.on_object.allFinite() && touch.normal.allFinite() &&
-                            touch.normal.norm() > 0.0,
+                            touch.normal.cwiseAbs().maxCoeff() > 0.0,
                         source << " non-finite points or a zero or non-finite normal");
+  // A normal whose squared length would overflow or lose its precision is scaled first (the
+  // ordinary ones are normalized as they come, bit for bit as before).
+  const double n2 = touch.normal.squaredNorm();
+  if (!(n2 >= 1e-200 && n2 <= 1e200)) touch.normal /= touch.normal.cwiseAbs().maxCoeff();
   touch.normal.normalize();
   return touch;
 }
@@ -113,7 +117,9 @@ FollowResult Sensing::follow_boundary(const FollowRequest& req) const {
     at->x = x;
     at->f = t.gap - req.level;
     at->g = Vec2(t.normal.dot(req.plane.u), t.normal.dot(req.plane.p));
-    return at->g.norm() > 1e-3;  // the surface must not be (nearly) parallel to the plane
+    // Off the level curve's reach: a gap of -inf (a skin may answer it once the axis is inside
+    // O) or +inf gives no Newton step. And the surface must not be (nearly) parallel to the plane.
+    return std::isfinite(at->f) && at->g.norm() > 1e-3;
   };
   // Newton steps along the gradient back onto the level curve (each at most h long).
   auto project = [&](Vec2 x, Level* at) {
