@@ -289,6 +289,16 @@ def test_contact_tolerance_below_double_resolution_is_refused(hand, sphere):
     assert traj.status == "done", f"ran to {traj.status} with first contact {traj.stats['first_contact_iteration']}"
 
 
+def test_a_skin_far_from_the_origin_is_refused_at_the_default_tolerance_too(hand):
+    # A skin records no mesh: T and the pose give the scene's extent, for the tolerance in force
+    # whether given or the default (the same value both ways gets the same answer).
+    c = np.array([1e15, 0.0, 0.0])
+    pose = hugger.look_at(c + [0, 0, 0.2], c)
+    for given in ({}, {"contact_tolerance": hugger.Planner(hand, hugger.objects.sphere(0.04), [0, 0, 0], start()).params["contact_tolerance"]}):
+        with pytest.raises(ValueError, match="below the resolution"):
+            hugger.Planner(hand, hugger.skins.SphereSkin(0.04, c), c, pose, **given)
+
+
 @pytest.mark.parametrize("which", ["target", "palm_pose"])
 def test_complex_target_or_pose_gets_a_value_error(hand, sphere, which):
     args = {"target": np.zeros(3), "palm_pose": start()}
