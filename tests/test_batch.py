@@ -65,6 +65,31 @@ def test_cases_sharing_a_noisy_skin_plan_as_in_one_thread(cases, threads):
     assert not same(reference[3], hugger.plan_many([mixed()[3]], threads=1)[0])
 
 
+def test_sensor_models_wrapping_one_noisy_skin_plan_as_in_one_thread(cases):
+    # Each wrapper is a skin of its own, but all read the one noise stream they wrap.
+    def wrapped():
+        noisy = hugger.skins.SensorModel(cases[0]["obj"], gap_noise=2e-5, seed=1)
+        return [{**c, "obj": hugger.skins.SensorModel(noisy, range=0.01 + 0.001 * i), "contact_tolerance": 4e-4}
+                for i, c in enumerate(cases[:4])]
+
+    reference = hugger.plan_many(wrapped(), threads=1)
+    for _ in range(2):
+        assert all(same(t, r) for t, r in zip(hugger.plan_many(wrapped(), threads=4), reference))
+
+
+def test_cases_are_grouped_by_the_stateful_skins_they_wrap(cases):
+    from hugger import batch
+
+    noisy = hugger.skins.SensorModel(cases[0]["obj"], gap_noise=2e-6)
+    model = hugger.skins.SensorModel(noisy, range=0.1)  # a model of it: reads its stream
+    mesh = hugger.skins.MeshSkin(cases[1]["obj"])
+    skins = [model, hugger.skins.SensorModel(mesh), noisy, hugger.skins.SensorModel(mesh),
+             hugger.skins.SensorModel(model, taxel_spacing=0.004), cases[5]["obj"]]
+    jobs = [batch._job(i, {**c, "obj": skin}, None, {}, None) for i, (c, skin) in enumerate(zip(cases, skins))]
+    # 0, 2 and 4 read noisy's stream; 1 and 3 each their own model over a stateless skin
+    assert batch._groups(jobs) == [[0, 2, 4], [1], [3], [5]]
+
+
 def test_plans_pass_the_checker(cases, checker, tmp_path):
     for i, t in enumerate(hugger.plan_many(cases[:2], threads=2)):
         helpers.save_and_check(checker, t, tmp_path / f"plan{i}.npz", samples=30)

@@ -110,15 +110,40 @@ def _run_all(jobs: list[_Job]) -> list[Trajectory | BaseException]:
     return out
 
 
+def _stateful(skin: Any) -> list[int]:
+    """The ids of the skins that keep state (``keeps_state``) among ``skin`` and the skins it wraps
+    (a wrapper's ``skin``, as a SensorModel's)."""
+    out: list[int] = []
+    seen: set[int] = set()
+    while skin is not None and id(skin) not in seen:
+        seen.add(id(skin))
+        if getattr(skin, "keeps_state", False):
+            out.append(id(skin))
+        skin = getattr(skin, "skin", None)
+    return out
+
+
 def _groups(jobs: list[_Job]) -> list[list[int]]:
-    """The cases, in groups planned one after another in one thread: the cases sharing a skin that
-    keeps state (``keeps_state``: a SensorModel's noise stream) in input order, so that each reads
-    the skin as a serial run would; every other case alone (stateless skins, compiled or not, are
-    shared by threads in parallel)."""
-    groups: dict[Any, list[int]] = {}
+    """The cases, in groups planned one after another in one thread: the cases that share a skin
+    which keeps state (``keeps_state``: a SensorModel's noise stream), given or wrapped by the
+    skins given, in input order, so that each reads the skin as a serial run would; every other
+    case alone (stateless skins, compiled or not, are shared by threads in parallel)."""
+    group_of: dict[int, int] = {}  # a stateful skin's id -> its group (the first case that reads it)
+    parent = list(range(len(jobs)))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            i = parent[i]
+        return i
+
     for i, job in enumerate(jobs):
-        key = ("skin", id(job.obj)) if getattr(job.obj, "keeps_state", False) else ("case", i)
-        groups.setdefault(key, []).append(i)
+        for key in _stateful(job.obj):
+            j = group_of.setdefault(key, i)
+            a, b = root(i), root(j)
+            parent[max(a, b)] = min(a, b)  # a group is known by its first case
+    groups: dict[int, list[int]] = {}
+    for i in range(len(jobs)):
+        groups.setdefault(root(i), []).append(i)
     return list(groups.values())
 
 
@@ -137,8 +162,8 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
     ``threads``: worker threads (default: the CPUs this process may use; 1 plans in the calling
     thread). The engine plans with the GIL released, so threads run in parallel; cases may share
     a :class:`Hand`, an :class:`Object` and a skin. Cases that share a skin which keeps state
-    (``keeps_state = True``: a SensorModel's noise stream) are planned one after another in input
-    order, in one thread, so that the results are those of ``threads=1``; ``progress`` then
+    (``keeps_state = True``: a SensorModel's noise stream), given or wrapped (a wrapper's ``skin``),
+    are planned one after another in input order, in one thread, so that the results are those of ``threads=1``; ``progress`` then
     reports them when the last of them ends.
 
     ``progress(done, total)`` is called in the calling thread after each case finishes.
