@@ -164,6 +164,8 @@ def _edit(key, fn):
     (_edit("palm_pose", lambda x: np.concatenate([x[:1], x[1:] * np.diag([1.0, 1.0, 1.5, 1.0])])),
      r"palm_pose\[1\] .*(rotation|orthonormal)"),
     (_edit("angles", lambda x: x[:, :, :-1]), "angles has shape"),
+    (_edit("joints", lambda x: x + 1e300), r"joints holds numbers beyond \+-1e\+06"),
+    (_edit("angles", lambda x: x + 1e7), "angles holds numbers beyond"),
     (_edit("tip_state", lambda x: x.astype(float)), "tip_state .* dtype"),
     (_edit("tip_state", lambda x: x + 7), r"tip_state holds [7-9]"),
     (_edit("tip_state", lambda x: x.astype(np.int64) + 256), "tip_state holds"),  # would wrap to int8 0
@@ -185,7 +187,12 @@ def _edit(key, fn):
     (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "fingers": 10 ** 9}))), "fingers"),
     (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "link_radius": -1}))), "link_radius"),
     (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "link_lengths": [[1]]}))),
-     "link_lengths"),
+     "link_length"),
+    # the hand's own rules (Hand.from_dict): what tools read, and everything else
+    (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "finger_angles": [0.0, 1.0]}))),
+     "finger_angles must hold 5"),
+    (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "palm_radius": 0}))), "palm_radius"),
+    (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "links": 4}))), "links"),
     (_edit("params_json", lambda x: np.array("[1, 2]")), "params_json"),
 ])
 def test_wrong_dtypes_shapes_and_values_are_refused(saved, tmp_path, edit, match):

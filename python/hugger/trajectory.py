@@ -17,7 +17,7 @@ from . import _core
 from ._checks import positive
 from ._files import atomic_path
 from ._types import CONTACT_DISTANCE, MAX_FINGERS, MAX_LINKS, VERSION, Configuration
-from .world import Object
+from .world import MAX_COORDINATE, Object
 
 FORMAT_VERSION = 1
 
@@ -216,6 +216,9 @@ class Trajectory:
                 raise ValueError(f"{source}: {key} has shape {a.shape} and dtype {a.dtype}, expected {ndim} dimensions of kind {kinds!r}")
             if a.dtype.kind == "f" and not np.all(np.isfinite(a)):
                 raise ValueError(f"{source}: {key} holds non-finite numbers")
+            if a.dtype.kind == "f" and a.size and np.abs(a).max() > MAX_COORDINATE:
+                # coordinates (m) and angles (rad) alike: an object's coordinates are bounded so
+                raise ValueError(f"{source}: {key} holds numbers beyond +-{MAX_COORDINATE:g}")
             arrays[key] = a
         try:
             hand = json.loads(strings["hand_json"])
@@ -235,7 +238,7 @@ class Trajectory:
         for name, count, limit in (("fingers", m, MAX_FINGERS), ("links", n, MAX_LINKS)):
             if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= limit:
                 raise ValueError(f"{source}: hand_json {name} must be a whole number in 1..{limit}, got {count!r}")
-        _check_hand_sizes(hand, m, n, source)
+        _check_hand(hand, m, n, source)
         k = arrays["palm_pose"].shape[0]
         if k < 1:
             raise ValueError(f"{source}: {EMPTY}")
@@ -363,26 +366,14 @@ def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, source: str) -> np.
     return array
 
 
-def _check_hand_sizes(hand: dict[str, Any], m: int, n: int, source: str) -> None:
-    """The sizes of ``hand_json`` that tools read: finite, non-negative numbers (m), link_lengths (M, N) > 0."""
-    for key in ("link_radius", "palm_radius", "palm_thickness"):
-        x = hand.get(key)
-        if isinstance(x, bool) or not isinstance(x, (int, float)) or not np.isfinite(x) or x < 0:
-            raise ValueError(f"{source}: hand_json {key} must be a finite number >= 0 (m), got {x!r}")
+def _check_hand(hand: dict[str, Any], m: int, n: int, source: str) -> None:
+    """``hand_json`` describes a hand :meth:`hugger.Hand.from_dict` takes (its rules), of the
+    arrays' M fingers and N links."""
+    from .hand import Hand
+
     try:
-        lengths = np.asarray(hand.get("link_lengths"), dtype=np.float64)
-    except (TypeError, ValueError, OverflowError):
-        lengths = np.zeros(0)
-    if lengths.shape != (m, n) or not np.all(np.isfinite(lengths)) or not np.all(lengths > 0):
-        raise ValueError(f"{source}: hand_json link_lengths must be a ({m}, {n}) list of positive lengths (m)")
-    # the optional general layout (hugger.Hand.from_layout): shapes and finite numbers
-    for key, shape in (("finger_roots", (m, 3)), ("finger_directions", (m, 3)), ("rest_angles", (m, n)),
-                       ("joint_limits", (m, n, 2))):
-        if key not in hand:
-            continue
-        try:
-            a = np.asarray(hand[key], dtype=np.float64)
-        except (TypeError, ValueError, OverflowError):
-            a = np.zeros(0)
-        if a.shape != shape or not np.all(np.isfinite(a)):
-            raise ValueError(f"{source}: hand_json {key} must be a {shape} list of finite numbers")
+        h = Hand.from_dict(hand)
+    except (ValueError, TypeError, OverflowError, RecursionError) as exc:
+        raise ValueError(f"{source}: hand_json is not a valid hand: {exc}") from None
+    if (h.fingers, h.links) != (m, n):
+        raise ValueError(f"{source}: hand_json describes {h.fingers} x {h.links} links, not {m} x {n}")
