@@ -410,6 +410,71 @@ def test_a_damaged_shard_is_named_and_made_again(reference, tmp_path):
         ds[len(ds)]
 
 
+def _edit_index(index: dict, how: str) -> Any:
+    if how == "deep":
+        return "[" * 100000 + "]" * 100000
+    if how == "shard is a string":
+        index["shards"][0] = "shards/x.npz"
+    elif how == "shard without file":
+        del index["shards"][0]["file"]
+    elif how == "file is a number":
+        index["shards"][0]["file"] = 5
+    elif how == "hands not a list":
+        index["hands"] = {"5x5": {}}
+    return json.dumps(index)
+
+
+@pytest.mark.parametrize("how", ["deep", "shard is a string", "shard without file", "file is a number", "hands not a list"])
+def test_a_malformed_index_is_a_value_error(reference, tmp_path, how):
+    import shutil
+
+    out = tmp_path / "ds"
+    shutil.copytree(reference, out)
+    (out / "index.json").write_text(_edit_index(json.loads((out / "index.json").read_text()), how))
+    with pytest.raises(ValueError, match="is not the index of a hugger dataset"):
+        hugger.Dataset(out)
+
+
+def _rewrite_shard(path: Path, edit) -> None:
+    with np.load(path, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    edit(arrays)
+    with open(path, "wb") as fh:
+        np.savez(fh, **arrays)
+
+
+@pytest.mark.parametrize("edit, why", [
+    (lambda a: a.update(status=np.array("done")), "no status per approach"),
+    (lambda a: a.pop("contact_offsets"), "no contact_offsets"),
+    (lambda a: a.update(contact_offsets=a["contact_offsets"] + 10 ** 6), "contact offsets do not split"),
+    (lambda a: a.update(contact_offsets=a["contact_offsets"][::-1].copy()), "contact offsets do not split"),
+    (lambda a: a.update(joints=a["joints"][:1]), "joints has shape"),
+    (lambda a: a.update(best=np.int64(99)), "best is"),
+])
+def test_a_malformed_shard_is_a_value_error_naming_it(reference, tmp_path, edit, why):
+    import shutil
+
+    out = tmp_path / "ds"
+    shutil.copytree(reference, out)
+    shard = out / "shards" / f"{OBJECTS[0]}__5x5.npz"
+    _rewrite_shard(shard, edit)
+    with pytest.raises(ValueError, match=f"{shard.name} is not a (whole )?shard.*{why}"):
+        ds = hugger.Dataset(out)
+        ds[0]
+
+
+def test_a_grasp_whose_hand_the_index_lacks_is_a_value_error(reference, tmp_path):
+    import shutil
+
+    out = tmp_path / "ds"
+    shutil.copytree(reference, out)
+    index = json.loads((out / "index.json").read_text())
+    index["hands"] = []
+    (out / "index.json").write_text(json.dumps(index))
+    with pytest.raises(ValueError, match="grasp 0: its hand '5x5' is not among the index's hands"):
+        hugger.Dataset(out).trajectory(0)
+
+
 def test_a_temporary_left_by_a_killed_writer_is_removed_on_resume(reference, tmp_path):
     import shutil
 

@@ -440,3 +440,16 @@ def test_a_urdf_without_finger_cylinders_warns_and_takes_a_given_radius(tmp_path
 def test_the_exporters_take_a_hand_only(export):
     with pytest.raises(ValueError, match="hand must be a hugger.Hand, got str"):
         export("x")
+
+
+@pytest.mark.parametrize("text, match", [("[" * 100000 + "]" * 100000, "not readable JSON"),
+                                         ("{not json", "not readable JSON"),
+                                         ("[1, 2]", "a hand description must be a dict")])
+def test_a_hand_file_that_is_no_hand_json_is_a_one_line_error(tmp_path, text, match):
+    f = tmp_path / "hand.json"
+    f.write_text(text)
+    with pytest.raises(ValueError, match=match):
+        hands.load(str(f))
+    r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--hand", str(f), "--out",
+                        str(tmp_path / "x.npz")], capture_output=True, text=True)
+    assert r.returncode == 2 and r.stderr.startswith("hugger: error:") and len(r.stderr.strip().splitlines()) == 1

@@ -248,11 +248,22 @@ def _read_index(path: Path) -> dict[str, Any]:
     """A dataset's index.json; ``ValueError`` unless it is one of this format and version."""
     try:
         index = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, RecursionError) as exc:  # (nested too deep for the reader)
         raise ValueError(f"{path} is not the index of a hugger dataset ({exc})") from None
     if not isinstance(index, dict) or index.get("format") != DATASET_FORMAT or \
             index.get("format_version") != DATASET_VERSION or not isinstance(index.get("shards"), list):
         raise ValueError(f"{path} is not the index of a hugger dataset of version {DATASET_VERSION}")
+    # what the loader reads of it, of the types it reads (docs/generation.md, "Format")
+    def listed(key: str, fields: dict[str, type]) -> bool:
+        entries = index.get(key, [])
+        return isinstance(entries, list) and all(
+            isinstance(e, dict) and all(isinstance(e.get(f), t) for f, t in fields.items()) for e in entries)
+
+    if not (listed("shards", {"file": str, "object": str, "hand": str})
+            and listed("objects", {"name": str, "path": str, "builtin": bool}) and listed("hands", {"label": str, "kwargs": dict})
+            and isinstance(index.get("parameters", {}), dict)):
+        raise ValueError(f"{path} is not the index of a hugger dataset: its shards, objects, hands or parameters "
+                         f"are not lists of the entries docs/generation.md describes")
     return index
 
 
@@ -608,6 +619,41 @@ class Grasp:
     held: bool | None  #: six-direction physics verdict (None: not validated)
 
 
+#: A shard's members the loader reads, and their shapes by K approaches (None: any length).
+_SHARD_MEMBERS = {"best": (), "direction": ("K", 3), "status": ("K",), "start_pose": ("K", 4, 4),
+                  "palm_pose": ("K", 4, 4), "links_in_contact": ("K",), "palm_contact": ("K",),
+                  "force_closure": ("K",), "epsilon": ("K",), "contact_offsets": ("K+1",),
+                  "contact_points": (None, 3), "contact_normals": (None, 3), "contact_finger": (None,),
+                  "contact_link": (None,), "target": (3,), "params_json": (), "joints": ("K", None, None, 3),
+                  "angles": ("K", None, None)}
+_SHARD_OPTIONAL = {"escape": ("K",), "held": ("K",)}
+
+
+def _check_shard(z: dict[str, np.ndarray], k: int, path: Path) -> None:
+    """``ValueError`` unless the shard's members the loader reads are there, of K approaches, and
+    its contact offsets split its contacts (docs/generation.md, "Format")."""
+    def bad(why: str) -> ValueError:
+        return ValueError(f"{path} is not a whole shard ({why}); 'hugger generate' with the command in "
+                          f"index.json makes it again")
+
+    sizes = {"K": k, "K+1": k + 1}
+    for key, shape in {**_SHARD_MEMBERS, **_SHARD_OPTIONAL}.items():
+        if key not in z:
+            if key in _SHARD_OPTIONAL:
+                continue
+            raise bad(f"no {key}")
+        got = z[key].shape
+        if len(got) != len(shape) or any(want is not None and n != sizes.get(want, want) for n, want in zip(got, shape)):
+            raise bad(f"{key} has shape {got}")
+    c = len(z["contact_points"])
+    off = z["contact_offsets"]
+    if (off.dtype.kind not in "iu" or off[0] != 0 or off[-1] != c or np.any(np.diff(off) < 0)
+            or any(len(z[key]) != c for key in ("contact_normals", "contact_finger", "contact_link"))):
+        raise bad("its contact offsets do not split its contacts")
+    if z["best"].dtype.kind not in "iu" or not 0 <= int(z["best"]) < max(k, 1):
+        raise bad(f"best is {z['best']!r}")
+
+
 class Dataset:
     """A dataset written by :func:`generate` / ``hugger generate``: ``len(ds)`` grasps over
     ``ds.shards``; ``ds[i]`` is a :class:`Grasp`; ``ds.trajectory(i)`` re-plans grasp i
@@ -626,7 +672,10 @@ class Dataset:
         self._sizes = []
         for s in self.shards:  # the grasp counts only: whole shards load on first use (shard())
             with _open_shard(self.root / s["file"]) as z:
-                self._sizes.append(int(z["status"].shape[0]))
+                status = z["status"] if "status" in z.files else None
+                if status is None or status.ndim != 1:
+                    raise ValueError(f"{self.root / s['file']} is not a shard: it holds no status per approach")
+                self._sizes.append(int(status.shape[0]))
         self._starts = np.concatenate([[0], np.cumsum(self._sizes)]).astype(int)
 
     def __len__(self) -> int:
@@ -638,8 +687,11 @@ class Dataset:
             raise IndexError(f"shard {i!r} is out of range for a dataset of {len(self.shards)} shards")
         i = int(i) % len(self.shards)
         if i not in self._cache:
-            with _open_shard(self.root / self.shards[i]["file"]) as z:
-                self._cache[i] = {k: z[k] for k in z.files}
+            path = self.root / self.shards[i]["file"]
+            with _open_shard(path) as z:
+                arrays = {k: z[k] for k in z.files}
+            _check_shard(arrays, self._sizes[i], path)
+            self._cache[i] = arrays
         return self._cache[i]
 
     def _locate(self, i: int) -> tuple[int, int]:
@@ -704,7 +756,10 @@ class Dataset:
         if g.status == "error":
             raise ValueError(f"grasp {i} has no plan (planning failed)")
         z = self.shard(g.shard)
-        hand = Hand(**next(h["kwargs"] for h in self.index["hands"] if h["label"] == g.hand))
+        kwargs = next((h["kwargs"] for h in self.index["hands"] if h["label"] == g.hand), None)
+        if kwargs is None:
+            raise ValueError(f"grasp {i}: its hand {g.hand!r} is not among the index's hands")
+        hand = Hand(**kwargs)
         params = {k: v for k, v in json.loads(str(z["params_json"])).items() if v is not None}
         rules = self.index["parameters"].get("rules")
         if rules is not None:

@@ -56,6 +56,6 @@ def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = N
     try:
         with open(text, encoding="utf-8") as fh:
             d = json.load(fh)
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, RecursionError) as exc:  # (nested too deep for the reader)
         raise ValueError(f"hand file {text!r} is not readable JSON ({exc})") from None
     return Hand.from_dict(d)
