@@ -104,6 +104,13 @@ def test_bad_answers_are_python_errors(hand, bad, error):
         hugger.Planner(hand, cls([0, 0, 0], 0.04), [0, 0, 0], start())
 
 
+@pytest.mark.parametrize("answer", [True, np.bool_(False), "0.1", None])
+def test_a_palm_gap_must_be_a_number(hand, answer):
+    cls = type("Bad", (Ball,), {"palm": lambda self, pose, r, t, c: answer})
+    with pytest.raises(TypeError, match="Sensing.palm must return a float"):
+        hugger.Planner(hand, cls([0, 0, 0], 0.04), [0, 0, 0], start())
+
+
 def test_incomplete_skin_and_missing_super_init(hand):
     class NoPalm(hugger.Sensing):
         def capsule(self, a, b, radius, cap):

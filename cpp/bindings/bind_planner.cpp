@@ -48,7 +48,7 @@ std::string status_of(const PyPlanner& p) { return p.failed ? "error" : to_strin
 class Busy {
  public:
   explicit Busy(PyPlanner& p) : lock_(p.busy, std::try_to_lock) {
-    if (!lock_.owns_lock()) throw std::runtime_error("this planner is already running in another thread");
+    if (!lock_.owns_lock()) throw std::runtime_error("this planner is already running (in another thread, or its own skin called it)");
   }
 
  private:
