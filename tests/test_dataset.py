@@ -547,6 +547,34 @@ def test_a_dataset_of_a_relative_mesh_path_reads_from_any_folder_and_a_missing_s
         hugger.Dataset(tmp_path / "ds")
 
 
+def test_opening_what_is_no_dataset_says_what_it_is(tmp_path):
+    (tmp_path / "file").write_text("x")
+    for path, match in ((tmp_path / "nowhere", "nowhere: no such folder"), (tmp_path / "file", "is not a folder"),
+                        (tmp_path, "holds no dataset index")):
+        with pytest.raises(ValueError, match=match):
+            hugger.Dataset(path)
+
+
+def test_a_moved_dataset_finds_its_mesh_beside_it_by_name(tmp_path):
+    # made from an absolute path; then the mesh and the dataset move, the mesh into the dataset's folder
+    import shutil
+
+    import trimesh
+
+    mesh = tmp_path / "meshes" / "ball.stl"
+    mesh.parent.mkdir()
+    trimesh.creation.icosphere(subdivisions=2, radius=0.04).export(mesh)
+    dataset.generate([str(mesh)], str(tmp_path / "ds"), approaches=2, workers=1)
+    moved = tmp_path / "moved"
+    shutil.move(tmp_path / "ds", moved)
+    shutil.move(mesh, tmp_path / "away.stl")
+    with pytest.raises(ValueError, match="is not found"):
+        hugger.Dataset(moved).trajectory(0)
+    shutil.move(tmp_path / "away.stl", moved / "ball.stl")
+    ds = hugger.Dataset(moved)
+    assert ds.trajectory(0).status == ds[0].status
+
+
 def test_an_address_where_something_else_listens_is_refused_within_the_probe_s_time(tmp_path, monkeypatch, capsys):
     # ray.init retries for ever there and ignores Ctrl-C: a child process tries, and is ended.
     pytest.importorskip("ray", reason="the cluster extra is not installed (pip install 'hugger[cluster]')")

@@ -663,6 +663,9 @@ class Dataset:
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.root = Path(path)
         index_path = self.root / "index.json"
+        if not self.root.is_dir():
+            raise ValueError(f"{self.root}: no such folder" if not self.root.exists() else
+                             f"{self.root} is not a folder (a dataset is a folder, made by 'hugger generate')")
         if not index_path.is_file():
             raise ValueError(f"{self.root} holds no dataset index (index.json); make one with 'hugger generate'")
         self.index = _read_index(index_path)
@@ -736,7 +739,10 @@ class Dataset:
         if not entry["builtin"]:
             # as given, else where it was when the dataset was made, else beside the dataset: the
             # first of these that is the mesh it was made from
-            tried = [p for p in (entry["path"], entry.get("abspath"), str(self.root / entry["path"])) if p is not None]
+            # (beside it: under its path within the dataset's folder, or by its name in that folder)
+            given = entry["path"]
+            tried = list(dict.fromkeys(p for p in (given, entry.get("abspath"), str(self.root / given),
+                                                   str(self.root / Path(given).name)) if p is not None))
             found = [p for p in tried if os.path.isfile(p)]
             path = next((p for p in found if _sha256_file(p) == entry["sha256"]), None)
             if path is None:
