@@ -371,10 +371,13 @@ def test_internal_error_exits_1_with_a_report(monkeypatch, capsys):
     ("matplotlib", ["render", "{plan}", "--out", "{tmp}/x.png"], "hugger[viz]"),
     ("trimesh", ["plan", "{tmp}/ball.stl", "--out", "{tmp}/x.npz"], "hugger[mesh]"),
     ("mujoco", ["validate", "{plan}"], "hugger[physics]"),
+    ("mujoco", ["generate", "sphere", "--validate", "--approaches", "2", "--out", "{tmp}/ds"], "hugger[physics]"),
+    ("coacd", ["generate", "sphere", "--validate", "--approaches", "2", "--out", "{tmp}/ds"], "hugger[physics]"),
 ])
 def test_missing_optional_dependency_names_the_extra(module, command, extra, sphere_file, tmp_path):
     (tmp_path / "ball.stl").write_bytes(b"")
     assert_names_the_extra(module, [a.format(plan=sphere_file, tmp=tmp_path) for a in command], extra)
+    assert not (tmp_path / "ds").exists()  # refused before anything is made
 
 
 def test_entry_point_runs_as_a_module(tmp_path):

@@ -458,6 +458,11 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     if address is not None and backend != "ray":
         raise ValueError("an address applies to the Ray backend only")
     ray: Any = _ray() if backend == "ray" else None  # the extra named first
+    if validate:  # its extra too, before any folder is made
+        from .physics._common import _coacd, _mujoco
+
+        _mujoco("--validate")
+        _coacd("--validate")
     if address is not None:
         _check_ray_address(address)
     from .planner import PARAMS, check_params

@@ -19,12 +19,14 @@ def _mujoco(user: str = "the physics check") -> Any:
     return mujoco
 
 
-def _coacd() -> Any:
+def _coacd(user: str | None = None) -> Any:
+    """The coacd module; ``ImportError`` saying that ``user`` (default: the convex decomposition,
+    which may be left out) needs it, and how to install it, when missing."""
     try:
         import coacd
     except ImportError as exc:
-        raise ImportError("convex decomposition needs CoACD: pip install 'hugger[physics]' "
-                          "(or pass decompose=False to use the object's convex hull)") from exc
+        hint = "" if user else " (or pass decompose=False to use the object's convex hull)"
+        raise ImportError(f"{user or 'convex decomposition'} needs CoACD: pip install 'hugger[physics]'{hint}") from exc
     return coacd
 
 
