@@ -29,7 +29,10 @@ def main() -> int:
     ap.add_argument("dataset")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
-    ds = hugger.Dataset(args.dataset)
+    try:
+        ds = hugger.Dataset(args.dataset)
+    except ValueError as exc:  # no dataset there: argparse's one-line error, exit 2
+        ap.error(str(exc))
     eps, links, hug, slide, firm, key, held = [], [], [], [], [], [], []
     chosen_held = default_held = 0
     shards = 0

@@ -371,6 +371,7 @@ def test_internal_error_exits_1_with_a_report(monkeypatch, capsys):
     ("matplotlib", ["render", "{plan}", "--out", "{tmp}/x.png"], "hugger[viz]"),
     ("trimesh", ["plan", "{tmp}/ball.stl", "--out", "{tmp}/x.npz"], "hugger[mesh]"),
     ("mujoco", ["validate", "{plan}"], "hugger[physics]"),
+    ("yourdfpy", ["export-urdf", "{plan}", "--out", "{tmp}/h.urdf"], "writing a URDF needs yourdfpy: pip install 'hugger[hands]'"),
     ("mujoco", ["generate", "sphere", "--validate", "--approaches", "2", "--out", "{tmp}/ds"], "hugger[physics]"),
     ("coacd", ["generate", "sphere", "--validate", "--approaches", "2", "--out", "{tmp}/ds"], "hugger[physics]"),
 ])

@@ -528,6 +528,9 @@ def test_a_shard_records_its_rule_set(tmp_path):
     ds = hugger.Dataset(out)
     assert json.loads(str(ds.shard(0)["params_json"]))["rules"] == "paper"
     assert ds.trajectory(0).params["rules"] == "paper"
+    # a shard is no trajectory file: hugger info says what it is
+    with pytest.raises(ValueError, match="it is a shard of a dataset: read it with hugger.Dataset"):
+        hugger.Trajectory.load(out / "shards" / "sphere__5x5.npz")
 
 
 def test_a_dataset_of_a_relative_mesh_path_reads_from_any_folder_and_a_missing_shard_is_named(tmp_path, monkeypatch):

@@ -444,7 +444,9 @@ def test_the_exporters_take_a_hand_only(export):
 
 @pytest.mark.parametrize("text, match", [("[" * 100000 + "]" * 100000, "not readable JSON"),
                                          ("{not json", "not readable JSON"),
-                                         ("[1, 2]", "a hand description must be a dict")])
+                                         ("[1, 2]", "a hand description must be a dict"),
+                                         ('{"fingers": 3, "links": 2, "link_lengths": NaN, "link_radius": 0.004, '
+                                          '"palm_radius": 0.03, "palm_thickness": 0.01}', r"hand\.json'?: link_length")])
 def test_a_hand_file_that_is_no_hand_json_is_a_one_line_error(tmp_path, text, match):
     f = tmp_path / "hand.json"
     f.write_text(text)

@@ -104,8 +104,12 @@ def _object_entry(spec: str, scale: float, force: bool = False) -> dict[str, Any
         digest = hashlib.sha256(np.ascontiguousarray(obj.vertices).tobytes() +
                                 np.ascontiguousarray(obj.faces).tobytes()).hexdigest()
         return {"name": spec, "path": spec, "builtin": True, "sha256": digest, "scale": scale}
-    if not os.path.isfile(spec):
-        raise ValueError(f"{spec!r} is neither a built-in object nor a mesh file")
+    if not os.path.isfile(spec):  # refused as the plan command refuses it, in a ValueError
+        try:
+            load_object(spec, scale)
+        except FileNotFoundError as exc:
+            raise ValueError(str(exc)) from None
+        raise ValueError(f"{spec!r} is not a mesh file")  # (a folder, say)
     # Refuses what a worker would, before any shard is made: a mesh the planner cannot take, or
     # one whose natural target T is not inside it (the start pose depends on the hand; T does not).
     case, message = judged_case(spec, scale=scale, force=force)

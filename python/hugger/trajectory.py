@@ -195,7 +195,9 @@ class Trajectory:
         """A trajectory from the arrays of a format-1 file; ``ValueError`` naming what is wrong."""
         missing = [k for k in ("format_version", *_STRINGS, *_ARRAYS) if k not in data]
         if missing:
-            raise ValueError(f"{source}: missing keys {missing}")
+            shard = "task_sha256" in data and "contact_offsets" in data  # (docs/generation.md, "Format")
+            hint = "; it is a shard of a dataset: read it with hugger.Dataset (its folder)" if shard else ""
+            raise ValueError(f"{source}: missing keys {missing}{hint}")
         version = np.asarray(data["format_version"])
         if version.shape != () or version.dtype.kind not in "iu" or int(version) != FORMAT_VERSION:
             got = f"{version.item()!r} ({version.dtype})" if version.shape == () else f"an array of shape {version.shape}"

@@ -38,11 +38,11 @@ class _Chain:
     radii: list[float] = field(default_factory=list)
 
 
-def _need(module: str) -> Any:
+def _need(module: str, user: str = "reading robot files") -> Any:
     try:
         return __import__(module)
     except ImportError:
-        raise ImportError(f"reading robot files needs {module}: pip install 'hugger[hands]'") from None
+        raise ImportError(f"{user} needs {module}: pip install 'hugger[hands]'") from None
 
 
 #: The root element of each kind of robot file this module reads.
@@ -481,7 +481,7 @@ def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
     (rad) and its limits are the hand's less the rest angles (``continuous`` where unlimited).
     ``angles`` (M, N), hugger angles, adds a comment giving the joint values of that
     configuration (a grasp). :func:`from_urdf` reads the file back to the same hand."""
-    yourdfpy = _need("yourdfpy")
+    yourdfpy = _need("yourdfpy", "writing a URDF")
     from yourdfpy import urdf as U
 
     g = _general(hand)
