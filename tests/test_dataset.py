@@ -421,10 +421,17 @@ def _edit_index(index: dict, how: str) -> Any:
         index["shards"][0]["file"] = 5
     elif how == "hands not a list":
         index["hands"] = {"5x5": {}}
+    elif how == "no hands":
+        del index["hands"]
+    elif how == "no parameters":
+        del index["parameters"]
+    elif how == "scale is a string":
+        index["objects"][0]["scale"] = "1"
     return json.dumps(index)
 
 
-@pytest.mark.parametrize("how", ["deep", "shard is a string", "shard without file", "file is a number", "hands not a list"])
+@pytest.mark.parametrize("how", ["deep", "shard is a string", "shard without file", "file is a number", "hands not a list",
+                                 "no hands", "no parameters", "scale is a string"])
 def test_a_malformed_index_is_a_value_error(reference, tmp_path, how):
     import shutil
 
@@ -469,9 +476,14 @@ def test_a_grasp_whose_hand_the_index_lacks_is_a_value_error(reference, tmp_path
     out = tmp_path / "ds"
     shutil.copytree(reference, out)
     index = json.loads((out / "index.json").read_text())
+    hands = index["hands"]
     index["hands"] = []
     (out / "index.json").write_text(json.dumps(index))
     with pytest.raises(ValueError, match="grasp 0: its hand '5x5' is not among the index's hands"):
+        hugger.Dataset(out).trajectory(0)
+    index["hands"] = [{**hands[0], "kwargs": {"nope": 1}}]
+    (out / "index.json").write_text(json.dumps(index))
+    with pytest.raises(ValueError, match="grasp 0: the index's hand '5x5' is not a hugger.Hand's keywords"):
         hugger.Dataset(out).trajectory(0)
 
 

@@ -289,14 +289,24 @@ def test_contact_tolerance_below_double_resolution_is_refused(hand, sphere):
     assert traj.status == "done", f"ran to {traj.status} with first contact {traj.stats['first_contact_iteration']}"
 
 
-def test_a_skin_far_from_the_origin_is_refused_at_the_default_tolerance_too(hand):
-    # A skin records no mesh: T and the pose give the scene's extent, for the tolerance in force
-    # whether given or the default (the same value both ways gets the same answer).
-    c = np.array([1e15, 0.0, 0.0])
+def test_a_skin_scene_far_from_the_origin_is_refused(hand):
+    # A skin records no mesh: T and the start must lie where an object's coordinates may (the
+    # files loaded back hold them), and the contact tolerance in force, given or the default,
+    # must be above the resolution there.
+    for c in (1e15, 2e6):
+        c = np.array([c, 0.0, 0.0])
+        with pytest.raises(ValueError, match="palm_pose's translation lies beyond 1e\\+06 m"):
+            hugger.Planner(hand, hugger.skins.SphereSkin(0.04, c), c, hugger.look_at(c + [0, 0, 0.2], c))
+        with pytest.raises(ValueError, match="target lies beyond 1e\\+06 m"):
+            hugger.Planner(hand, hugger.skins.SphereSkin(0.04), c, start())
+    c = np.array([5e5, 0.0, 0.0])
     pose = hugger.look_at(c + [0, 0, 0.2], c)
-    for given in ({}, {"contact_tolerance": hugger.Planner(hand, hugger.objects.sphere(0.04), [0, 0, 0], start()).params["contact_tolerance"]}):
-        with pytest.raises(ValueError, match="below the resolution"):
-            hugger.Planner(hand, hugger.skins.SphereSkin(0.04, c), c, pose, **given)
+    with pytest.raises(ValueError, match="below the resolution"):
+        hugger.Planner(hand, hugger.skins.SphereSkin(0.04, c), c, pose, contact_tolerance=1e-5)
+    far_start = hugger.look_at([0, 0, 1.5e6], [0, 0, 0])
+    with pytest.raises(ValueError, match="palm_pose's translation lies beyond"):
+        hugger.Planner(hand, hugger.skins.SphereSkin(0.04), [0, 0, 0], far_start)
+    hugger.Planner(hand, hugger.skins.SphereSkin(0.04, c), c, pose)  # the default tolerance is enough there
 
 
 @pytest.mark.parametrize("which", ["target", "palm_pose"])
@@ -557,12 +567,16 @@ def test_gil_is_released_during_phase_1_in_the_constructor(hand, sphere):
 
 # --- bounded resources ------------------------------------------------------------------------
 
-@pytest.mark.parametrize("distance, step", [(1000.0, None), (0.2, 1e-8), (1e16, None)])
-def test_an_approach_of_too_many_steps_is_refused_before_planning(hand, sphere, distance, step):
+@pytest.mark.parametrize("distance, step, message", [
+    (1000.0, None, "the approach would need more than 100000 steps"),
+    (0.2, 1e-8, "the approach would need more than 100000 steps"),
+    (1e16, None, "palm_pose's translation lies beyond 1e\\+06 m"),  # no scene's: refused as such
+])
+def test_an_approach_of_too_many_steps_is_refused_before_planning(hand, sphere, distance, step, message):
     # Each step of the approach is a configuration, all made in one iteration whatever the timeout:
     # a start that needs more than kMaxIncrements of them is refused (a timeout would not stop it).
     params = {} if step is None else {"step": step, "contact_tolerance": step / 2}
-    with pytest.raises(ValueError, match="the approach would need more than 100000 steps"):
+    with pytest.raises(ValueError, match=message):
         hugger.Planner(hand, sphere, [0, 0, 0], hugger.look_at([0, 0, distance], [0, 0, 0]), **params)
 
 

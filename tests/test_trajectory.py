@@ -164,7 +164,10 @@ def _edit(key, fn):
     (_edit("palm_pose", lambda x: np.concatenate([x[:1], x[1:] * np.diag([1.0, 1.0, 1.5, 1.0])])),
      r"palm_pose\[1\] .*(rotation|orthonormal)"),
     (_edit("angles", lambda x: x[:, :, :-1]), "angles has shape"),
-    (_edit("joints", lambda x: x + 1e300), r"joints holds numbers beyond \+-1e\+06"),
+    (_edit("joints", lambda x: x + 1e300), r"joints holds numbers beyond \+-2e\+06"),
+    (_edit("target", lambda x: x + 2e6), r"target holds numbers beyond \+-1e\+06"),
+    (_edit("palm_pose", lambda x: x + np.pad(np.full((len(x), 3, 1), 2e6), ((0, 0), (0, 1), (3, 0)))),
+     r"palm_pose\[0\]'s translation lies beyond 1e\+06 m"),
     (_edit("angles", lambda x: x + 1e7), "angles holds numbers beyond"),
     (_edit("tip_state", lambda x: x.astype(float)), "tip_state .* dtype"),
     (_edit("tip_state", lambda x: x + 7), r"tip_state holds [7-9]"),
@@ -187,18 +190,31 @@ def _edit(key, fn):
     (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "fingers": 10 ** 9}))), "fingers"),
     (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "link_radius": -1}))), "link_radius"),
     (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "link_lengths": [[1]]}))),
-     "link_length"),
+     r"link_lengths must be a \(5, 5\) list"),
+    (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "link_lengths": 0.02}))),
+     r"link_lengths must be a \(5, 5\) list"),  # a hand takes a scalar; the format does not
+    (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "link_lengths": [[-1.0] * 5] * 5}))),
+     "link_length must be a positive"),
     # the hand's own rules (Hand.from_dict): what tools read, and everything else
     (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "finger_angles": [0.0, 1.0]}))),
      "finger_angles must hold 5"),
     (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "palm_radius": 0}))), "palm_radius"),
-    (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "links": 4}))), "links"),
+    (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "links": 4}))), r"\(5, 4\)"),
     (_edit("params_json", lambda x: np.array("[1, 2]")), "params_json"),
 ])
 def test_wrong_dtypes_shapes_and_values_are_refused(saved, tmp_path, edit, match):
     _, _, arrays = saved
     with pytest.raises(ValueError, match=match):
         hugger.Trajectory.load(_write(tmp_path, edit(dict(arrays))))
+
+
+def test_a_hand_of_implausible_size_is_not_warned_of_again_on_loading(saved, tmp_path):
+    # (warnings are errors in the tests) the file loads as it is; its joints no longer match its
+    # hand, which the loader does not check (the checker does)
+    _, _, arrays = saved
+    big = _edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "link_lengths": [[0.9] * 5] * 5})))
+    traj = hugger.Trajectory.load(_write(tmp_path, big(dict(arrays))))
+    assert traj.hand["link_lengths"][0][0] == 0.9
 
 
 def test_pickled_objects_are_refused_not_unpickled(saved, tmp_path):

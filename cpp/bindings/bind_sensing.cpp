@@ -46,10 +46,11 @@ class PySensing : public Sensing {
     const py::object r = f(from_pose(pose), radius, thickness, cap);
     double g = 0.0;
     try {
-      // A bool is an answer to another question (capsule_clear's), not a gap.
-      // (NumPy's type is looked up once, under the GIL, and kept: never released.)
-      static const py::handle numpy_bool = py::object(py::module_::import("numpy").attr("bool_")).release();
-      if (py::isinstance<py::bool_>(r) || py::isinstance(r, numpy_bool)) throw py::cast_error();
+      // A bool, Python's or NumPy's (a scalar of dtype kind 'b'), is an answer to another question
+      // (capsule_clear's), not a gap.
+      if (py::isinstance<py::bool_>(r) ||
+          (py::hasattr(r, "dtype") && py::str(r.attr("dtype").attr("kind")).cast<std::string>() == "b"))
+        throw py::cast_error();
       g = r.cast<double>();
     } catch (const py::cast_error&) {
       throw py::type_error("Sensing.palm must return a float (the gap in m), got " +

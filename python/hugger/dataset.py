@@ -258,16 +258,17 @@ def _read_index(path: Path) -> dict[str, Any]:
             index.get("format_version") != DATASET_VERSION or not isinstance(index.get("shards"), list):
         raise ValueError(f"{path} is not the index of a hugger dataset of version {DATASET_VERSION}")
     # what the loader reads of it, of the types it reads (docs/generation.md, "Format")
-    def listed(key: str, fields: dict[str, type]) -> bool:
-        entries = index.get(key, [])
+    def listed(key: str, fields: dict[str, type | tuple[type, ...]]) -> bool:
+        entries = index.get(key)
         return isinstance(entries, list) and all(
-            isinstance(e, dict) and all(isinstance(e.get(f), t) for f, t in fields.items()) for e in entries)
+            isinstance(e, dict) and all(isinstance(e.get(f), t) and not (t is not bool and isinstance(e.get(f), bool))
+                                        for f, t in fields.items()) for e in entries)
 
-    if not (listed("shards", {"file": str, "object": str, "hand": str})
-            and listed("objects", {"name": str, "path": str, "builtin": bool}) and listed("hands", {"label": str, "kwargs": dict})
-            and isinstance(index.get("parameters", {}), dict)):
+    if not (listed("shards", {"file": str, "object": str, "hand": str, "task_sha256": str})
+            and listed("objects", {"name": str, "path": str, "builtin": bool, "sha256": str, "scale": (int, float)})
+            and listed("hands", {"label": str, "kwargs": dict}) and isinstance(index.get("parameters"), dict)):
         raise ValueError(f"{path} is not the index of a hugger dataset: its shards, objects, hands or parameters "
-                         f"are not lists of the entries docs/generation.md describes")
+                         f"are not the entries docs/generation.md describes")
     return index
 
 
@@ -462,11 +463,10 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     if address is not None and backend != "ray":
         raise ValueError("an address applies to the Ray backend only")
     ray: Any = _ray() if backend == "ray" else None  # the extra named first
-    if validate:  # its extra too, before any folder is made
-        from .physics._common import _coacd, _mujoco
+    if validate and backend == "local":  # MuJoCo, before any folder is made (Ray's workers have their own)
+        from .physics._common import _mujoco
 
-        _mujoco("--validate")
-        _coacd("--validate")
+        _mujoco("validate")
     if address is not None:
         _check_ray_address(address)
     from .planner import PARAMS, check_params
@@ -628,24 +628,28 @@ class Grasp:
     held: bool | None  #: six-direction physics verdict (None: not validated)
 
 
-#: A shard's members the loader reads, and their shapes by K approaches (None: any length).
-_SHARD_MEMBERS = {"best": (), "direction": ("K", 3), "status": ("K",), "start_pose": ("K", 4, 4),
-                  "palm_pose": ("K", 4, 4), "links_in_contact": ("K",), "palm_contact": ("K",),
-                  "force_closure": ("K",), "epsilon": ("K",), "contact_offsets": ("K+1",),
-                  "contact_points": (None, 3), "contact_normals": (None, 3), "contact_finger": (None,),
-                  "contact_link": (None,), "target": (3,), "params_json": (), "joints": ("K", None, None, 3),
-                  "angles": ("K", None, None)}
-_SHARD_OPTIONAL = {"escape": ("K",), "held": ("K",)}
+#: K, the approaches of a shard, and K + 1, in the shapes below.
+_K, _K1 = -1, -2
+#: A shard's members the loader reads, and their shapes (None: any length). Its ``status``, one per
+#: approach, is read when the dataset is opened (Dataset's constructor) and gives K.
+_SHARD_MEMBERS: dict[str, tuple[int | None, ...]] = {
+    "best": (), "direction": (_K, 3), "start_pose": (_K, 4, 4), "palm_pose": (_K, 4, 4),
+    "joints": (_K, None, None, 3), "angles": (_K, None, None), "links_in_contact": (_K,), "palm_contact": (_K,),
+    "force_closure": (_K,), "epsilon": (_K,), "contact_offsets": (_K1,), "contact_points": (None, 3),
+    "contact_normals": (None, 3), "contact_finger": (None,), "contact_link": (None,), "target": (3,),
+    "params_json": ()}
+#: ... and those it reads when a shard holds them (format 1 has no escape; held comes with --validate).
+_SHARD_OPTIONAL: dict[str, tuple[int | None, ...]] = {"escape": (_K,), "held": (_K,)}
 
 
 def _check_shard(z: dict[str, np.ndarray], k: int, path: Path) -> None:
-    """``ValueError`` unless the shard's members the loader reads are there, of K approaches, and
-    its contact offsets split its contacts (docs/generation.md, "Format")."""
+    """``ValueError`` unless the shard's members the loader reads are there, of its K approaches,
+    and its contact offsets split its contacts (docs/generation.md, "Format")."""
     def bad(why: str) -> ValueError:
         return ValueError(f"{path} is not a whole shard ({why}); 'hugger generate' with the command in "
                           f"index.json makes it again")
 
-    sizes = {"K": k, "K+1": k + 1}
+    sizes = {_K: k, _K1: k + 1}
     for key, shape in {**_SHARD_MEMBERS, **_SHARD_OPTIONAL}.items():
         if key not in z:
             if key in _SHARD_OPTIONAL:
@@ -774,7 +778,10 @@ class Dataset:
         kwargs = next((h["kwargs"] for h in self.index["hands"] if h["label"] == g.hand), None)
         if kwargs is None:
             raise ValueError(f"grasp {i}: its hand {g.hand!r} is not among the index's hands")
-        hand = Hand(**kwargs)
+        try:
+            hand = Hand(**kwargs)
+        except TypeError as exc:  # keywords a Hand does not take
+            raise ValueError(f"grasp {i}: the index's hand {g.hand!r} is not a hugger.Hand's keywords ({exc})") from None
         params = {k: v for k, v in json.loads(str(z["params_json"])).items() if v is not None}
         rules = self.index["parameters"].get("rules")
         if rules is not None:

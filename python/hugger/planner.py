@@ -128,29 +128,26 @@ class Planner:
         # (ValueError saying what is wrong), then plans Phase 1.
         params = _core.PlannerParams(step=step, epsilon=epsilon, contact_tolerance=contact_tolerance,
                                      max_iterations=max_iterations, rules=rules)
+        # The contact tolerance in force: given, or the default.
+        tolerance = _core.DEFAULT_CONTACT_TOLERANCE if params.contact_tolerance is None else params.contact_tolerance
         from .skins.sensor import SensorModel
 
         if isinstance(sensing, SensorModel):  # (the engine would find every part touching at the start)
             if obj is None:
                 obj = sensing.object  # a sensor model of an Object records that Object (None: none)
-            given = params.contact_tolerance
-            tolerance = _core.DEFAULT_CONTACT_TOLERANCE if given is None else given
             if not sensing.range > tolerance:
                 raise ValueError(f"the SensorModel's range ({sensing.range:g} m) must exceed the planner's "
                                  f"contact_tolerance ({tolerance:g} m): every part within range reads as touching")
-        # What only Python sees: the recorded mesh's extent. The contact tolerance in force (given
-        # or the default) against the scene's largest coordinate; one the engine refuses anyway
-        # (not a positive number) is left to its message.
-        delta = _core.DEFAULT_CONTACT_TOLERANCE if params.contact_tolerance is None else params.contact_tolerance
-        extent = max(1.0, float(np.abs(obj.vertices).max()) if obj is not None else 0.0,
-                     float(np.abs(pose[:3, 3]).max()) if pose.shape == (4, 4) else 0.0,
-                     float(np.abs(t).max()) if t.size else 0.0)
-        if 0.0 < delta < MIN_RELATIVE_TOLERANCE * extent:
-            given = "" if params.contact_tolerance is not None else " (the default)"
-            raise ValueError(f"contact_tolerance {delta:g} m{given} is below the resolution this scene allows "
-                             f"({MIN_RELATIVE_TOLERANCE:g} x its largest coordinate, {extent:g} m)")
         self._core = _core.Planner(hand._core, cast(Object, obj)._core if sensing is None else sensing, t, pose,
                                    params, DEFAULT_SKIN if skin is None else skin)
+        # What only Python sees: the recorded mesh's extent, with T's and the start's (checked by the
+        # engine), against the tolerance in force.
+        extent = max(1.0, float(np.abs(obj.vertices).max()) if obj is not None else 0.0,
+                     float(np.abs(pose[:3, 3]).max()), float(np.abs(t).max()))
+        if tolerance < MIN_RELATIVE_TOLERANCE * extent:
+            default = "" if params.contact_tolerance is not None else " (the default)"
+            raise ValueError(f"contact_tolerance {tolerance:g} m{default} is below the resolution this scene allows "
+                             f"({MIN_RELATIVE_TOLERANCE:g} x its largest coordinate, {extent:g} m)")
         self.hand, self.object, self.sensing, self.target = hand, obj, sensing, t
         self._emitted: int | None = 0  # configurations handed out by step(); None after plan()
 

@@ -6,6 +6,7 @@ import json
 import os
 import struct
 import tokenize
+import warnings
 import zipfile
 import zlib
 from dataclasses import dataclass, field, fields, replace
@@ -17,6 +18,7 @@ from . import _core
 from ._checks import positive
 from ._files import atomic_path
 from ._types import CONTACT_DISTANCE, MAX_FINGERS, MAX_LINKS, VERSION, Configuration
+from .hand import Hand
 from .world import MAX_COORDINATE, Object
 
 FORMAT_VERSION = 1
@@ -218,9 +220,12 @@ class Trajectory:
                 raise ValueError(f"{source}: {key} has shape {a.shape} and dtype {a.dtype}, expected {ndim} dimensions of kind {kinds!r}")
             if a.dtype.kind == "f" and not np.all(np.isfinite(a)):
                 raise ValueError(f"{source}: {key} holds non-finite numbers")
-            if a.dtype.kind == "f" and a.size and np.abs(a).max() > MAX_COORDINATE:
-                # coordinates (m) and angles (rad) alike: an object's coordinates are bounded so
-                raise ValueError(f"{source}: {key} holds numbers beyond +-{MAX_COORDINATE:g}")
+            # Where a plan's numbers lie: an object's coordinates, T and the palm's within
+            # MAX_COORDINATE (the engine's bound; the poses' is check_pose's, below), the joints
+            # within a hand's reach of the palm (twice that bound holds them), the angles far within.
+            bound = 2.0 * MAX_COORDINATE if key == "joints" else MAX_COORDINATE
+            if a.dtype.kind == "f" and a.size and key != "palm_pose" and np.abs(a).max() > bound:
+                raise ValueError(f"{source}: {key} holds numbers beyond +-{bound:g}")
             arrays[key] = a
         try:
             hand = json.loads(strings["hand_json"])
@@ -369,12 +374,19 @@ def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, source: str) -> np.
 
 
 def _check_hand(hand: dict[str, Any], m: int, n: int, source: str) -> None:
-    """``hand_json`` describes a hand :meth:`hugger.Hand.from_dict` takes (its rules), of the
-    arrays' M fingers and N links."""
-    from .hand import Hand
-
+    """``hand_json`` holds its link lengths as the format says (an M x N list, which tools read as
+    such) and describes a hand :meth:`hugger.Hand.from_dict` takes (the hand's rules), of the
+    arrays' M fingers and N links. The hand's size is not warned of again (it was when made)."""
     try:
-        h = Hand.from_dict(hand)
+        shape = np.shape(cast(Any, hand.get("link_lengths")))
+    except ValueError:  # ragged
+        shape = ()
+    if shape != (m, n):
+        raise ValueError(f"{source}: hand_json link_lengths must be a ({m}, {n}) list of lengths (m)")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            h = Hand.from_dict(hand)
     except (ValueError, TypeError, OverflowError, RecursionError) as exc:
         raise ValueError(f"{source}: hand_json is not a valid hand: {exc}") from None
     if (h.fingers, h.links) != (m, n):

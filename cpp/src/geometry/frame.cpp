@@ -9,6 +9,9 @@ namespace hugger {
 
 void check_pose(const Eigen::Matrix4d& pose, const std::string& name) {
   HUGGER_CHECK_ARGUMENT(pose.allFinite(), name << " holds non-finite numbers");
+  // Where an object's coordinates may lie (kMaxCoordinate): a pose beyond is no scene's.
+  HUGGER_CHECK_ARGUMENT((pose.topRightCorner<3, 1>().cwiseAbs().maxCoeff() <= kMaxCoordinate),
+                        name << "'s translation lies beyond " << kMaxCoordinate << " m of the origin");
   HUGGER_CHECK_ARGUMENT(pose(3, 0) == 0.0 && pose(3, 1) == 0.0 && pose(3, 2) == 0.0 && pose(3, 3) == 1.0,
                         name << " must be a homogeneous transform with last row (0, 0, 0, 1), got (" << pose(3, 0)
                              << ", " << pose(3, 1) << ", " << pose(3, 2) << ", " << pose(3, 3) << ")");

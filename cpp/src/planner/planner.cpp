@@ -108,6 +108,8 @@ Planner::Planner(HandModel hand, std::shared_ptr<const Sensing> sensing, const V
   HUGGER_CHECK_ARGUMENT(sensing_, "the planner needs a sensing interface");
   HUGGER_CHECK_ARGUMENT(target_.allFinite(), "target must be a finite 3-vector, got (" << target_.x() << ", "
                                                                                       << target_.y() << ", " << target_.z() << ")");
+  HUGGER_CHECK_ARGUMENT(target_.cwiseAbs().maxCoeff() <= kMaxCoordinate,
+                        "target lies beyond " << kMaxCoordinate << " m of the origin (where an object's coordinates may lie)");
   params_ = resolve_params(hand_, params);
   check_pose(palm_pose.matrix(), "palm_pose");
   // Re-orthonormalise so that every emitted pose is rigid to machine precision.

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any, Callable
+from typing import Any
 
 from ..hand import Hand
 from .presets import PRESETS, Preset, preset
@@ -52,21 +52,13 @@ def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = N
             raise ValueError(f"hand file {text!r} is {kind}, whose palm is chosen by {PALM_KEYWORDS[kind]}, not "
                              f"{wrong}")
         read = from_urdf if kind == "URDF" else from_mjcf
-        return _naming(text, lambda: read(text, fixed_joints=fixed_joints, **kwargs))
+        return read(text, fixed_joints=fixed_joints, **kwargs)
     try:
         with open(text, encoding="utf-8") as fh:
             d = json.load(fh)
     except (OSError, ValueError, RecursionError) as exc:  # (nested too deep for the reader)
         raise ValueError(f"hand file {text!r} is not readable JSON ({exc})") from None
-    return _naming(text, lambda: Hand.from_dict(d))
-
-
-def _naming(path: str, read: Callable[[], Hand]) -> Hand:
-    """``read()``, whose ValueError names the hand file ``path`` (the readers name it in theirs, the
-    hand's own checks do not)."""
     try:
-        return read()
-    except ValueError as exc:
-        if path in str(exc):
-            raise
-        raise ValueError(f"hand file {path!r}: {exc}") from None
+        return Hand.from_dict(d)
+    except ValueError as exc:  # the hand's checks, named by the file (as the robot files' readers do)
+        raise ValueError(f"hand file {text!r}: {exc}") from None

@@ -259,9 +259,12 @@ def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | No
     kwargs = {}
     if palm_thickness is not None:
         kwargs["palm_thickness"] = palm_thickness
-    return Hand.from_layout(np.array(roots), np.array(dirs), np.array(lengths), rest=np.array(rest),
-                            limits=np.array(limits), link_radius=link_radius, palm_radius=palm_radius,
-                            name=os.path.splitext(os.path.basename(source))[0], **kwargs)
+    try:  # the hand's own checks (a NaN length, say), named by the file as the checks above
+        return Hand.from_layout(np.array(roots), np.array(dirs), np.array(lengths), rest=np.array(rest),
+                                limits=np.array(limits), link_radius=link_radius, palm_radius=palm_radius,
+                                name=os.path.splitext(os.path.basename(source))[0], **kwargs)
+    except ValueError as exc:
+        raise ValueError(f"{source}: {exc}") from None
 
 
 # ------------------------------------------------------------------------------------- URDF

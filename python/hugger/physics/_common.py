@@ -19,14 +19,12 @@ def _mujoco(user: str = "the physics check") -> Any:
     return mujoco
 
 
-def _coacd(user: str | None = None) -> Any:
-    """The coacd module; ``ImportError`` saying that ``user`` (default: the convex decomposition,
-    which may be left out) needs it, and how to install it, when missing."""
+def _coacd() -> Any:
     try:
         import coacd
     except ImportError as exc:
-        hint = "" if user else " (or pass decompose=False to use the object's convex hull)"
-        raise ImportError(f"{user or 'convex decomposition'} needs CoACD: pip install 'hugger[physics]'{hint}") from exc
+        raise ImportError("convex decomposition needs CoACD: pip install 'hugger[physics]' "
+                          "(or pass decompose=False to use the object's convex hull)") from exc
     return coacd
 
 
