@@ -418,6 +418,61 @@ def test_hugger_plan_refuses_an_unknown_parameter_as_plan_many_does(hand, sphere
             call()
 
 
+def test_an_interrupted_plan_goes_on_to_the_same_plan(hand, sphere, sphere_plan):
+    # interrupt() (as Ctrl-C) stops plan() between iterations with KeyboardInterrupt, the plan
+    # still running; later calls go on, and the plan is the same bits as never interrupted
+    p = hugger.Planner(hand, sphere, [0, 0, 0], start())
+    stops = 0
+    for _ in range(3):
+        p._core.interrupt()
+        with pytest.raises(KeyboardInterrupt):
+            p.plan()
+        stops += 1
+        assert p.status == "running"
+        p.step()  # stepping in between changes nothing either
+    assert p.plan().status == "done" and stops == 3
+    t = p.trajectory()
+    assert np.array_equal(t.joints, sphere_plan.joints) and np.array_equal(t.palm_pose, sphere_plan.palm_pose)
+
+
+LONG_PLAN = """
+import sys, time, hugger
+from hugger.scenarios import default_case
+c = default_case("curvy")
+kw = dict(skin="mesh", step=4e-6, contact_tolerance=2e-6, max_iterations=1000000)
+print("ready", flush=True)
+try:
+    if sys.argv[1] == "plan":
+        hugger.Planner(c.hand, c.obj, c.target, c.palm_pose, **kw).plan()
+    elif sys.argv[1] == "plan_many":
+        hugger.plan_many([c] * 4, threads=2, **kw)
+    else:
+        hugger.search(c.hand, c.obj, c.target, approaches=4, threads=2, **kw)
+except KeyboardInterrupt:
+    print("interrupted", flush=True)
+"""
+
+
+@pytest.mark.parametrize("call", ["plan", "plan_many", "search"])
+def test_ctrl_c_stops_a_long_plan_at_once(call):
+    # The plans (about 10 s each, GIL released, in the caller's thread or in workers) end within
+    # a fraction of a second of SIGINT, not when they are done.
+    import signal
+
+    p = subprocess.Popen([sys.executable, "-c", LONG_PLAN, call], stdout=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline().strip() == "ready"
+        time.sleep(1.0)
+        sent = time.monotonic()
+        p.send_signal(signal.SIGINT)
+        out, _ = p.communicate(timeout=60)
+        waited = time.monotonic() - sent
+    finally:
+        p.kill()
+    assert out.strip() == "interrupted" and p.returncode == 0
+    assert waited < 3.0, f"{call} ended {waited:.1f} s after SIGINT"
+
+
 def test_timeout_through_hugger_plan(hand, sphere):
     t = hugger.plan(hand, sphere, [0, 0, 0], START, timeout=1e-3, step=5e-5, contact_tolerance=1e-5,
                     max_iterations=100000)

@@ -1,6 +1,8 @@
 // The planner and its typed results: PlannerParams, PlannerStats, Configuration and History (a
 // plan's configurations as stacked arrays).
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <iterator>
 #include <limits>
@@ -30,7 +32,12 @@ struct PyPlanner {
   /// An exception left the planner in the middle of an iteration (a skin's callback raised): the
   /// plan has ended with status "error"; history() holds every configuration completed before.
   bool failed = false;
+  /// interrupt() asks a running plan() (in any thread) to stop as a Ctrl-C would.
+  std::atomic<bool> interrupt{false};
 };
+
+/// How often plan() looks for a signal (Ctrl-C) while it runs with the GIL released.
+constexpr std::chrono::milliseconds kSignalPoll{50};
 
 /// Runs f (planner work); an exception ends the plan (status "error") and propagates unchanged.
 template <class F>
@@ -252,16 +259,37 @@ void bind_planner(py::module_& m) {
             const double limit = timeout.is_none() ? kInf : check_timeout(real_number(timeout, "timeout"));
             Busy busy(p);
             if (p.failed) return status_of(p);
+            bool stopped = false;  // by a signal (its handler's exception is set) or by interrupt()
             {
               py::gil_scoped_release release;
-              guarded(p, [&] { return p.planner->plan(limit); });
+              using Clock = std::chrono::steady_clock;
+              auto polled = Clock::now();
+              // Between iterations: interrupt(), or every kSignalPoll a look for signals, which
+              // Python's handlers (Ctrl-C's KeyboardInterrupt) take only with the GIL.
+              auto pause = [&] {
+                if (p.interrupt.exchange(false)) return stopped = true;
+                const auto now = Clock::now();
+                if (now - polled < kSignalPoll) return false;
+                polled = now;
+                py::gil_scoped_acquire gil;
+                return stopped = PyErr_CheckSignals() != 0;
+              };
+              guarded(p, [&] { return p.planner->plan(limit, pause); });
+            }
+            if (stopped) {  // the plan is still running: plan() or step() goes on from here
+              if (!PyErr_Occurred()) PyErr_SetNone(PyExc_KeyboardInterrupt);
+              throw py::error_already_set();
             }
             return status_of(p);
           },
           py::arg("timeout") = py::none(),
           "Run to the end (GIL released); returns the status. With ``timeout`` (seconds, positive finite) the "
           "plan stops with status 'timeout' once that much wall-clock time has passed. An exception raised by the "
-          "skin propagates unchanged and ends the plan (status 'error').")
+          "skin propagates unchanged and ends the plan (status 'error'). A signal's exception (Ctrl-C: "
+          "KeyboardInterrupt) or interrupt() stops it between iterations, still running: a later call goes on.")
+      .def("interrupt", [](PyPlanner& p) { p.interrupt = true; },
+           "Ask a plan() running in another thread to stop between iterations, raising KeyboardInterrupt there "
+           "(the plan still running). Without one running, the next plan() stops at once.")
       .def("history", [](PyPlanner& p, std::size_t start, std::size_t stop) {
             Busy busy(p);
             return history_of(*p.planner, start, stop);

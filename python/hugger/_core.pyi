@@ -372,7 +372,11 @@ class Planner:
         """
     def plan(self, timeout: typing.SupportsFloat | None = None) -> str:
         """
-        Run to the end (GIL released); returns the status. With ``timeout`` (seconds, positive finite) the plan stops with status 'timeout' once that much wall-clock time has passed. An exception raised by the skin propagates unchanged and ends the plan (status 'error').
+        Run to the end (GIL released); returns the status. With ``timeout`` (seconds, positive finite) the plan stops with status 'timeout' once that much wall-clock time has passed. An exception raised by the skin propagates unchanged and ends the plan (status 'error'). A signal's exception (Ctrl-C: KeyboardInterrupt) or interrupt() stops it between iterations, still running: a later call goes on.
+        """
+    def interrupt(self) -> None:
+        """
+        Ask a plan() running in another thread to stop between iterations, raising KeyboardInterrupt there (the plan still running). Without one running, the next plan() stops at once.
         """
     def step(self) -> Configuration | None:
         """

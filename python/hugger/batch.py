@@ -13,7 +13,7 @@ import numpy as np
 
 from . import _checks, _core
 from .hand import Hand
-from .planner import PARAMS, Planner, _timeout, check_params
+from .planner import PARAMS, Planner, _Batch, _timeout, check_params
 from .trajectory import Trajectory
 from .world import Object
 
@@ -95,16 +95,17 @@ def _job(index: int, case: Any, hand: Hand | None, params: dict[str, Any], timeo
     return _Job(c_hand, obj, target, pose, {**params, **own}, timeout)
 
 
-def _run(job: _Job) -> Trajectory:
-    return Planner(job.hand, job.obj, job.target, job.palm_pose, **job.params).plan(job.timeout)
+def _run(job: _Job, batch: _Batch | None = None) -> Trajectory:
+    planner = Planner(job.hand, job.obj, job.target, job.palm_pose, **job.params)
+    return planner.plan(job.timeout) if batch is None else batch.plan(planner, job.timeout)
 
 
-def _run_all(jobs: list[_Job]) -> list[Trajectory | BaseException]:
+def _run_all(jobs: list[_Job], batch: _Batch) -> list[Trajectory | BaseException]:
     """Plan ``jobs`` one after another; each outcome a trajectory or the case's exception."""
     out: list[Trajectory | BaseException] = []
     for job in jobs:
         try:
-            out.append(_run(job))
+            out.append(_run(job, batch))
         except Exception as exc:  # reported per case
             out.append(exc)
     return out
@@ -208,8 +209,10 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
         from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 
         groups = _groups(jobs)
+        batch = _Batch()
         with ThreadPoolExecutor(max_workers=min(int(threads), len(groups)), thread_name_prefix="hugger") as pool:
-            group_of: dict[Future[Any], list[int]] = {pool.submit(_run_all, [jobs[i] for i in g]): g for g in groups}
+            group_of: dict[Future[Any], list[int]] = {pool.submit(_run_all, [jobs[i] for i in g], batch): g
+                                                      for g in groups}
             pending = set(group_of)
             done = 0
             try:
@@ -224,6 +227,7 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
             except BaseException:
                 for fut in pending:  # e.g. the progress callback raised: drop what has not started
                     fut.cancel()
+                batch.stop()  # and stop what has (Ctrl-C: the plans running in the workers)
                 raise
     if failed and errors == "raise":
         err = PlanManyError(failed, results)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import threading
 from typing import Any, Iterator, Mapping, Sequence, cast
 
 import numpy as np
@@ -217,6 +218,36 @@ class Planner:
             status=self.status,
             stats_json=json.dumps(self.stats),
         )
+
+
+
+class _Batch:
+    """The planners that worker threads run for one call (plan_many, search): when the call is
+    interrupted (Ctrl-C reaches its thread, which waits for the workers), :meth:`stop` stops the
+    running plans between iterations, and those not yet started at once, each with
+    KeyboardInterrupt, so that the call ends without waiting for them."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._running: set[Planner] = set()
+        self._stopped = False
+
+    def plan(self, planner: Planner, timeout: float | None) -> Trajectory:
+        with self._lock:
+            if self._stopped:
+                raise KeyboardInterrupt
+            self._running.add(planner)
+        try:
+            return planner.plan(timeout)
+        finally:
+            with self._lock:
+                self._running.discard(planner)
+
+    def stop(self) -> None:
+        with self._lock:
+            self._stopped = True
+            for planner in self._running:
+                planner._core.interrupt()  # (taken at its next iteration, even before it starts)
 
 
 def plan(hand: Hand, obj: Object, target: Any, palm_pose: Any, timeout: float | None = None,

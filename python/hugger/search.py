@@ -350,7 +350,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
     then, and shrinks when perturbations are skipped). The choice does not depend on ``threads``
     or ``workers``.
     """
-    from .planner import Planner, _timeout, check_params
+    from .planner import Planner, _Batch, _timeout, check_params
     from .scenarios import interior_target, safe_distance, start_pose
 
     t0 = time.perf_counter()
@@ -382,7 +382,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
         pose = start_pose(obj, hand, t, d, distance=distance)
         t1 = time.perf_counter()
         try:
-            traj = Planner(hand, obj, t, pose, **params).plan(limit)
+            traj = batch.plan(Planner(hand, obj, t, pose, **params), limit)
         except (ValueError, RuntimeError) as exc:
             return Candidate(index=i, direction=d, status="error", start_pose=pose,
                              error=f"{type(exc).__name__}: {exc}"), None, None
@@ -395,6 +395,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
         return judged, traj, found
 
     k = len(dirs)
+    batch = _Batch()  # (in this thread too: a Ctrl-C here reaches the plan itself)
     slots: list[tuple[Candidate, Trajectory | None, Any] | None] = [None] * k
     if workers == 1 or k == 1:
         for i in range(k):
@@ -406,10 +407,16 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
 
         with ThreadPoolExecutor(max_workers=min(workers, k), thread_name_prefix="hugger-search") as pool:
             futures = {pool.submit(run, i): i for i in range(k)}
-            for done, fut in enumerate(as_completed(futures), 1):
-                slots[futures[fut]] = fut.result()
-                if progress is not None:
-                    progress(done, k)
+            try:
+                for done, fut in enumerate(as_completed(futures), 1):
+                    slots[futures[fut]] = fut.result()
+                    if progress is not None:
+                        progress(done, k)
+            except BaseException:  # Ctrl-C, or the progress callback raised: the workers stop too
+                for fut in futures:
+                    fut.cancel()
+                batch.stop()
+                raise
     results = [r for r in slots if r is not None]  # every slot is filled (a failed run raised)
     trajs = [r[1] for r in results]
 

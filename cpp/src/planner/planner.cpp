@@ -1013,7 +1013,7 @@ bool Planner::advance() {
   return true;
 }
 
-Status Planner::plan(double timeout) {
+Status Planner::plan(double timeout, const std::function<bool()>& pause) {
   if (timeout != kInf) check_timeout(timeout);  // kInf: no limit
   using Clock = std::chrono::steady_clock;
   // Past ~292 years (or infinite) the duration would overflow; such a timeout is no timeout.
@@ -1025,6 +1025,7 @@ Status Planner::plan(double timeout) {
       status_ = Status::kTimeout;
       break;
     }
+    if (pause && pause()) break;
     phase2_iteration();
   }
   next_ = history_.size();

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -116,7 +117,9 @@ class Planner {
   /// trajectory and the overrun is at most one iteration (Phase 1 and the skin's preparation,
   /// done by the constructor, are not counted). A timed-out plan has ended for good.
   /// Throws std::invalid_argument when `timeout` is NaN or not positive.
-  Status plan(double timeout = kInf);
+  /// `pause`, when given, is asked before every Phase 2 iteration too: true stops the call there
+  /// with the plan still running (a later call goes on from there, as if never stopped).
+  Status plan(double timeout = kInf, const std::function<bool()>& pause = {});
 
   Status status() const { return status_; }
   bool finished() const { return status_ != Status::kRunning && next_ >= history_.size(); }
