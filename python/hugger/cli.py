@@ -111,7 +111,8 @@ def _planner_options(p: argparse.ArgumentParser, skin_help: str = _SKIN_HELP) ->
     g.add_argument("--skin", choices=SKINS, help=skin_help)
     g.add_argument("--timeout", type=float, metavar="SECONDS",
                    help="stop planning Phase 2 after this long, with status 'timeout' and a valid partial "
-                        "plan (Phase 1 and the finger planes' regions come before it)")
+                        "plan (Phase 1 and the finger planes' regions come before it); with --approaches, each "
+                        "plan's bound (a plan it stops depends on the machine's speed, so the search's result may)")
 
 
 def _case_options(p: argparse.ArgumentParser) -> None:
