@@ -178,6 +178,10 @@ def test_object_free_plan_saves_and_hugger_info_reads_it(hand, tmp_path):
             hugger.physics.export_mjcf(back)
     with pytest.raises(ValueError, match="object-free"):
         back.summary()
+    if importlib.util.find_spec("matplotlib") is not None:  # every figure says why it cannot be drawn
+        for out in ("free.png", "free.gif"):
+            assert main(["render", str(path), "--out", str(tmp_path / out)]) == 2
+            assert not (tmp_path / out).exists()
     with pytest.raises(ValueError, match="record_object"):
         hugger.Planner(hand, hugger.objects.sphere(0.04), [0, 0, 0], start(), record_object=hugger.objects.sphere(0.04))
 

@@ -59,15 +59,23 @@ def animate(traj: Trajectory, path: str | os.PathLike[str], fps: float = 30, max
     try:
         ax = fig.add_axes((0.0, 0.08, 1.0, 0.84), projection="3d")
         _legend(fig)
+
+        def draw(k: int) -> list[Any]:
+            artists = draw_configuration(ax, traj, k, view=view, limits=limits, _scene=scene)
+            states = np.bincount(traj.tip_state[k].astype(int), minlength=3)
+            ax.set_title(f"k = {k} / {len(traj) - 1}, {_phase_name(traj, k)}   "
+                         f"FROZEN {states[0]}  CONTACT {states[1]}  DONE {states[2]}", fontsize=9)
+            return artists
+
+        # The first frame is drawn before the writer starts: what cannot be drawn (an object-free
+        # plan) raises as itself, not as the writer's complaint of a movie without frames.
+        artists = draw(int(frames[0]))
         with rc_context(rc), writer.saving(fig, str(out), dpi):
-            artists: list[Any] = []
             for i, k in enumerate(frames, start=1):
-                for a in artists:
-                    a.remove()
-                artists = draw_configuration(ax, traj, int(k), view=view, limits=limits, _scene=scene)
-                states = np.bincount(traj.tip_state[k].astype(int), minlength=3)
-                ax.set_title(f"k = {int(k)} / {len(traj) - 1}, {_phase_name(traj, int(k))}   "
-                             f"FROZEN {states[0]}  CONTACT {states[1]}  DONE {states[2]}", fontsize=9)
+                if i > 1:
+                    for a in artists:
+                        a.remove()
+                    artists = draw(int(k))
                 writer.grab_frame()
                 if progress is not None:
                     progress(i, len(frames))
