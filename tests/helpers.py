@@ -271,3 +271,21 @@ def random_hand(rng: np.random.Generator, size: float) -> hugger.Hand:
     lengths = link * rng.uniform(0.8, 1.2, size=(m, n)) if rng.random() < 0.3 else link
     return hugger.Hand(fingers=m, links=n, link_length=lengths, link_radius=radius, palm_radius=palm,
                        palm_thickness=0.3 * palm)
+
+
+def proc_file(pid: int, name: str) -> str:
+    """/proc/PID/NAME, or "" once the process is gone."""
+    try:
+        return Path(f"/proc/{pid}/{name}").read_text(errors="replace")
+    except OSError:
+        return ""
+
+
+def children(pid: int) -> set[int]:
+    """The processes whose parent is ``pid`` (Linux /proc)."""
+    found = set()
+    for entry in Path("/proc").iterdir():
+        stat = proc_file(int(entry.name), "stat") if entry.name.isdigit() else ""
+        if stat and int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+            found.add(int(entry.name))
+    return found

@@ -19,7 +19,7 @@ import hugger
 from hugger import analysis, dataset
 from hugger.cli import main
 
-from helpers import save_and_check, write_ball
+from helpers import children, proc_file, save_and_check, write_ball
 
 OBJECTS = ["box", "torus", "cylinder"]
 
@@ -104,27 +104,9 @@ def test_a_killed_run_resumes_to_the_same_dataset(reference, tmp_path, sig):
         assert (out / "shards" / p.name).stat().st_mtime_ns == before[p.name]
 
 
-def _proc(pid: int, name: str) -> str:
-    """/proc/PID/NAME, or "" once the process is gone."""
-    try:
-        return Path(f"/proc/{pid}/{name}").read_text(errors="replace")
-    except OSError:
-        return ""
-
-
-def _children(pid: int) -> set[int]:
-    """The processes whose parent is ``pid`` (Linux /proc)."""
-    found = set()
-    for entry in Path("/proc").iterdir():
-        stat = _proc(int(entry.name), "stat") if entry.name.isdigit() else ""
-        if stat and int(stat.rsplit(")", 1)[1].split()[1]) == pid:
-            found.add(int(entry.name))
-    return found
-
-
 def _running(pid: int) -> bool:
     """The process exists and is not a zombie (one left unreaped by a container's first process)."""
-    stat = _proc(pid, "stat")
+    stat = proc_file(pid, "stat")
     return bool(stat) and stat.rsplit(")", 1)[1].split()[0] != "Z"
 
 
@@ -134,7 +116,7 @@ def _start_with_two_workers(cmd: list[str], **popen: Any) -> tuple[subprocess.Po
     deadline = time.monotonic() + 120
     workers: set[int] = set()
     while time.monotonic() < deadline and proc.poll() is None and len(workers) < 2:
-        workers = {p for p in _children(proc.pid) if "spawn_main" in _proc(p, "cmdline")}
+        workers = {p for p in children(proc.pid) if "spawn_main" in proc_file(p, "cmdline")}
         time.sleep(0.05)
     return proc, workers
 

@@ -396,6 +396,37 @@ def test_animate_short_plan_gives_one_frame_per_configuration(turned_plan, tmp_p
 
 
 @needs_mpl
+def test_ctrl_c_at_a_terminal_while_ffmpeg_writes_is_an_interrupt(tmp_path):
+    # A terminal's Ctrl-C reaches the whole process group: ffmpeg ends first, and the render is
+    # still an interrupt (130, nothing under the final name), not an internal error.
+    import signal
+    import time
+
+    from helpers import children
+
+    if viz.ffmpeg_path() is None:
+        pytest.skip("no ffmpeg: pip install imageio-ffmpeg (or put ffmpeg on the PATH) to test MP4 output")
+    c = hugger.scenarios.default_case("curvy")
+    plan = tmp_path / "plan.npz"
+    hugger.plan(c.hand, c.obj, c.target, c.palm_pose).save(plan)
+    out = tmp_path / "plan.mp4"
+    p = subprocess.Popen([sys.executable, "-m", "hugger", "render", str(plan), "--out", str(out), "--fps", "2"],
+                         start_new_session=True, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while not children(p.pid) and time.monotonic() < deadline:  # ffmpeg has started
+            time.sleep(0.05)
+        assert children(p.pid), "ffmpeg never started"
+        time.sleep(0.5)
+        os.killpg(p.pid, signal.SIGINT)
+        _, err = p.communicate(timeout=60)
+    finally:
+        p.kill()
+    assert p.returncode == 130 and err.strip() == "hugger: interrupted", err
+    assert not out.exists()
+
+
+@needs_mpl
 def test_animate_mp4(small_plan, tmp_path):
     if viz.ffmpeg_path() is None:
         pytest.skip("no ffmpeg: pip install imageio-ffmpeg (or put ffmpeg on the PATH) to test MP4 output")

@@ -1,9 +1,12 @@
 """GIF and MP4 animations of a whole plan (Pillow; ffmpeg for MP4)."""
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
+import subprocess
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -17,6 +20,18 @@ MOVIE_SIZE = (6.4, 4.8)
 
 
 # --- animation --------------------------------------------------------------------------------------
+
+@contextlib.contextmanager
+def _ffmpeg_interrupted() -> Iterator[None]:
+    """Ctrl-C at a terminal reaches ffmpeg too, which ends first (status 255, or killed by the
+    signal): the writer's CalledProcessError is then the interrupt it is, KeyboardInterrupt."""
+    try:
+        yield
+    except subprocess.CalledProcessError as exc:
+        if exc.returncode in (255, -signal.SIGINT):
+            raise KeyboardInterrupt from None
+        raise
+
 
 def animate(traj: Trajectory, path: str | os.PathLike[str], fps: float = 30, max_frames: int = 300, *,
             dpi: float = 100, view: str = "oblique", max_faces: int = 6000,
@@ -70,7 +85,7 @@ def animate(traj: Trajectory, path: str | os.PathLike[str], fps: float = 30, max
         # The first frame is drawn before the writer starts: what cannot be drawn (an object-free
         # plan) raises as itself, not as the writer's complaint of a movie without frames.
         artists = draw(int(frames[0]))
-        with rc_context(rc), writer.saving(fig, str(out), dpi):
+        with rc_context(rc), _ffmpeg_interrupted(), writer.saving(fig, str(out), dpi):
             for i, k in enumerate(frames, start=1):
                 if i > 1:
                     for a in artists:
