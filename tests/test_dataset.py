@@ -469,6 +469,33 @@ def test_a_grasp_whose_hand_the_index_lacks_is_a_value_error(reference, tmp_path
         hugger.Dataset(out).trajectory(0)
 
 
+def test_a_folder_another_run_is_writing_is_refused(tmp_path):
+    # The other run holds the folder (here, this process): a second run would mix its shards with
+    # the other's and write its own index. Refused at once, nothing written; then made as usual.
+    out = tmp_path / "ds"
+    holder = subprocess.Popen([sys.executable, "-c", "import sys, pathlib\nfrom hugger.dataset import _exclusive\n"
+                               f"with _exclusive(pathlib.Path({str(out)!r})):\n print('held', flush=True)\n"
+                               " sys.stdin.readline()"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        r = subprocess.run([sys.executable, "-m", "hugger", "generate", "sphere", "--approaches", "2", "--out", str(out)],
+                           capture_output=True, text=True, timeout=120)
+        assert r.returncode == 2 and "is being written by another hugger generate" in r.stderr, r.stderr
+        assert list(out.iterdir()) == []
+    finally:
+        holder.communicate("\n", timeout=60)
+    assert main(["generate", "sphere", "--approaches", "2", "--out", str(out), "--workers", "1"]) == 0
+    assert hugger.Dataset(out)[0].status == "done"
+
+
+def test_a_run_refused_before_writing_leaves_no_folder(tmp_path, monkeypatch):
+    out = tmp_path / "ds"
+    monkeypatch.setattr(dataset, "_check_index", lambda root, tasks: (_ for _ in ()).throw(ValueError("refused")))
+    with pytest.raises(ValueError, match="refused"):
+        dataset.generate(["sphere"], out, approaches=2, workers=1)
+    assert not out.exists()
+
+
 def test_a_temporary_left_by_a_killed_writer_is_removed_on_resume(reference, tmp_path):
     import shutil
 

@@ -413,6 +413,36 @@ def _names(name: str, value: Any, what: str = "names") -> list[Any]:
         raise ValueError(f"{name} must be a list of {what}, got {value!r}") from None
 
 
+@contextlib.contextmanager
+def _exclusive(root: Path) -> Iterator[None]:
+    """Holds the dataset folder ``root`` (made here) for this run: a second run writing the same
+    folder meanwhile is refused (the two would mix their shards, and each write its own index). A
+    run that ends in an exception before anything was written in a folder it made leaves no folder."""
+    try:
+        import fcntl
+    except ImportError:  # (no POSIX locks: not held)
+        yield
+        return
+    made = not root.exists()
+    root.mkdir(parents=True, exist_ok=True)
+    fd = os.open(root, os.O_RDONLY)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ValueError(f"{root} is being written by another hugger generate: wait for it to end, or write "
+                             f"to another folder") from None
+        try:
+            yield
+        except BaseException:
+            if made:
+                with contextlib.suppress(OSError):
+                    root.rmdir()  # only if still empty
+            raise
+    finally:
+        os.close(fd)  # (the lock goes with it)
+
+
 def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: int = 26, hands: Sequence[str] = ("5x5",),
              validate: bool = False, workers: int | None = None, backend: str = "local", address: str | None = None,
              scale: float = 1.0, rules: str | None = None, params: dict[str, Any] | None = None,
@@ -518,83 +548,84 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
             task["file"] = f"{safe_name}__{entry['label']}.npz"
             task["key"] = _task_key(task)
             tasks.append(task)
-    _check_index(root, tasks)
-    todo = [t for t in tasks if not _shard_done(shard_dir / t["file"], t["key"])]
-    # Ray first: a cluster that cannot be reached is refused before anything is written (and a Ray
-    # started here is shut down however the block ends).
-    with _ray_session(ray if todo else None, address, workers):
-        shard_dir.mkdir(parents=True, exist_ok=True)
-        remove_temporaries(shard_dir)  # left by a killed run
-        say = log or (lambda s: None)
-        say(f"{len(tasks) - len(todo)} of {len(tasks)} shards already done; making {len(todo)}")
-        done = len(tasks) - len(todo)
-        if progress is not None:
-            progress(done, len(tasks))
-
-        digests: dict[str, str] = {}  # of the shards written now (kept ones are hashed from disk)
-
-        def finished(task: dict[str, Any], data: bytes) -> None:
-            nonlocal done
-            write_atomic(shard_dir / task["file"], data)
-            digests[task["file"]] = hashlib.sha256(data).hexdigest()
-            done += 1
-            say(f"shard {done}/{len(tasks)} written: {task['file']}")
+    with _exclusive(root):  # this run alone writes the folder, from its check of the index to its index
+        _check_index(root, tasks)
+        todo = [t for t in tasks if not _shard_done(shard_dir / t["file"], t["key"])]
+        # Ray first: a cluster that cannot be reached is refused before anything is written (and a Ray
+        # started here is shut down however the block ends).
+        with _ray_session(ray if todo else None, address, workers):
+            shard_dir.mkdir(parents=True, exist_ok=True)
+            remove_temporaries(shard_dir)  # left by a killed run
+            say = log or (lambda s: None)
+            say(f"{len(tasks) - len(todo)} of {len(tasks)} shards already done; making {len(todo)}")
+            done = len(tasks) - len(todo)
             if progress is not None:
                 progress(done, len(tasks))
 
-        if todo and backend == "local":
-            if workers == 1 or len(todo) == 1:
-                for t in todo:
-                    finished(t, make_shard(t))
-            else:
-                from concurrent.futures import FIRST_COMPLETED, wait
+            digests: dict[str, str] = {}  # of the shards written now (kept ones are hashed from disk)
 
-                from ._pool import running_pool
+            def finished(task: dict[str, Any], data: bytes) -> None:
+                nonlocal done
+                write_atomic(shard_dir / task["file"], data)
+                digests[task["file"]] = hashlib.sha256(data).hexdigest()
+                done += 1
+                say(f"shard {done}/{len(tasks)} written: {task['file']}")
+                if progress is not None:
+                    progress(done, len(tasks))
 
-                # Interrupted (Ctrl-C, or SIGINT to this process alone), the pool is stopped at once
-                # rather than waited for (running_pool), and the shards made meanwhile are kept.
-                with running_pool(workers, len(todo)) as pool:
-                    pending: dict[Any, dict[str, Any]] = {}
-                    try:
-                        for t in todo:
-                            pending[pool.submit(make_shard, t)] = t
-                        while pending:
-                            ready, _ = wait(pending, return_when=FIRST_COMPLETED)
-                            for fut in sorted(ready, key=lambda f: pending[f]["file"]):
-                                finished(pending.pop(fut), fut.result())
-                    except BaseException:
-                        with contextlib.suppress(Exception):
-                            for fut in sorted(pending, key=lambda f: pending[f]["file"]):
-                                if fut.done() and not fut.cancelled() and fut.exception() is None:
-                                    finished(pending[fut], fut.result())
-                        raise
-        elif todo:
-            remote = ray.remote(num_cpus=1, max_retries=2)(make_shard)
-            waiting: dict[Any, dict[str, Any]] = {}
-            queue = list(todo)
-            while queue or waiting:
-                while queue and len(waiting) < max(1, workers):
-                    t = queue.pop(0)
-                    waiting[remote.remote(t)] = t
-                ready, _ = ray.wait(list(waiting), num_returns=1)
-                for ref in ready:
-                    finished(waiting.pop(ref), ray.get(ref))
+            if todo and backend == "local":
+                if workers == 1 or len(todo) == 1:
+                    for t in todo:
+                        finished(t, make_shard(t))
+                else:
+                    from concurrent.futures import FIRST_COMPLETED, wait
 
-    index = {
-        "format": DATASET_FORMAT, "format_version": DATASET_VERSION, "hugger_version": VERSION,
-        "command": list(command) if command is not None else None,
-        "parameters": {"approaches": int(approaches), "validate": bool(validate), "rules": rules, "scale": float(scale),
-                       "planner": params},
-        # a mesh file's absolute path beside the path as given (which the shards' keys hold): the
-        # dataset is then read from any folder
-        "objects": [o if o["builtin"] else {**o, "abspath": os.path.abspath(o["path"])} for o in obj_list],
-        "hands": hand_entries,
-        "shards": [{"file": f"shards/{t['file']}", "object": t["object"]["name"], "hand": t["hand"]["label"],
-                    "task_sha256": t["key"],
-                    "sha256": digests.get(t["file"]) or _sha256_file(str(shard_dir / t["file"]))} for t in tasks],
-    }
-    write_atomic(root / "index.json", json.dumps(index, indent=1, sort_keys=True) + "\n")
-    return index
+                    from ._pool import running_pool
+
+                    # Interrupted (Ctrl-C, or SIGINT to this process alone), the pool is stopped at once
+                    # rather than waited for (running_pool), and the shards made meanwhile are kept.
+                    with running_pool(workers, len(todo)) as pool:
+                        pending: dict[Any, dict[str, Any]] = {}
+                        try:
+                            for t in todo:
+                                pending[pool.submit(make_shard, t)] = t
+                            while pending:
+                                ready, _ = wait(pending, return_when=FIRST_COMPLETED)
+                                for fut in sorted(ready, key=lambda f: pending[f]["file"]):
+                                    finished(pending.pop(fut), fut.result())
+                        except BaseException:
+                            with contextlib.suppress(Exception):
+                                for fut in sorted(pending, key=lambda f: pending[f]["file"]):
+                                    if fut.done() and not fut.cancelled() and fut.exception() is None:
+                                        finished(pending[fut], fut.result())
+                            raise
+            elif todo:
+                remote = ray.remote(num_cpus=1, max_retries=2)(make_shard)
+                waiting: dict[Any, dict[str, Any]] = {}
+                queue = list(todo)
+                while queue or waiting:
+                    while queue and len(waiting) < max(1, workers):
+                        t = queue.pop(0)
+                        waiting[remote.remote(t)] = t
+                    ready, _ = ray.wait(list(waiting), num_returns=1)
+                    for ref in ready:
+                        finished(waiting.pop(ref), ray.get(ref))
+
+        index = {
+            "format": DATASET_FORMAT, "format_version": DATASET_VERSION, "hugger_version": VERSION,
+            "command": list(command) if command is not None else None,
+            "parameters": {"approaches": int(approaches), "validate": bool(validate), "rules": rules, "scale": float(scale),
+                           "planner": params},
+            # a mesh file's absolute path beside the path as given (which the shards' keys hold): the
+            # dataset is then read from any folder
+            "objects": [o if o["builtin"] else {**o, "abspath": os.path.abspath(o["path"])} for o in obj_list],
+            "hands": hand_entries,
+            "shards": [{"file": f"shards/{t['file']}", "object": t["object"]["name"], "hand": t["hand"]["label"],
+                        "task_sha256": t["key"],
+                        "sha256": digests.get(t["file"]) or _sha256_file(str(shard_dir / t["file"]))} for t in tasks],
+        }
+        write_atomic(root / "index.json", json.dumps(index, indent=1, sort_keys=True) + "\n")
+        return index
 
 
 # --------------------------------------------------------------------------------------------
