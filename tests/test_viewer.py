@@ -106,6 +106,17 @@ def test_export_scene_final_grasp_loads_in_trimesh(plans, tmp_path, capsys):
     assert np.allclose(far[:3], traj.joints[-1, 2, 5], atol=1e-6)
     assert np.ptp(link.vertices[:, 2]) == pytest.approx(0.02 + 2 * 0.004, rel=1e-6)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["grasp.glb"]
+    # glTF materials: the object blended at alpha 0.5 (a vertex colour's alpha alone is ignored,
+    # the default mode being opaque), the hand opaque; and normals, for smooth shading
+    obj = scene.geometry[scene.graph["object"][1]].visual.material
+    assert obj.alphaMode == "BLEND" and obj.baseColorFactor[3] == 128
+    assert link.visual.material.alphaMode == "OPAQUE" and link.visual.material.baseColorFactor[3] == 255
+    import json
+    import struct
+
+    data = out.read_bytes()
+    gltf = json.loads(data[20:20 + struct.unpack("<I", data[12:16])[0]])
+    assert all("NORMAL" in p["attributes"] for mesh in gltf["meshes"] for p in mesh["primitives"])
 
 
 def test_export_scene_all_frames(plans, tmp_path, capsys):

@@ -448,8 +448,13 @@ def view(trajs: Any, *, port: int = 8080, host: str = "127.0.0.1", open_browser:
 # --- glTF export ------------------------------------------------------------------------------------
 
 def _colored(trimesh: Any, verts: np.ndarray, faces: np.ndarray, rgb: Sequence[int], alpha: int = 255) -> Any:
+    """A mesh of one glTF material: its colour, and below alpha 255 blended (glTF's default mode is
+    opaque: a vertex colour's alpha alone is ignored by viewers)."""
     mesh = trimesh.Trimesh(vertices=verts, faces=faces, process=False)
-    mesh.visual = trimesh.visual.ColorVisuals(mesh, face_colors=np.tile([*rgb, alpha], (len(faces), 1)))
+    material = trimesh.visual.material.PBRMaterial(
+        baseColorFactor=[*rgb, alpha], alphaMode="BLEND" if alpha < 255 else "OPAQUE", metallicFactor=0.0,
+        roughnessFactor=0.8, doubleSided=alpha < 255)
+    mesh.visual = trimesh.visual.TextureVisuals(material=material)
     return mesh
 
 
@@ -509,5 +514,5 @@ def export_scene(traj: Trajectory, path: Any = None, *, all_frames: bool = False
             scene.add_geometry(_colored(trimesh, sv, sf, CONTACT_RGB), node_name=f"{prefix}contacts",
                                geom_name=f"{prefix}contacts")
     if path is not None:
-        write_atomic(path, scene.export(file_type="glb"))
+        write_atomic(path, scene.export(file_type="glb", include_normals=True))  # (smooth shading)
     return scene
