@@ -64,6 +64,24 @@ def test_convex_object_is_one_piece_without_coacd(monkeypatch, cache):
     np.testing.assert_array_equal(pieces[0][0], ball.vertices)
 
 
+@pytest.mark.parametrize("radius", [0.0006, 0.004, 0.04, 1.5])
+def test_a_hulls_volume_at_any_size_the_planner_takes(radius):
+    # (a hull under 1 cm across at unit density is lighter than MuJoCo takes: it is weighed denser)
+    ball = hugger.objects.sphere(radius, subdivisions=3)
+    volume, _, _ = physics.mass_properties(ball.vertices, ball.faces)
+    assert physics.hull_volume(ball.vertices) == pytest.approx(volume, rel=1e-6)
+
+
+def test_a_grasp_of_a_one_millimetre_object_is_judged(tmp_path):
+    # 1.2 mm across: above the smallest size the planner takes (1 mm); the hold test runs
+    ball = hugger.objects.sphere(0.0006, subdivisions=3)
+    hand = hugger.Hand(fingers=3, links=3, link_length=0.002, link_radius=0.0002, palm_radius=0.002,
+                       palm_thickness=0.001)
+    traj = hugger.plan(hand, ball, [0, 0, 0], hugger.look_at([0, 0, 0.01], [0, 0, 0]), contact_tolerance=2e-5)
+    verdict = physics.validate(traj, cache_dir=tmp_path)
+    assert set(verdict["directions"]) == set(physics.DIRECTIONS)
+
+
 def test_nonconvex_object_is_decomposed_and_cached(monkeypatch, cache):
     blob = hugger.objects.blob(0.04, amplitude=0.6, seed=1, subdivisions=2)
     assert physics.hull_volume(blob.vertices) / blob.volume > physics.CONVEX_RATIO

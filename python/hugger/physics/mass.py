@@ -37,6 +37,11 @@ def hull_volume(vertices: Any) -> float:
     mujoco = _mujoco()
     v = np.asarray(vertices, dtype=np.float64)
     shift = v.mean(axis=0)
+    # MuJoCo refuses a free body whose mass or inertia is below its mjMINVAL (1e-15): at unit
+    # density, a hull less than about 1 cm across. Such a hull is weighed at a density that makes
+    # it a unit cube's mass (larger ones at unit density, as before).
+    size = float(np.ptp(v, axis=0).max()) if len(v) else 0.0
+    density = 1.0 if size >= 0.01 or size == 0.0 else size ** -3
     xml = (f'<mujoco><asset><mesh name="m" inertia="convex" vertex="{_floats(v - shift, "{:.9g}")}"/></asset>'
-           '<worldbody><body><freejoint/><geom type="mesh" mesh="m" density="1"/></body></worldbody></mujoco>')
-    return float(mujoco.MjModel.from_xml_string(xml).body_mass[1])
+           f'<worldbody><body><freejoint/><geom type="mesh" mesh="m" density="{density!r}"/></body></worldbody></mujoco>')
+    return float(mujoco.MjModel.from_xml_string(xml).body_mass[1]) / density
