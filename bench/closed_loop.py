@@ -18,6 +18,13 @@ from hugger import mujoco_skin
 from hugger.scenarios import default_case
 
 
+def _cells(run: dict) -> str:
+    """A run's held, links and object moved; a simulation that went unstable has no figures."""
+    if run["hold"].get("diverged"):
+        return "no (diverged) | — | —"
+    return f"{'yes' if run['held'] else 'no'} | {run['links_in_contact']} | {1000 * run['object_moved_m']:.1f}"
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--objects", nargs="+", default=["sphere", "ellipsoid", "cylinder", "curvy"])
@@ -40,8 +47,7 @@ def main() -> int:
             c = mujoco_skin.simulate(hand, case.obj, case.target, case.palm_pose, offset=offset, push=push).as_dict()
             o = mujoco_skin.replay(hand, case.obj, case.target, case.palm_pose, offset=offset, push=push).as_dict()
             rows.append({"object": name, "case": label, "closed": c, "open": o, "seconds": time.perf_counter() - t0})
-            print(f"| {name} | {label} | {'yes' if c['held'] else 'no'} | {c['links_in_contact']} | {1000 * c['object_moved_m']:.1f} "
-                  f"| {'yes' if o['held'] else 'no'} | {o['links_in_contact']} | {1000 * o['object_moved_m']:.1f} |", flush=True)
+            print(f"| {name} | {label} | {_cells(c)} | {_cells(o)} |", flush=True)
     held_c = sum(r["closed"]["held"] for r in rows)
     held_o = sum(r["open"]["held"] for r in rows)
     print(f"\nheld: closed loop {held_c}/{len(rows)}, open loop {held_o}/{len(rows)}")

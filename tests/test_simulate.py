@@ -120,4 +120,13 @@ def test_a_simulation_that_goes_unstable_is_no_hold(hand):
     r = mujoco_skin.simulate(hand, case.obj, case.target, case.palm_pose, push=1e12)
     assert r.hold == {"held": False, "diverged": True}
     assert r.as_dict()["held"] is False
+    assert r.object_moved_m is None and r.links_in_contact is None  # the reset state's figures say nothing
+
+
+def test_the_command_gives_no_figures_of_a_simulation_that_went_unstable(capsys):
+    from hugger.cli import main
+
+    assert main(["simulate", "sphere", "--push", "1e12"]) == 0
+    out = capsys.readouterr().out
+    assert "went unstable (MuJoCo reset it): no figures, NOT held" in out and "object moved" not in out
 

@@ -709,10 +709,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     else:
         for mode, r in runs.items():
             d = r.as_dict()
-            print(f"{mode:6s} status {d['status']:14s} configurations {d['configurations']:5d}  object moved "
-                  f"{1000 * d['object_moved_m']:6.2f} mm  links in contact {d['links_in_contact']:2d}  "
-                  + ("the simulation went unstable (MuJoCo reset it): NOT held" if d["hold"].get("diverged") else
-                     f"{'held' if d['held'] else 'NOT held'} in the six-direction test"))
+            head = f"{mode:6s} status {d['status']:14s} configurations {d['configurations']:5d}  "
+            if d["hold"].get("diverged"):  # where the reset left the object says nothing
+                print(head + "the simulation went unstable (MuJoCo reset it): no figures, NOT held")
+            else:
+                print(head + f"object moved {1000 * d['object_moved_m']:6.2f} mm  links in contact "
+                      f"{d['links_in_contact']:2d}  {'held' if d['held'] else 'NOT held'} in the six-direction test")
     return EXIT_OK
 
 

@@ -225,8 +225,8 @@ class LoopResult:
     mode: str  #: "closed" or "open"
     status: str  #: the planner's status (closed loop) or the replayed plan's
     configurations: int
-    object_moved_m: float  #: how far the object's centre moved during the grasp
-    links_in_contact: int  #: simulated links within 1 mm of the object at the end
+    object_moved_m: float | None  #: how far the object's centre moved during the grasp (None: diverged)
+    links_in_contact: int | None  #: simulated links within 1 mm of the object at the end (None: diverged)
     hold: dict[str, Any] = field(default_factory=dict)  #: the six-direction test (physics.validate's fields)
     trajectory: Any = None  #: the plan, with the object recorded where the simulation left it
 
@@ -261,14 +261,14 @@ def _finish(sim: Simulation, traj: Any, mode: str, start_centre: np.ndarray) -> 
     sim.advance(FINAL_SETTLE)
     T = sim.object_pose()
     moved = dataclasses.replace(traj, object_vertices=sim.obj.vertices @ T[:3, :3].T + T[:3, 3])
-    gaps = sim.link_gaps()
     if _ph._resets(sim.mujoco, sim.data):  # where a reset left the object says nothing of the grasp
-        hold: dict[str, Any] = {"held": False, "diverged": True}
-    else:
-        hold = _ph.validate(moved) if len(traj) else {"held": False}
+        return LoopResult(mode=mode, status=traj.status, configurations=len(traj), object_moved_m=None,
+                          links_in_contact=None, hold={"held": False, "diverged": True}, trajectory=moved)
+    gaps = sim.link_gaps()
     return LoopResult(mode=mode, status=traj.status, configurations=len(traj),
                       object_moved_m=float(np.linalg.norm(sim.data.xpos[sim.body] - start_centre)),
-                      links_in_contact=int(np.sum(gaps <= CONTACT_DISTANCE)), hold=hold, trajectory=moved)
+                      links_in_contact=int(np.sum(gaps <= CONTACT_DISTANCE)),
+                      hold=_ph.validate(moved) if len(traj) else {"held": False}, trajectory=moved)
 
 
 def simulate(hand: Any, obj: Any, target: Any, palm_pose: Any, offset: Any = (0.0, 0.0, 0.0), push: float = 0.0,
