@@ -290,6 +290,7 @@ def test_robust_verify_keeps_the_first_robust_grasp_or_the_largest_held_fraction
     assert got[order[3]] == (True, True, 1.0)
     assert all(got[i] == (None, None, None) for i in order[4:])
     assert seen[-1][0] == seen[-1][1] == 6 + len(calls)  # plans, then every simulation run
+    assert seen[6] == (6, 6 + 5 * len(physics.PERTURBATIONS))  # after the plans, at once: the simulations to come (at most)
     assert [d for d, _ in seen] == sorted(d for d, _ in seen)
     d = r.chosen.to_dict()
     assert d["robust"] is True and d["held_fraction"] == 1.0

@@ -269,6 +269,8 @@ def _verify(order: Sequence[Candidate], trajs: Sequence[Trajectory | None], coun
     others = [n for n in PERTURBATIONS if n != "nominal"]
     total = planned + len(order[:count]) * (1 + (len(others) if robust else 0))
     done = planned
+    if progress is not None:  # the simulations to come, before the first (a bar would sit at full)
+        progress(done, total)
     checked: list[Candidate] = []
     pool: Any = None
     with contextlib.ExitStack() as pools:  # the pool, once made, stopped at once if interrupted
