@@ -481,19 +481,41 @@ def test_a_folder_another_run_is_writing_is_refused(tmp_path):
         r = subprocess.run([sys.executable, "-m", "hugger", "generate", "sphere", "--approaches", "2", "--out", str(out)],
                            capture_output=True, text=True, timeout=120)
         assert r.returncode == 2 and "is being written by another hugger generate" in r.stderr, r.stderr
-        assert list(out.iterdir()) == []
+        assert [p.name for p in out.iterdir()] == [dataset.LOCK_FILE]  # the holder's alone
     finally:
         holder.communicate("\n", timeout=60)
     assert main(["generate", "sphere", "--approaches", "2", "--out", str(out), "--workers", "1"]) == 0
     assert hugger.Dataset(out)[0].status == "done"
 
 
-def test_a_run_refused_before_writing_leaves_no_folder(tmp_path, monkeypatch):
-    out = tmp_path / "ds"
+def test_a_run_refused_or_interrupted_before_a_shard_leaves_no_folder_it_made(tmp_path, monkeypatch):
+    out = tmp_path / "a" / "b" / "ds"
     monkeypatch.setattr(dataset, "_check_index", lambda root, tasks: (_ for _ in ()).throw(ValueError("refused")))
     with pytest.raises(ValueError, match="refused"):
         dataset.generate(["sphere"], out, approaches=2, workers=1)
-    assert not out.exists()
+    assert list(tmp_path.iterdir()) == []  # nor the parents it made
+    monkeypatch.undo()
+    monkeypatch.setattr(dataset, "make_shard", lambda task: (_ for _ in ()).throw(KeyboardInterrupt))
+    with pytest.raises(KeyboardInterrupt):
+        dataset.generate(["sphere"], out, approaches=2, workers=1)
+    assert list(tmp_path.iterdir()) == []  # its empty shards folder and lock file too
+    (tmp_path / "kept").mkdir()
+    with pytest.raises(KeyboardInterrupt):
+        dataset.generate(["sphere"], tmp_path / "kept", approaches=2, workers=1)
+    assert (tmp_path / "kept").is_dir()  # a folder it did not make stays
+
+
+def test_a_filesystem_without_locks_is_written_unguarded_with_a_warning(tmp_path, monkeypatch):
+    import errno
+    import fcntl
+
+    def no_lock(fd, op):
+        raise OSError(errno.EBADF, "Bad file descriptor")  # NFS without its lock service, say
+
+    monkeypatch.setattr(fcntl, "flock", no_lock)
+    with pytest.warns(UserWarning, match="this filesystem takes no lock"):
+        dataset.generate(["sphere"], tmp_path / "ds", approaches=2, workers=1)
+    assert hugger.Dataset(tmp_path / "ds")[0].status == "done"
 
 
 def test_a_temporary_left_by_a_killed_writer_is_removed_on_resume(reference, tmp_path):

@@ -413,34 +413,75 @@ def _names(name: str, value: Any, what: str = "names") -> list[Any]:
         raise ValueError(f"{name} must be a list of {what}, got {value!r}") from None
 
 
-@contextlib.contextmanager
-def _exclusive(root: Path) -> Iterator[None]:
-    """Holds the dataset folder ``root`` (made here) for this run: a second run writing the same
-    folder meanwhile is refused (the two would mix their shards, and each write its own index). A
-    run that ends in an exception before anything was written in a folder it made leaves no folder."""
-    try:
-        import fcntl
-    except ImportError:  # (no POSIX locks: not held)
-        yield
-        return
-    made = not root.exists()
-    root.mkdir(parents=True, exist_ok=True)
-    fd = os.open(root, os.O_RDONLY)
-    try:
+#: The file a run of generate holds locked in its dataset's folder while it writes there.
+LOCK_FILE = ".hugger-lock"
+
+
+def _lock(path: Path) -> int | None:
+    """An open descriptor of ``path`` (made if missing) holding its exclusive lock; None where the
+    filesystem takes no lock (NFS without its lock service, Lustre without ``flock``: the run goes
+    on unguarded, and says so); ``ValueError`` when another run holds it."""
+    import errno
+    import fcntl
+    import warnings
+
+    for _ in range(8):
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            raise ValueError(f"{root} is being written by another hugger generate: wait for it to end, or write "
-                             f"to another folder") from None
+            os.close(fd)
+            raise ValueError(f"{path.parent} is being written by another hugger generate: wait for it to end, or "
+                             f"write to another folder") from None
+        except OSError as exc:
+            os.close(fd)
+            if exc.errno not in (errno.EBADF, errno.ENOLCK, errno.ENOSYS, errno.EOPNOTSUPP, errno.EINVAL):
+                raise
+            warnings.warn(f"{path.parent}: this filesystem takes no lock ({exc.strerror}); two runs writing this "
+                          f"dataset at once would not be told apart", stacklevel=4)
+            return None
+        # A run that failed may have removed the file between our open and our lock: the lock
+        # then holds a file no other run finds. Locked the file under the name, or try again.
         try:
-            yield
-        except BaseException:
-            if made:
+            if os.stat(path).st_ino == os.fstat(fd).st_ino:
+                return fd
+        except FileNotFoundError:
+            pass
+        os.close(fd)
+    raise ValueError(f"{path}: could not be locked (removed again and again)")
+
+
+@contextlib.contextmanager
+def _exclusive(root: Path) -> Iterator[None]:
+    """Holds the dataset folder ``root`` (made here, with its parents) for this run: a second run
+    writing the same folder meanwhile is refused (the two would mix their shards, and each write
+    its own index). A run that ends in an exception leaves none of the folders it made that are
+    still empty but for its lock file and an empty ``shards``."""
+    made = [p for p in (root, *root.parents) if not p.exists()]  # the deepest first
+    root.mkdir(parents=True, exist_ok=True)
+    fd: int | None = None
+    try:
+        try:
+            import fcntl  # noqa: F401  (POSIX: locks held by flock)
+        except ImportError:
+            pass
+        else:
+            fd = _lock(root / LOCK_FILE)
+        yield
+    except BaseException:
+        if made:  # this run made the folder: what it holds of this run alone goes with it
+            with contextlib.suppress(OSError):
+                (root / "shards").rmdir()  # only if empty
+            if {p.name for p in root.iterdir()} <= {LOCK_FILE}:
                 with contextlib.suppress(OSError):
-                    root.rmdir()  # only if still empty
-            raise
+                    (root / LOCK_FILE).unlink()
+            for p in made:
+                with contextlib.suppress(OSError):
+                    p.rmdir()  # only if empty
+        raise
     finally:
-        os.close(fd)  # (the lock goes with it)
+        if fd is not None:
+            os.close(fd)  # (the lock goes with it)
 
 
 def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: int = 26, hands: Sequence[str] = ("5x5",),
