@@ -64,12 +64,16 @@ def test_convex_object_is_one_piece_without_coacd(monkeypatch, cache):
     np.testing.assert_array_equal(pieces[0][0], ball.vertices)
 
 
-@pytest.mark.parametrize("radius", [0.0006, 0.004, 0.04, 1.5])
-def test_a_hulls_volume_at_any_size_the_planner_takes(radius):
-    # (a hull under 1 cm across at unit density is lighter than MuJoCo takes: it is weighed denser)
-    ball = hugger.objects.sphere(radius, subdivisions=3)
-    volume, _, _ = physics.mass_properties(ball.vertices, ball.faces)
-    assert physics.hull_volume(ball.vertices) == pytest.approx(volume, rel=1e-6)
+@pytest.mark.parametrize("make", [lambda: hugger.objects.sphere(0.0006, subdivisions=3),
+                                  lambda: hugger.objects.sphere(0.004, subdivisions=3),
+                                  lambda: hugger.objects.sphere(1.5, subdivisions=3),
+                                  lambda: hugger.objects.cylinder(0.0001, 0.012),  # a needle
+                                  lambda: hugger.objects.cylinder(0.00005, 0.011)])
+def test_a_hulls_volume_at_any_size_and_shape_the_planner_takes(make):
+    # (a hull whose mass or inertia at unit density is below what MuJoCo takes is weighed denser)
+    obj = make()
+    volume, _, _ = physics.mass_properties(obj.vertices, obj.faces)
+    assert physics.hull_volume(obj.vertices) == pytest.approx(volume, rel=1e-6)
 
 
 def test_a_grasp_of_a_one_millimetre_object_is_judged(tmp_path):

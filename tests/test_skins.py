@@ -111,6 +111,24 @@ def test_a_palm_gap_must_be_a_number(hand, answer):
         hugger.Planner(hand, cls([0, 0, 0], 0.04), [0, 0, 0], start())
 
 
+class _Scalar:
+    """A number of another array library: a dtype that is no NumPy dtype, and a float value."""
+    dtype = "other.float64"
+
+    def __init__(self, x):
+        self.x = x
+
+    def __float__(self):
+        return self.x
+
+
+def test_a_palm_gap_of_another_librarys_scalar_is_taken(hand):
+    ball = Ball([0, 0, 0], 0.04)
+    cls = type("Other", (Ball,), {"palm": lambda self, *a: _Scalar(Ball.palm(self, *a))})
+    assert hugger.Planner(hand, cls([0, 0, 0], 0.04), [0, 0, 0], start()).plan().status == "done"
+    assert ball.palm(start(), 0.03, 0.01, math.inf) > 0
+
+
 def test_incomplete_skin_and_missing_super_init(hand):
     class NoPalm(hugger.Sensing):
         def capsule(self, a, b, radius, cap):

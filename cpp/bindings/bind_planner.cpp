@@ -260,6 +260,10 @@ void bind_planner(py::module_& m) {
             Busy busy(p);
             if (p.failed) return status_of(p);
             bool stopped = false;  // by a signal (its handler's exception is set) or by interrupt()
+            // Python runs signal handlers in the main thread only: other threads (plan_many's,
+            // the search's) are stopped by interrupt() alone, and never take the GIL to look.
+            const bool main_thread = py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>() ==
+                                     PyThread_get_thread_ident();
             {
               py::gil_scoped_release release;
               using Clock = std::chrono::steady_clock;
@@ -268,6 +272,7 @@ void bind_planner(py::module_& m) {
               // Python's handlers (Ctrl-C's KeyboardInterrupt) take only with the GIL.
               auto pause = [&] {
                 if (p.interrupt.exchange(false)) return stopped = true;
+                if (!main_thread) return false;
                 const auto now = Clock::now();
                 if (now - polled < kSignalPoll) return false;
                 polled = now;
@@ -286,7 +291,8 @@ void bind_planner(py::module_& m) {
           "Run to the end (GIL released); returns the status. With ``timeout`` (seconds, positive finite) the "
           "plan stops with status 'timeout' once that much wall-clock time has passed. An exception raised by the "
           "skin propagates unchanged and ends the plan (status 'error'). A signal's exception (Ctrl-C: "
-          "KeyboardInterrupt) or interrupt() stops it between iterations, still running: a later call goes on.")
+          "KeyboardInterrupt) or interrupt() stops it between iterations, still running: a later call goes on (one "
+          "raised inside a Python skin's callback ends it, status 'error', as any exception of the skin).")
       .def("interrupt", [](PyPlanner& p) { p.interrupt = true; },
            "Ask a plan() running in another thread to stop between iterations, raising KeyboardInterrupt there "
            "(the plan still running). Without one running, the next plan() stops at once.")

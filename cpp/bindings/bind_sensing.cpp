@@ -48,8 +48,8 @@ class PySensing : public Sensing {
     try {
       // A bool, Python's or NumPy's (a scalar of dtype kind 'b'), is an answer to another question
       // (capsule_clear's), not a gap.
-      if (py::isinstance<py::bool_>(r) ||
-          (py::hasattr(r, "dtype") && py::str(r.attr("dtype").attr("kind")).cast<std::string>() == "b"))
+      const py::object kind = py::getattr(py::getattr(r, "dtype", py::none()), "kind", py::none());
+      if (py::isinstance<py::bool_>(r) || (py::isinstance<py::str>(kind) && kind.cast<std::string>() == "b"))
         throw py::cast_error();
       g = r.cast<double>();
     } catch (const py::cast_error&) {

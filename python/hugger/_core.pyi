@@ -372,7 +372,7 @@ class Planner:
         """
     def plan(self, timeout: typing.SupportsFloat | None = None) -> str:
         """
-        Run to the end (GIL released); returns the status. With ``timeout`` (seconds, positive finite) the plan stops with status 'timeout' once that much wall-clock time has passed. An exception raised by the skin propagates unchanged and ends the plan (status 'error'). A signal's exception (Ctrl-C: KeyboardInterrupt) or interrupt() stops it between iterations, still running: a later call goes on.
+        Run to the end (GIL released); returns the status. With ``timeout`` (seconds, positive finite) the plan stops with status 'timeout' once that much wall-clock time has passed. An exception raised by the skin propagates unchanged and ends the plan (status 'error'). A signal's exception (Ctrl-C: KeyboardInterrupt) or interrupt() stops it between iterations, still running: a later call goes on (one raised inside a Python skin's callback ends it, status 'error', as any exception of the skin).
         """
     def interrupt(self) -> None:
         """

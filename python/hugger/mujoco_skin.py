@@ -228,7 +228,7 @@ class LoopResult:
     object_moved_m: float | None  #: how far the object's centre moved during the grasp (None: diverged)
     links_in_contact: int | None  #: simulated links within 1 mm of the object at the end (None: diverged)
     hold: dict[str, Any] = field(default_factory=dict)  #: the six-direction test (physics.validate's fields)
-    trajectory: Any = None  #: the plan, with the object recorded where the simulation left it
+    trajectory: Any = None  #: the plan, with the object recorded where the simulation left it (as planned: diverged)
 
     def as_dict(self) -> dict[str, Any]:
         return {"mode": self.mode, "status": self.status, "configurations": self.configurations,
@@ -261,9 +261,10 @@ def _finish(sim: Simulation, traj: Any, mode: str, start_centre: np.ndarray) -> 
     sim.advance(FINAL_SETTLE)
     T = sim.object_pose()
     moved = dataclasses.replace(traj, object_vertices=sim.obj.vertices @ T[:3, :3].T + T[:3, 3])
-    if _ph._resets(sim.mujoco, sim.data):  # where a reset left the object says nothing of the grasp
+    if _ph._resets(sim.mujoco, sim.data):  # where a reset left the object says nothing of the grasp:
+        # the plan keeps the object it was planned with
         return LoopResult(mode=mode, status=traj.status, configurations=len(traj), object_moved_m=None,
-                          links_in_contact=None, hold={"held": False, "diverged": True}, trajectory=moved)
+                          links_in_contact=None, hold={"held": False, "diverged": True}, trajectory=traj)
     gaps = sim.link_gaps()
     return LoopResult(mode=mode, status=traj.status, configurations=len(traj),
                       object_moved_m=float(np.linalg.norm(sim.data.xpos[sim.body] - start_centre)),

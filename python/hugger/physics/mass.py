@@ -37,11 +37,19 @@ def hull_volume(vertices: Any) -> float:
     mujoco = _mujoco()
     v = np.asarray(vertices, dtype=np.float64)
     shift = v.mean(axis=0)
-    # MuJoCo refuses a free body whose mass or inertia is below its mjMINVAL (1e-15): at unit
-    # density, a hull less than about 1 cm across. Such a hull is weighed at a density that makes
-    # it a unit cube's mass (larger ones at unit density, as before).
-    size = float(np.ptp(v, axis=0).max()) if len(v) else 0.0
-    density = 1.0 if size >= 0.01 or size == 0.0 else size ** -3
-    xml = (f'<mujoco><asset><mesh name="m" inertia="convex" vertex="{_floats(v - shift, "{:.9g}")}"/></asset>'
-           f'<worldbody><body><freejoint/><geom type="mesh" mesh="m" density="{density!r}"/></body></worldbody></mujoco>')
-    return float(mujoco.MjModel.from_xml_string(xml).body_mass[1]) / density
+    # MuJoCo refuses a free body whose mass or any principal inertia is below its mjMINVAL (1e-15):
+    # at unit density, a hull under about 1 cm across, or a needle. Such a hull is weighed again
+    # at the density that gives its bounding box a mass of 1 kg (the others at unit density).
+    def weighed(density: float) -> float:
+        xml = (f'<mujoco><asset><mesh name="m" inertia="convex" vertex="{_floats(v - shift, "{:.9g}")}"/></asset>'
+               f'<worldbody><body><freejoint/><geom type="mesh" mesh="m" density="{density!r}"/></body>'
+               '</worldbody></mujoco>')
+        return float(mujoco.MjModel.from_xml_string(xml).body_mass[1]) / density
+
+    try:
+        return weighed(1.0)
+    except ValueError as exc:
+        box = float(np.prod(np.ptp(v, axis=0)))
+        if "mjMINVAL" not in str(exc) or not box > 0.0:
+            raise
+        return weighed(1.0 / box)

@@ -24,11 +24,16 @@ MOVIE_SIZE = (6.4, 4.8)
 @contextlib.contextmanager
 def _ffmpeg_interrupted() -> Iterator[None]:
     """Ctrl-C at a terminal reaches ffmpeg too, which ends first (status 255, or killed by the
-    signal): the writer's CalledProcessError is then the interrupt it is, KeyboardInterrupt."""
+    signal) while Python takes its KeyboardInterrupt: the writer's CalledProcessError, raised with
+    that interrupt as its context, is then the interrupt it is. (ffmpeg's own failures end it with
+    255 too, as an error of -1: without the interrupt they stay what they are.)"""
     try:
         yield
     except subprocess.CalledProcessError as exc:
-        if exc.returncode in (255, -signal.SIGINT):
+        cause: BaseException | None = exc.__context__
+        while cause is not None and not isinstance(cause, KeyboardInterrupt):
+            cause = cause.__context__
+        if cause is not None and exc.returncode in (255, -signal.SIGINT):
             raise KeyboardInterrupt from None
         raise
 
