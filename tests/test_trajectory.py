@@ -208,6 +208,13 @@ def test_wrong_dtypes_shapes_and_values_are_refused(saved, tmp_path, edit, match
         hugger.Trajectory.load(_write(tmp_path, edit(dict(arrays))))
 
 
+def test_half_precision_arrays_load_without_a_warning(saved, tmp_path):
+    # (warnings are errors in the tests) the bound on coordinates is compared in double precision
+    _, _, arrays = saved
+    half = _edit("object_vertices", lambda x: x.astype(np.float16))
+    assert hugger.Trajectory.load(_write(tmp_path, half(dict(arrays)))).object_vertices.dtype == np.float64
+
+
 def test_a_hand_of_implausible_size_is_not_warned_of_again_on_loading(saved, tmp_path):
     # (warnings are errors in the tests) the file loads as it is; its joints no longer match its
     # hand, which the loader does not check (the checker does)

@@ -224,7 +224,7 @@ class Trajectory:
             # MAX_COORDINATE (the engine's bound; the poses' is check_pose's, below), the joints
             # within a hand's reach of the palm (twice that bound holds them), the angles far within.
             bound = 2.0 * MAX_COORDINATE if key == "joints" else MAX_COORDINATE
-            if a.dtype.kind == "f" and a.size and key != "palm_pose" and np.abs(a).max() > bound:
+            if a.dtype.kind == "f" and a.size and key != "palm_pose" and float(np.abs(a).max()) > bound:
                 raise ValueError(f"{source}: {key} holds numbers beyond +-{bound:g}")
             arrays[key] = a
         try:
