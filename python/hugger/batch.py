@@ -224,10 +224,8 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
                         for i, outcome in zip(group_of[fut], outcomes):
                             done += 1
                             finish(i, outcome, done)
-            except BaseException:
-                for fut in pending:  # e.g. the progress callback raised: drop what has not started
-                    fut.cancel()
-                batch.stop()  # and stop what has (Ctrl-C: the plans running in the workers)
+            except BaseException:  # Ctrl-C, or the progress callback raised: the workers stop too
+                batch.stop(pending)
                 raise
     if failed and errors == "raise":
         err = PlanManyError(failed, results)

@@ -223,29 +223,31 @@ def make_shard(task: dict[str, Any]) -> bytes:
     return _npz_bytes(a)
 
 
+def _not_whole(path: Path, why: object) -> ValueError:
+    """The error of a shard file that is not whole (damaged, or not of the format), naming it."""
+    return ValueError(f"{path} is not a whole shard ({why}); 'hugger generate' with the command in index.json "
+                      f"makes it again")
+
+
 @contextlib.contextmanager
 def _open_shard(path: Path) -> Iterator[Any]:
     """The arrays of a shard file (np.load without pickles), the file closed whatever happens;
     ``ValueError`` naming the file when it is not a whole .npz (on opening, or on reading an
     array of it)."""
-    def damaged(why: object) -> ValueError:
-        return ValueError(f"{path} is not a whole shard ({why}); 'hugger generate' with the command in "
-                          f"index.json makes it again")
-
     if not path.is_file():
         raise ValueError(f"{path} is missing; 'hugger generate' with the command in index.json makes it again")
     with open(path, "rb") as fh:
         try:
             z = np.load(fh, allow_pickle=False)
         except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
-            raise damaged(exc) from None
+            raise _not_whole(path, exc) from None
         if not isinstance(z, np.lib.npyio.NpzFile):
-            raise damaged("a single array, not an .npz")
+            raise _not_whole(path, "a single array, not an .npz")
         with z:
             try:
                 yield z
             except (EOFError, zipfile.BadZipFile, zlib.error) as exc:
-                raise damaged(exc) from None
+                raise _not_whole(path, exc) from None
 
 
 def _read_index(path: Path) -> dict[str, Any]:
@@ -420,10 +422,15 @@ LOCK_FILE = ".hugger-lock"
 def _lock(path: Path) -> int | None:
     """An open descriptor of ``path`` (made if missing) holding its exclusive lock; None where the
     filesystem takes no lock (NFS without its lock service, Lustre without ``flock``: the run goes
-    on unguarded, and says so); ``ValueError`` when another run holds it."""
+    on unguarded, and says so) or the system has no ``flock`` (not POSIX); ``ValueError`` when
+    another run holds it."""
     import errno
-    import fcntl
     import warnings
+
+    try:
+        import fcntl
+    except ImportError:
+        return None
 
     for _ in range(8):
         fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
@@ -461,12 +468,7 @@ def _exclusive(root: Path) -> Iterator[None]:
     root.mkdir(parents=True, exist_ok=True)
     fd: int | None = None
     try:
-        try:
-            import fcntl  # noqa: F401  (POSIX: locks held by flock)
-        except ImportError:
-            pass
-        else:
-            fd = _lock(root / LOCK_FILE)
+        fd = _lock(root / LOCK_FILE)
         yield
     except BaseException:
         if made:  # this run made the folder: what it holds of this run alone goes with it
@@ -717,26 +719,22 @@ _SHARD_OPTIONAL: dict[str, tuple[int | None, ...]] = {"escape": (_K,), "held": (
 def _check_shard(z: dict[str, np.ndarray], k: int, path: Path) -> None:
     """``ValueError`` unless the shard's members the loader reads are there, of its K approaches,
     and its contact offsets split its contacts (docs/generation.md, "Format")."""
-    def bad(why: str) -> ValueError:
-        return ValueError(f"{path} is not a whole shard ({why}); 'hugger generate' with the command in "
-                          f"index.json makes it again")
-
     sizes = {_K: k, _K1: k + 1}
     for key, shape in {**_SHARD_MEMBERS, **_SHARD_OPTIONAL}.items():
         if key not in z:
             if key in _SHARD_OPTIONAL:
                 continue
-            raise bad(f"no {key}")
+            raise _not_whole(path, f"no {key}")
         got = z[key].shape
         if len(got) != len(shape) or any(want is not None and n != sizes.get(want, want) for n, want in zip(got, shape)):
-            raise bad(f"{key} has shape {got}")
+            raise _not_whole(path, f"{key} has shape {got}")
     c = len(z["contact_points"])
     off = z["contact_offsets"]
     if (off.dtype.kind not in "iu" or off[0] != 0 or off[-1] != c or np.any(np.diff(off) < 0)
             or any(len(z[key]) != c for key in ("contact_normals", "contact_finger", "contact_link"))):
-        raise bad("its contact offsets do not split its contacts")
+        raise _not_whole(path, "its contact offsets do not split its contacts")
     if z["best"].dtype.kind not in "iu" or not 0 <= int(z["best"]) < max(k, 1):
-        raise bad(f"best is {z['best']!r}")
+        raise _not_whole(path, f"best is {z['best']!r}")
 
 
 class Dataset:
@@ -762,7 +760,7 @@ class Dataset:
             with _open_shard(self.root / s["file"]) as z:
                 status = z["status"] if "status" in z.files else None
                 if status is None or status.ndim != 1:
-                    raise ValueError(f"{self.root / s['file']} is not a shard: it holds no status per approach")
+                    raise _not_whole(self.root / s["file"], "no status per approach")
                 self._sizes.append(int(status.shape[0]))
         self._starts = np.concatenate([[0], np.cumsum(self._sizes)]).astype(int)
 

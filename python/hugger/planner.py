@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import json
 import threading
-from typing import Any, Iterator, Mapping, Sequence, cast
+from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping, Sequence, cast
 
 import numpy as np
 
@@ -12,6 +12,10 @@ from ._types import CONTACT, DONE, FROZEN, Configuration  # noqa: F401  (hugger.
 from .hand import Hand, _real_array
 from .trajectory import Trajectory
 from .world import Object
+
+if TYPE_CHECKING:
+    from concurrent.futures import Future
+
 
 def look_at(position: Any, target: Any, up: Any = None) -> np.ndarray:
     """A palm pose (4, 4) at ``position`` whose normal (z axis) points at ``target``."""
@@ -129,8 +133,8 @@ class Planner:
         # (ValueError saying what is wrong), then plans Phase 1.
         params = _core.PlannerParams(step=step, epsilon=epsilon, contact_tolerance=contact_tolerance,
                                      max_iterations=max_iterations, rules=rules)
-        # The contact tolerance in force: given, or the default.
-        tolerance = _core.DEFAULT_CONTACT_TOLERANCE if params.contact_tolerance is None else params.contact_tolerance
+        # The contact tolerance in force (given, or the default), by the engine's rule.
+        tolerance = cast(float, _core.resolve_params(hand._core, params).contact_tolerance)  # (resolved: a number)
         from .skins.sensor import SensorModel
 
         if isinstance(sensing, SensorModel):  # (the engine would find every part touching at the start)
@@ -243,7 +247,10 @@ class _Batch:
             with self._lock:
                 self._running.discard(planner)
 
-    def stop(self) -> None:
+    def stop(self, futures: Iterable[Future[Any]] = ()) -> None:
+        """Cancel ``futures`` (the workers' jobs not started) and stop the plans running."""
+        for fut in futures:
+            fut.cancel()
         with self._lock:
             self._stopped = True
             for planner in self._running:

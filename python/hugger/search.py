@@ -415,9 +415,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
                     if progress is not None:
                         progress(done, k)
             except BaseException:  # Ctrl-C, or the progress callback raised: the workers stop too
-                for fut in futures:
-                    fut.cancel()
-                batch.stop()
+                batch.stop(futures)
                 raise
     results = [r for r in slots if r is not None]  # every slot is filled (a failed run raised)
     trajs = [r[1] for r in results]
