@@ -402,8 +402,6 @@ def test_ctrl_c_at_a_terminal_while_ffmpeg_writes_is_an_interrupt(tmp_path):
     import signal
     import time
 
-    from helpers import children
-
     if viz.ffmpeg_path() is None:
         pytest.skip("no ffmpeg: pip install imageio-ffmpeg (or put ffmpeg on the PATH) to test MP4 output")
     c = hugger.scenarios.default_case("curvy")
@@ -413,15 +411,21 @@ def test_ctrl_c_at_a_terminal_while_ffmpeg_writes_is_an_interrupt(tmp_path):
     p = subprocess.Popen([sys.executable, "-m", "hugger", "render", str(plan), "--out", str(out), "--fps", "2"],
                          start_new_session=True, stderr=subprocess.PIPE, text=True)
     try:
-        deadline = time.monotonic() + 60
-        while not children(p.pid) and time.monotonic() < deadline:  # ffmpeg has started
+        # ffmpeg runs once it has made its output, the temporary file beside the final name
+        deadline = time.monotonic() + 120
+        while (not list(tmp_path.glob(".plan.mp4.*")) and p.poll() is None
+               and time.monotonic() < deadline):
             time.sleep(0.05)
-        assert children(p.pid), "ffmpeg never started"
+        if p.poll() is not None:
+            pytest.fail(f"the render ended before it was interrupted (status {p.returncode}): "
+                        f"{p.communicate()[1]}")
+        assert list(tmp_path.glob(".plan.mp4.*")), "ffmpeg made no output within 120 s"
         time.sleep(0.5)
         os.killpg(p.pid, signal.SIGINT)
         _, err = p.communicate(timeout=60)
     finally:
         p.kill()
+        p.communicate()
     assert p.returncode == 130 and err.strip() == "hugger: interrupted", err
     assert not out.exists()
 
