@@ -262,8 +262,60 @@ def test_urdf_with_fixed_spread_joints_imports_and_plans(tmp_path, checker):
         r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--hand", str(f), *holds, *extra,
                             "--out", str(tmp_path / "x.npz")], capture_output=True, text=True)
         assert r.returncode == 2 and message in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
-    with pytest.raises(ValueError, match="the preset 'barrett_bh8' has none to hold"):
+    with pytest.raises(ValueError, match="fixed_joints: for a URDF or MJCF file only; the preset 'barrett_bh8'"):
         hugger.hands.load("barrett_bh8", fixed_joints={"f0_spread": 0.0})
+
+
+def test_a_preset_or_json_hand_refuses_joints_and_a_palm_to_choose(tmp_path):
+    f = tmp_path / "hand.json"
+    f.write_text(hugger.Hand(fingers=3, links=2).to_json())
+    for spec in ("barrett_bh8", str(f)):
+        for kwargs, what in (({"fixed_joints": {"x": 0.0}}, "fixed_joints"), ({"palm": "base"}, "palm"),
+                             ({"palm_link": "base"}, "palm_link")):
+            with pytest.raises(ValueError, match=f"^{what}: for a URDF or MJCF file only"):
+                hands.load(spec, **kwargs)
+        for option in (["--fixed-joint", "x=0"], ["--palm-link", "base"]):
+            r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--hand", spec, *option, "--out",
+                                str(tmp_path / "x.npz")], capture_output=True, text=True)
+            assert r.returncode == 2 and "for a URDF or MJCF file only" in r.stderr, r.stderr
+            assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "x.npz").exists()
+    r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--palm-link", "base", "--out",
+                        str(tmp_path / "x.npz")], capture_output=True, text=True)
+    assert r.returncode == 2 and "--palm-link needs --hand FILE" in r.stderr
+
+
+def test_a_hand_mounted_below_a_world_link_takes_its_palm_by_name(tmp_path):
+    pytest.importorskip("yourdfpy")
+    hand = hands.preset("parallel_3link")
+    path = _edited_urdf(tmp_path, '<link name="palm">',
+                        '<link name="world"/><joint name="mount" type="fixed"><parent link="world"/>'
+                        '<child link="palm"/><origin xyz="0 0 1"/></joint><link name="palm">')
+    # the root link is the palm by default: the error says which, and how to name another
+    with pytest.raises(ValueError, match=r"\(the palm is link 'world'; name another with palm_link= or --palm-link\)"):
+        hands.load(path)
+    assert hands.load(path, palm="palm").same_as(hand) and hands.from_urdf(path, palm_link="palm").same_as(hand)
+    with pytest.raises(ValueError, match="palm and palm_link both name the palm"):
+        hands.load(path, palm="palm", palm_link="palm")
+    out = tmp_path / "x.npz"
+    r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--hand", str(path), "--out", str(out)],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "--palm-link" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--hand", str(path), "--palm-link", "palm",
+                        "--out", str(out)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert hugger.Hand.from_dict(hugger.Trajectory.load(out).hand).same_as(hand)
+
+
+def test_urdf_limits_in_degrees_and_mimic_joints_are_warned_of(tmp_path):
+    pytest.importorskip("yourdfpy")
+    path = _edited_urdf(tmp_path, 'lower="-0.3490658503988659" upper="1.7453292519943295"',
+                        'lower="-20" upper="100"')
+    with pytest.warns(UserWarning, match=r"joint 'f0_j0' has limits \[-20.0, 100.0\], beyond \+-2 pi as if in degrees"):
+        assert not np.isfinite(hands.load(path).joint_limits[0, 0]).any()  # taken as no bound, as documented
+    path = _edited_urdf(tmp_path, '<joint name="f1_j1" type="revolute">',
+                        '<joint name="f1_j1" type="revolute"><mimic joint="f0_j1"/>')
+    with pytest.warns(UserWarning, match="joint 'f1_j1' mimics 'f0_j1' in the file; the hand moves each joint on its own"):
+        hands.load(path)
 
 
 def test_cli_hands_export_urdf_and_plan_with_it(tmp_path):
@@ -445,6 +497,9 @@ def test_the_exporters_take_a_hand_only(export):
 @pytest.mark.parametrize("text, match", [("[" * 100000 + "]" * 100000, "not readable JSON"),
                                          ("{not json", "not readable JSON"),
                                          ("[1, 2]", "a hand description must be a dict"),
+                                         ('{"fingers": 3, "links": 2, "link_lengths": 0.02, "link_radius": 0.004, '
+                                          '"palm_radius": 0.03, "palm_thickness": 0.01, "rest_angle": 0.1}',
+                                          "unknown key 'rest_angle' \\(did you mean 'rest_angles'\\?\\)"),
                                          ('{"fingers": 3, "links": 2, "link_lengths": NaN, "link_radius": 0.004, '
                                           '"palm_radius": 0.03, "palm_thickness": 0.01}', r"hand\.json'?: link_length")])
 def test_a_hand_file_that_is_no_hand_json_is_a_one_line_error(tmp_path, text, match):

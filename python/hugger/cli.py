@@ -87,6 +87,10 @@ def _hand_options(p: argparse.ArgumentParser) -> None:
                         "beside it but --link-radius with a URDF or MJCF file (URDF/MJCF need hugger[hands])")
     g.add_argument("--fixed-joint", action="append", default=[], metavar="NAME=RAD",
                    help="with --hand FILE: hold this joint at RAD (repeatable; e.g. a spread joint)")
+    g.add_argument("--palm-link", metavar="NAME",
+                   help="with --hand FILE: the palm, a URDF link or an MJCF body (default: the URDF's root link, the "
+                        "MJCF's first body below the world with child bodies); e.g. the hand's base below a 'world' "
+                        "link")
 
 
 def _planner_params(g: Any) -> None:
@@ -102,7 +106,8 @@ def _planner_params(g: Any) -> None:
 _SKIN_HELP = "sensing skin: section (2D per finger plane, the default) or mesh (exact 3D queries, the reference)"
 
 
-def _planner_options(p: argparse.ArgumentParser, skin_help: str = _SKIN_HELP) -> None:
+def _planner_options(p: argparse.ArgumentParser, skin_help: str = _SKIN_HELP, approaches: bool = True) -> None:
+    """The planner's options; ``approaches``: the command has --approaches, which --timeout's help names."""
     g = p.add_argument_group("planner (defaults as hugger.Planner)")
     _planner_params(g)
     g.add_argument("--rules", choices=RULES, default="hug",
@@ -111,8 +116,9 @@ def _planner_options(p: argparse.ArgumentParser, skin_help: str = _SKIN_HELP) ->
     g.add_argument("--skin", choices=SKINS, help=skin_help)
     g.add_argument("--timeout", type=float, metavar="SECONDS",
                    help="stop planning Phase 2 after this long, with status 'timeout' and a valid partial "
-                        "plan (Phase 1 and the finger planes' regions come before it); with --approaches, each "
-                        "plan's bound (a plan it stops depends on the machine's speed, so the search's result may)")
+                        "plan (Phase 1 and the finger planes' regions come before it)"
+                        + ("; with --approaches, each plan's bound (a plan it stops depends on the machine's speed, "
+                           "so the search's result may)" if approaches else ""))
 
 
 def _case_options(p: argparse.ArgumentParser) -> None:
@@ -162,9 +168,10 @@ def _hand(args: argparse.Namespace) -> Hand:
                 raise UsageError(f"--fixed-joint must be NAME=RAD, got {item!r}")
             if sum(other.partition("=")[0] == name for other in args.fixed_joint) > 1:
                 raise UsageError(f"--fixed-joint holds {name!r} more than once")
-        return hands.load(args.hand, fixed_joints=fixed or None, **extra)
-    if getattr(args, "fixed_joint", None):
-        raise UsageError("--fixed-joint needs --hand FILE")
+        return hands.load(args.hand, fixed_joints=fixed or None, palm=args.palm_link, **extra)
+    for option in ("fixed_joint", "palm_link"):
+        if getattr(args, option, None):
+            raise UsageError(f"--{option.replace('_', '-')} needs --hand FILE")
     shape: dict[str, Any] = {k: getattr(args, k) if k in given else v for k, v in defaults.items()}
     for k, v in shape.items():  # as parsed with these defaults: the file's provenance records them
         setattr(args, k, v)
@@ -803,7 +810,7 @@ def build_parser() -> _Parser:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     _hand_options(p)
     _planner_options(p, skin_help="sensing skin of the --open-loop plan on the static mesh: section (the default) "
-                                  "or mesh; the closed loop senses through MuJoCo")
+                                  "or mesh; the closed loop senses through MuJoCo", approaches=False)
     _case_options(p)
     p.set_defaults(func=cmd_simulate)
 

@@ -1,6 +1,7 @@
 """The hand model (docs/model.md): a round palm and M planar fingers of N links."""
 from __future__ import annotations
 
+import difflib
 import json
 import warnings
 from typing import Any, Callable
@@ -339,9 +340,15 @@ class Hand:
         missing = [k for k in keys if k not in d]
         if missing:
             raise ValueError(f"the hand description lacks {missing}")
+        layout_keys = ("finger_roots", "finger_directions", "rest_angles", "joint_limits")
+        known = (*keys, "finger_angles", *layout_keys, "name")
+        for key in d:
+            if key not in known:  # a misspelt key would leave the hand another than described
+                close = difflib.get_close_matches(str(key), known, n=1)
+                hint = f" (did you mean {close[0]!r}?)" if close else f" (the keys: {', '.join(known)})"
+                raise ValueError(f"the hand description has an unknown key {key!r}{hint}")
         integral: Callable[[Any], Any] = lambda x: int(x) if isinstance(x, float) and x.is_integer() else x  # noqa: E731  (JSON may say 5.0)
         fingers, links = integral(d["fingers"]), integral(d["links"])
-        layout_keys = ("finger_roots", "finger_directions", "rest_angles", "joint_limits")
         # The rim angles as given (default 2 pi m / M): fingers at other angles are a layout too.
         phi: np.ndarray | None = None
         spread = False

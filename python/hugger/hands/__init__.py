@@ -22,18 +22,25 @@ __all__ = ["PRESETS", "Preset", "preset", "from_urdf", "from_mjcf", "to_urdf", "
 ROBOT_SUFFIXES = (".urdf", ".xml", ".mjcf")
 
 
-def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = None, **kwargs: Any) -> Hand:
+def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = None, palm: str | None = None,
+         **kwargs: Any) -> Hand:
     """A hand from a preset name, or a ``.urdf``, ``.xml``/``.mjcf`` or ``.json`` file. An XML
     file is read as URDF or MJCF by its root element (``<robot>`` or ``<mujoco>``), whatever its
-    extension. ``fixed_joints`` and other keywords go to :func:`from_urdf` / :func:`from_mjcf`.
-    ``ValueError`` for an unknown preset, a missing, malformed or unknown file, or an unknown
-    extension."""
+    extension. ``palm`` names the palm (a URDF's link, an MJCF's body: ``palm_link`` or
+    ``palm_body`` of the reader); ``fixed_joints`` and other keywords go to :func:`from_urdf` /
+    :func:`from_mjcf`, and are refused for a preset or a JSON hand, which have no joints to
+    hold. ``ValueError`` for an unknown preset, a missing, malformed or unknown file, or an
+    unknown extension."""
     text = os.fspath(spec)
-    if text in PRESETS:
-        if fixed_joints:
-            raise ValueError(f"fixed_joints hold joints of a URDF or MJCF file; the preset {text!r} has none to hold")
-        return preset(text)
     ext = os.path.splitext(text)[1].lower()
+    if text in PRESETS or ext == ".json":
+        given = [k for k, v in (("fixed_joints", bool(fixed_joints)), ("palm", palm is not None)) if v] + sorted(kwargs)
+        if given:
+            what = f"the preset {text!r}" if text in PRESETS else f"the JSON hand {text!r}"
+            raise ValueError(f"{', '.join(given)}: for a URDF or MJCF file only; {what} is a whole hand, with no "
+                             f"joints or links to choose")
+    if text in PRESETS:
+        return preset(text)
     if ext not in (*ROBOT_SUFFIXES, ".json"):
         raise ValueError(f"hand {text!r} is neither a preset ({', '.join(PRESETS)}) nor a .urdf, .xml/.mjcf or "
                          f".json file")
@@ -51,6 +58,10 @@ def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = N
         if wrong in kwargs:
             raise ValueError(f"hand file {text!r} is {kind}, whose palm is chosen by {PALM_KEYWORDS[kind]}, not "
                              f"{wrong}")
+        if palm is not None:
+            if PALM_KEYWORDS[kind] in kwargs:
+                raise ValueError(f"palm and {PALM_KEYWORDS[kind]} both name the palm: give one")
+            kwargs[PALM_KEYWORDS[kind]] = palm
         read = from_urdf if kind == "URDF" else from_mjcf
         return read(text, fixed_joints=fixed_joints, **kwargs)
     try:

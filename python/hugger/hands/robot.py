@@ -193,7 +193,11 @@ def _check_tree(source: str, links: list[str], joints: list[tuple[str, str, str]
 
 
 def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | None, palm_radius: float | None,
-                      palm_thickness: float | None) -> Hand:
+                      palm_thickness: float | None, palm: str) -> Hand:
+    """The hand of the fingers' chains, in the frame of ``palm`` (its description in messages
+    about that frame: "link 'base'", "body 'palm'")."""
+    kind = "palm_link" if palm.startswith("link") else "palm_body"
+    chosen = f" (the palm is {palm}; name another with {kind}= or --palm-link)"
     if not chains:
         raise ValueError(f"{source}: no finger found (no revolute joint below the palm)")
     n = len(chains[0].joints)
@@ -208,7 +212,7 @@ def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | No
         a0 = c.axes[0]
         if abs(float(_stable.dot(a0, z))) > PLANAR_TOLERANCE:
             raise ValueError(f"{source}: joint {c.joints[0]!r} has axis {np.round(a0, 6).tolist()} (palm frame), not "
-                             f"normal to the palm normal z: its finger plane does not contain the palm normal")
+                             f"normal to the palm normal z: its finger plane does not contain the palm normal{chosen}")
         signs = []
         for name, a in zip(c.joints, c.axes):
             if float(_stable.norm(np.cross(a, a0))) > PLANAR_TOLERANCE:
@@ -226,7 +230,7 @@ def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | No
         root = c.anchors[0]
         if abs(float(root[2])) > PLANAR_TOLERANCE:
             raise ValueError(f"{source}: joint {c.joints[0]!r} (a finger root) is at z = {root[2]:.6g} m in the palm "
-                             f"frame, not on the palm's front face (z = 0)")
+                             f"frame, not on the palm's front face (z = 0){chosen}")
         u = np.cross(z, a0)
         u[2] = 0.0
         u /= _stable.norm(u)
@@ -411,7 +415,15 @@ def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dic
                 if not float(lim.lower) <= float(lim.upper):
                     raise ValueError(f"{source}: joint {j.name!r} has limits lower = {lim.lower} > upper = "
                                      f"{lim.upper} rad")
+                if max(abs(float(lim.lower)), abs(float(lim.upper))) > 2 * math.pi:
+                    warnings.warn(f"{source}: joint {j.name!r} has limits [{lim.lower}, {lim.upper}], beyond "
+                                  f"+-2 pi as if in degrees (URDF limits are radians): a bound beyond +-pi is no "
+                                  f"bound", stacklevel=3)
                 c.limits.append((float(lim.lower), float(lim.upper)))
+            if getattr(j, "mimic", None) is not None:
+                warnings.warn(f"{source}: joint {j.name!r} mimics {j.mimic.joint!r} in the file; the hand moves "
+                              f"each joint on its own (the coupling is not kept; hold the joints with fixed_joints "
+                              f"where it matters)", stacklevel=3)
             c.radii += [r for _, r, _ in cylinders(j.child, f)]
             # follow the finger: through fixed joints to its next revolute joint
             nxt, tip, group, walk = None, None, [(j.child, f)], [(j.child, f)]
@@ -448,7 +460,7 @@ def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dic
     palm_r = palm_t = None
     if palm_cyl:
         palm_r, palm_t = max(r for _, r, _ in palm_cyl), max(length for _, _, length in palm_cyl)
-    return _exact(source, _hand_from_chains(chains, source, link_radius, palm_r, palm_t))
+    return _exact(source, _hand_from_chains(chains, source, link_radius, palm_r, palm_t, f"link {palm!r}"))
 
 
 def _finger_geometry(hand: Hand) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -677,7 +689,8 @@ def from_mjcf(path: str | os.PathLike[str], palm_body: str | None = None, fixed_
     for g in range(model.ngeom):
         if model.geom_bodyid[g] in palm_group and int(model.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_CYLINDER):
             palm_r, palm_t = float(model.geom_size[g][0]), 2.0 * float(model.geom_size[g][1])
-    return _exact(source, _hand_from_chains(chains, source, link_radius, palm_r, palm_t))
+    return _exact(source, _hand_from_chains(chains, source, link_radius, palm_r, palm_t,
+                                          f"body {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, palm) or palm!r}"))
 
 
 def to_mjcf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
