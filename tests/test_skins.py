@@ -173,6 +173,20 @@ def test_a_sensor_model_of_an_object_records_it(hand):
     traj = hugger.Planner(hand, skins.SensorModel(obj), [0, 0, 0], start(), record_object=other).plan()
     assert np.array_equal(traj.object_faces, other.faces)
     assert not hugger.Planner(hand, skins.SensorModel(Ball([0, 0, 0], 0.04)), [0, 0, 0], start()).plan().has_object
+
+
+def test_a_mesh_skin_records_its_object_as_the_mesh_planner_does(hand):
+    obj = hugger.objects.sphere(0.04, subdivisions=3)
+    direct = hugger.Planner(hand, obj, [0, 0, 0], start(), skin="mesh").plan()
+    through = hugger.Planner(hand, skins.MeshSkin(obj), [0, 0, 0], start()).plan()
+    assert through.has_object and np.array_equal(through.object_faces, obj.faces)
+    assert np.array_equal(through.object_vertices, direct.object_vertices)
+    assert np.array_equal(through.joints, direct.joints) and through.summary() == direct.summary()
+    # and a sensor model of that skin
+    assert np.array_equal(hugger.Planner(hand, skins.SensorModel(skins.MeshSkin(obj)), [0, 0, 0], start()).plan()
+                          .object_faces, obj.faces)
+    # a bare SimulatedWorld made without MeshSkin knows no Object: the plan is object-free
+    assert not hugger.Planner(hand, hugger._core.SimulatedWorld(obj._core), [0, 0, 0], start()).plan().has_object
     assert skins.SensorModel(skins.SensorModel(obj)).object is obj  # a model of a model of it
 
 

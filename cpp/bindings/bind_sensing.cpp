@@ -156,7 +156,8 @@ void bind_sensing(py::module_& m) {
           "True when the capsule does not penetrate O (gap >= 0). The default asks capsule(..., cap=0).");
 
   py::class_<SimulatedWorld, Sensing, std::shared_ptr<SimulatedWorld>>(
-      m, "SimulatedWorld", "The simulated mesh world: exact 3D queries on a BVH of the object (the reference skin).")
+      m, "SimulatedWorld", "The simulated mesh world: exact 3D queries on a BVH of the object (the reference skin).",
+      py::dynamic_attr())  // hugger.skins.MeshSkin records its hugger.Object on it
       .def(py::init([](std::shared_ptr<Object> object) { return std::make_shared<SimulatedWorld>(object); }),
            py::arg("object"));
 }

@@ -135,11 +135,12 @@ class Planner:
                                      max_iterations=max_iterations, rules=rules)
         # The contact tolerance in force (given, or the default), by the engine's rule.
         tolerance = cast(float, _core.resolve_params(hand._core, params).contact_tolerance)  # (resolved: a number)
+        from .skins.mesh import recorded_object
         from .skins.sensor import SensorModel
 
+        if sensing is not None and obj is None:
+            obj = recorded_object(sensing)  # a MeshSkin, or a sensor model of one, records its Object
         if isinstance(sensing, SensorModel):  # (the engine would find every part touching at the start)
-            if obj is None:
-                obj = sensing.object  # a sensor model of an Object records that Object (None: none)
             if not sensing.range > tolerance:
                 raise ValueError(f"the SensorModel's range ({sensing.range:g} m) must exceed the planner's "
                                  f"contact_tolerance ({tolerance:g} m): every part within range reads as touching")

@@ -49,15 +49,13 @@ class SensorModel(Sensing):
                  taxel_spacing: float | None = None, seed: int = 0) -> None:
         super().__init__()
         from ..world import Object
+        from .mesh import MeshSkin, recorded_object
 
-        #: The Object given as the skin (sensed through its mesh world; or that of a SensorModel
-        #: given), else None: a planner records it with the plan unless given another
+        #: The Object given as the skin (sensed through its mesh world), or that of a MeshSkin or
+        #: SensorModel given, else None: a planner records it with the plan unless given another
         #: ``record_object``.
-        self.object: Object | None = (skin if isinstance(skin, Object) else
-                                      skin.object if isinstance(skin, SensorModel) else None)
+        self.object: Object | None = skin if isinstance(skin, Object) else recorded_object(skin)
         if isinstance(skin, Object):
-            from .mesh import MeshSkin
-
             skin = MeshSkin(skin)
         if not isinstance(skin, Sensing):
             raise ValueError(f"skin must be a hugger Sensing skin or Object, got {type(skin).__name__}")
