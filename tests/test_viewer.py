@@ -319,6 +319,18 @@ def test_view_command_serves_until_interrupted(plans, monkeypatch, capsys):
     assert code == 0 and "serving 1 plan at http://localhost:" in out and seen == [True]
 
 
+def test_an_object_free_plan_is_refused_before_the_server_starts(tmp_path):
+    pytest.importorskip("viser")
+    c = hugger.scenarios.default_case("sphere")
+    free = hugger.Planner(c.hand, hugger._core.SimulatedWorld(c.obj._core), c.target, c.palm_pose).plan()
+    assert not free.has_object
+    free.save(tmp_path / "free.npz")
+    r = subprocess.run([sys.executable, "-m", "hugger", "view", str(tmp_path / "free.npz"), "--no-browser", "--port",
+                        "0"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "object-free" in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "viser" not in r.stdout + r.stderr  # no server was started (nor stopped)
+
+
 @pytest.mark.parametrize("host, message", [("8.8.8.8", "cannot serve on host '8.8.8.8'"),
                                            ("no.such.host.invalid", "cannot serve on host 'no.such.host.invalid'"),
                                            ("", "host must be")])

@@ -185,7 +185,10 @@ def _plans(trajs: Any) -> list[_Plan]:
     items = [trajs] if isinstance(trajs, (Trajectory, str, os.PathLike)) else list(trajs)
     if not items:
         raise ValueError("give at least one trajectory")
-    return [_Plan.of(Trajectory.load(t) if isinstance(t, (str, os.PathLike)) else _check_traj(t)) for t in items]
+    plans = [_Plan.of(Trajectory.load(t) if isinstance(t, (str, os.PathLike)) else _check_traj(t)) for t in items]
+    for plan in plans:
+        plan.traj.object()  # its contacts are shown: an object-free plan is refused before the server starts
+    return plans
 
 
 def _offsets(plans: Sequence[_Plan]) -> np.ndarray:
