@@ -265,9 +265,13 @@ def test_validate_is_deterministic(sphere_plan):
 def test_validate_rejects_bad_input(sphere_plan):
     for kwargs, word in (({"mass": 0}, "mass"), ({"mu": -0.1}, "mu"), ({"duration": 0}, "duration"),
                          ({"squeeze": -0.01}, "squeeze"), ({"force_factor": float("inf")}, "force_factor"),
-                         ({"k": 1.5}, "k")):
+                         ({"k": 1.5}, "k"), ({"duration": 1e9}, "duration must be at most 60")):
         with pytest.raises(ValueError, match=word):
             physics.validate(sphere_plan, **kwargs)
+    for kwargs, word in (({"max_factor": float("nan")}, "max_factor"), ({"max_factor": 0}, "max_factor"),
+                         ({"bisect_steps": -1}, "bisect_steps"), ({"bisect_steps": 2.5}, "bisect_steps")):
+        with pytest.raises(ValueError, match=word):
+            physics.validate_robust(sphere_plan, **kwargs)
 
 
 def test_validate_reads_trajectory_files(sphere_plan, tmp_path):

@@ -9,7 +9,7 @@ from typing import Any, cast
 
 import numpy as np
 
-from .._checks import positive as _positive, workers as _workers
+from .._checks import positive as _positive, whole as _whole, workers as _workers
 from .._pool import running_pool
 from .._types import CONTACT_DISTANCE
 from ._common import _index, _mujoco, _resets, _trajectory
@@ -23,6 +23,8 @@ SETTLE = 0.4
 #: Held = moved less than this (m) and turned less than this (degrees).
 MAX_DISPLACEMENT = 0.05
 MAX_ROTATION_DEG = 15.0
+#: The longest push a hold test simulates (s): a grasp that holds that long holds.
+MAX_DURATION = 60.0
 DIRECTIONS = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
 
 
@@ -58,9 +60,9 @@ def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: flo
        0.1 s; then 0.4 s of settling. Fingers that do not touch keep their planned angles.
     3. From this settled state (a copy of the whole ``mjData``, restored for every direction) a
        force of ``force_factor`` x weight is applied at the object's centre of mass along +x, -x,
-       +y, -y, +z, -z (world axes) for ``duration`` s (default 2). The direction holds when the
-       object's centre of mass moved less than 5 cm and it turned less than 15° from the settled
-       state. ``force`` (N), when given, replaces ``force_factor`` x weight (so that the push
+       +y, -y, +z, -z (world axes) for ``duration`` s (default 2, at most :data:`MAX_DURATION`).
+       The direction holds when the object's centre of mass moved less than 5 cm and it turned less
+       than 15° from the settled state. ``force`` (N), when given, replaces ``force_factor`` x weight (so that the push
        stays the same when ``mass`` is perturbed). ``kp`` is the servo stiffness (N·m/rad).
 
     Returns a JSON-serialisable dict: ``held`` (all six hold), ``directions`` (``"+x"`` ...
@@ -74,7 +76,7 @@ def validate(traj: Any, k: int = -1, squeeze: float = SQUEEZE, force_factor: flo
     k = _index(traj, k)
     squeeze = _positive("squeeze", squeeze, allow_zero=True)
     force_factor = _positive("force_factor", force_factor, allow_zero=True)
-    duration = _positive("duration", duration)
+    duration = _positive("duration", duration, most=MAX_DURATION)
     mu = _positive("mu", mu)
     mass = _positive("mass", mass)
     kp = _positive("kp", kp)
@@ -190,6 +192,8 @@ def validate_robust(traj: Any, k: int = -1, *, workers: int | None = None, bisec
     traj = _trajectory(traj, needs_object=True)
     k = _index(traj, k)
     workers = _workers("workers", workers)
+    bisect_steps = _whole("bisect_steps", bisect_steps, 0, 30)
+    max_factor = _positive("max_factor", max_factor)
     weight = NOMINAL_MASS * GRAVITY
     nominal_force = NOMINAL_FORCE
     names = list(PERTURBATIONS)
