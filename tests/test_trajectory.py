@@ -240,6 +240,36 @@ def test_pickled_objects_are_refused_not_unpickled(saved, tmp_path):
     assert ran == []
 
 
+def test_a_decompression_bomb_is_refused_unread(saved, tmp_path):
+    # 96 MiB of zeros packed into about 100 kB: refused from the zip's own sizes, before numpy
+    # allocates anything (a larger one would have the reader killed for lack of memory)
+    import tracemalloc
+    import zipfile
+
+    _, _, arrays = saved
+    path = tmp_path / "bomb.npz"
+    rows = (96 << 20) // 24
+    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for key, a in arrays.items():
+            if key != "object_vertices":
+                with zf.open(f"{key}.npy", "w") as fh:
+                    np.lib.format.write_array(fh, np.asarray(a), allow_pickle=False)
+        with zf.open("object_vertices.npy", "w", force_zip64=True) as fh:
+            np.lib.format.write_array_header_1_0(fh, {"descr": "<f8", "fortran_order": False, "shape": (rows, 3)})
+            chunk = bytes(1 << 20)
+            for _ in range(96):
+                fh.write(chunk)
+    assert path.stat().st_size < 1 << 20
+    tracemalloc.start()
+    try:
+        with pytest.raises(ValueError, match=r"object_vertices: \d+ bytes packed into \d+, over 100 times smaller: "
+                                             "refused unread, as a decompression bomb"):
+            hugger.Trajectory.load(path)
+        assert tracemalloc.get_traced_memory()[1] < 16 << 20
+    finally:
+        tracemalloc.stop()
+
+
 def test_a_header_declaring_a_huge_array_is_refused_without_allocating(saved, tmp_path):
     _, _, arrays = saved
     joints = arrays["joints"]

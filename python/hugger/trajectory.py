@@ -172,7 +172,9 @@ class Trajectory:
 
         ``ValueError`` if it is not a valid format-1 file: not a zip, truncated or corrupt,
         an array holding pickled Python objects (never unpickled), a declared array size the
-        file does not hold, missing keys, wrong shapes, dtypes or values. Extra keys are ignored.
+        file does not hold, a member unpacking to over 64 MiB and 100 times its packed size (a
+        decompression bomb, refused unread), missing keys, wrong shapes, dtypes or values. Extra
+        keys are ignored.
         ``FileNotFoundError`` if there is no such file.
         """
         source = os.fspath(path)
@@ -344,11 +346,21 @@ class Trajectory:
         }
 
 
+#: A member unpacking to more than this (bytes) and more than _BOMB_RATIO times its packed size is
+#: refused unread: a plan's numbers pack two to ten times, a crafted run of zeros a thousand times,
+#: and a small file must not make the reader allocate gigabytes.
+_BOMB_BYTES = 64 << 20
+_BOMB_RATIO = 100
+
+
 def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, source: str) -> np.ndarray:
-    """One .npy member of the zip, refusing pickled objects and declared sizes the member lacks
-    (a damaged header must not make numpy allocate gigabytes)."""
+    """One .npy member of the zip, refusing pickled objects, declared sizes the member lacks
+    (a damaged header must not make numpy allocate gigabytes) and decompression bombs."""
     fmt = np.lib.format
     key = info.filename[:-4]
+    if info.file_size > _BOMB_BYTES and info.file_size > _BOMB_RATIO * max(info.compress_size, 1):
+        raise ValueError(f"{key}: {info.file_size} bytes packed into {info.compress_size}, over {_BOMB_RATIO} times "
+                         f"smaller: refused unread, as a decompression bomb (no plan's numbers pack so well)")
     with zf.open(info) as member:
         version = fmt.read_magic(member)
         if version == (1, 0):
