@@ -378,6 +378,21 @@ def test_mjcf_joint_held_beyond_its_range_is_refused(tmp_path):
         hugger.Hand.from_mjcf(f, fixed_joints={"f0_j1": 10.0})
 
 
+@pytest.mark.parametrize("bad", ["1 -1", "nan 1"])
+def test_an_mjcf_range_with_lower_above_upper_is_refused_as_a_urdf_limit_is(tmp_path, bad):
+    # MuJoCo (autolimits) takes such a range for no limit at all: the hand would be unlimited
+    pytest.importorskip("mujoco")
+    import re
+
+    text = re.sub(r"<!-- hugger-hand .*? -->", "", hands.to_mjcf(hands.preset("parallel_3link")), flags=re.S)
+    old = 'range="-0.3490658503988659 1.7453292519943295" limited="true"'
+    assert old in text
+    f = tmp_path / "hand.xml"
+    f.write_text(text.replace(old, f'range="{bad}"', 1))
+    with pytest.raises(ValueError, match=r"joint 'f0_j0' has range \[(1, -1|nan, 1)\] rad: not a lower limit at most"):
+        hugger.Hand.from_mjcf(f)
+
+
 def test_urdf_grasp_comment_gives_plain_joint_values():
     pytest.importorskip("yourdfpy")
     hand = hands.preset("barrett_bh8")
@@ -462,6 +477,7 @@ def _edited_urdf(tmp_path: Path, old: str, new: str, count: int = 1) -> Path:
      "joint 'f0_j0' names parent link 'ghost', which the file does not have"),
     ('lower="-0.3490658503988659" upper="1.7453292519943295"', 'lower="1.0" upper="-1.0"',
      "joint 'f0_j0' has limits lower = 1.0 > upper = -1.0"),
+    ('<axis xyz="0.0 -1.0 0.0"/>', '<axis xyz="0 0 0"/>', r"joint 'f0_j0' has axis \[0.0, 0.0, 0.0\]: not a direction"),
 ])
 def test_a_urdf_that_is_no_tree_or_has_inverted_limits_is_refused(tmp_path, old, new, message):
     path = _edited_urdf(tmp_path, old, new)

@@ -1,6 +1,7 @@
 """Built-in objects, mesh files and default scenarios."""
 from __future__ import annotations
 
+import os
 import warnings
 
 import numpy as np
@@ -125,6 +126,21 @@ def test_mesh_files_round_trip(tmp_path, suffix):
     obj = objects.load(path)
     assert len(obj.faces) == len(src.faces)
     assert obj.volume == pytest.approx(src.volume, rel=1e-6)
+
+
+def test_a_mesh_path_that_is_no_mesh_file_says_what_it_is(tmp_path):
+    src = objects.sphere(0.03, subdivisions=2)
+    bare = tmp_path / "ball"
+    trimesh.Trimesh(src.vertices, src.faces, process=False).export(bare, file_type="stl")
+    with pytest.raises(ValueError, match="has no extension: name it by its format"):
+        objects.load(bare)
+    if hasattr(os, "mkfifo"):
+        pipe = tmp_path / "pipe.stl"
+        os.mkfifo(pipe)
+        with pytest.raises(ValueError, match="is not a regular file"):
+            objects.load(pipe)
+    with pytest.raises(FileNotFoundError, match="no such mesh file"):
+        objects.load(tmp_path / "missing.stl")
 
 
 def test_scale_turns_millimetres_into_metres(tmp_path):

@@ -311,8 +311,12 @@ def load_mesh(path: str | os.PathLike[str], scale: float = 1.0) -> tuple[Object,
     scale = positive("scale", scale)
     if os.path.isdir(path):
         raise IsADirectoryError(f"{path} is a directory, not a mesh file")
+    if os.path.exists(path) and not os.path.isfile(path):
+        raise ValueError(f"{path} is not a regular file (a device or pipe), not a mesh file")
     if not os.path.isfile(path):
         raise FileNotFoundError(f"no such mesh file: {path}")
+    if not os.path.splitext(path)[1]:
+        raise ValueError(f"{path} has no extension: name it by its format (.stl, .obj, .ply, .off, .glb, ...)")
     try:
         mesh = trimesh.load(path, force="mesh", process=False)
     except Exception as exc:  # trimesh raises many types for unreadable files

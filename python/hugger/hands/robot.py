@@ -407,6 +407,8 @@ def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dic
             c.joints.append(j.name)
             c.anchors.append(f[:3, 3].copy())
             axis = np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0], dtype=np.float64)
+            if not (np.all(np.isfinite(axis)) and float(_stable.norm(axis)) > 0.0):
+                raise ValueError(f"{source}: joint {j.name!r} has axis {axis.tolist()}: not a direction")
             c.axes.append(_stable.matmul(f[:3, :3], axis / _stable.norm(axis)))
             lim = j.limit
             if j.type == "continuous" or lim is None or lim.lower is None or lim.upper is None:
@@ -662,8 +664,11 @@ def from_mjcf(path: str | os.PathLike[str], palm_body: str | None = None, fixed_
             c.joints.append(jname(j))
             c.anchors.append(to_palm(data.xanchor[j]))
             c.axes.append(_stable.matmul(rot_p.T, data.xaxis[j]))
-            lo, hi = model.jnt_range[j] if model.jnt_limited[j] else (-math.inf, math.inf)
-            c.limits.append((float(lo), float(hi)))
+            lo, hi = (float(x) for x in model.jnt_range[j])
+            if math.isnan(lo) or math.isnan(hi) or lo > hi:  # (MuJoCo takes such a range for no limit)
+                raise ValueError(f"{source}: joint {jname(j)!r} has range [{lo:g}, {hi:g}] rad: not a lower "
+                                 f"limit at most the upper")
+            c.limits.append((lo, hi) if model.jnt_limited[j] else (-math.inf, math.inf))
             c.radii += [r for r, _, _ in geoms(b)]
             nxt = [k for k in kids.get(b, []) if moving(k)]
             if len(nxt) > 1:
