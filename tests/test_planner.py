@@ -95,6 +95,16 @@ def test_planner_rejects_bad_parameters(hand, sphere, kwargs, match):
         hugger.Planner(hand, sphere, [0, 0, 0], start(), **kwargs)
 
 
+def test_a_short_hand_s_defaults_are_named_where_they_meet(sphere):
+    # links of 2 mm: the default step (0.1 mm) reaches the default contact tolerance
+    tiny = hugger.Hand(fingers=3, links=3, link_length=0.002, link_radius=0.0005, palm_radius=0.004)
+    with pytest.raises(ValueError, match=r"\(defaults: step the shortest link / 20, contact_tolerance 1e-4 m; give a "
+                                         r"smaller contact_tolerance for links this short\)"):
+        hugger.Planner(tiny, sphere, [0, 0, 0], start())
+    with pytest.raises(ValueError, match=r"smaller than step \(0.0001 m\)$"):  # both given: nothing defaulted
+        hugger.Planner(tiny, sphere, [0, 0, 0], start(), step=1e-4, contact_tolerance=1e-4)
+
+
 def test_sideways_start_that_would_sweep_through_the_object_is_refused(hand, fine_sphere):
     pose = np.eye(4)
     pose[:3, 3] = [0.075, 0, 0]

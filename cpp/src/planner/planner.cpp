@@ -93,9 +93,15 @@ PlannerParams resolve_params(const HandModel& hand, const PlannerParams& params)
   HUGGER_CHECK_ARGUMENT(out.step <= shortest, "step (" << out.step << " m) must not exceed the shortest link ("
                                                        << shortest << " m)");
   out.contact_tolerance = params.contact_tolerance_or_default();
-  HUGGER_CHECK_ARGUMENT(out.contact_tolerance < out.step, "contact_tolerance (" << out.contact_tolerance
-                                                                                << " m) must be smaller than step ("
-                                                                                << out.step << " m)");
+  // Links of 2 mm or less meet the defaults' limit: say which were defaults, and what to give.
+  const bool defaulted = std::isnan(params.step) || std::isnan(params.contact_tolerance);
+  HUGGER_CHECK_ARGUMENT(out.contact_tolerance < out.step,
+                        "contact_tolerance (" << out.contact_tolerance << " m) must be smaller than step ("
+                                              << out.step << " m)"
+                                              << (defaulted ? " (defaults: step the shortest link / 20, "
+                                                              "contact_tolerance 1e-4 m; give a smaller "
+                                                              "contact_tolerance for links this short)"
+                                                            : ""));
   out.epsilon = resolve(params.epsilon, out.step / 10.0);
   HUGGER_CHECK_ARGUMENT(out.epsilon <= out.step,
                         "epsilon (" << out.epsilon << " m) must not exceed step (" << out.step << " m)");
