@@ -635,3 +635,12 @@ def test_an_address_where_something_else_listens_is_refused_within_the_probe_s_t
     err = capsys.readouterr().err
     assert f"no Ray cluster answers at {address}" in err and err.count("\n") == 1, err
     assert not (tmp_path / "r").exists()
+
+
+def test_meshes_named_in_any_script_keep_their_names(tmp_path):
+    # "苹果.obj" and "盒子.obj" had both become "object" (and were refused as sharing a name)
+    apple, box = write_ball(tmp_path / "苹果.obj"), write_ball(tmp_path / "盒子.obj", radius=0.03)
+    index = dataset.generate([str(apple), str(box)], str(tmp_path / "ds"), approaches=1, workers=1)
+    assert sorted(o["name"] for o in index["objects"]) == ["盒子", "苹果"]
+    assert sorted(p.name for p in (tmp_path / "ds" / "shards").iterdir()) == ["盒子__5x5.npz", "苹果__5x5.npz"]
+    assert len(hugger.Dataset(tmp_path / "ds")) == 2

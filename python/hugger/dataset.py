@@ -79,7 +79,8 @@ def parse_hand(spec: str) -> tuple[str, dict[str, Any]]:
 
 
 def _safe(name: str) -> str:
-    return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "object"
+    """``name`` as part of a file name: letters and digits of any script, '.', '-' and '_'."""
+    return re.sub(r"[^\w.-]+", "_", name).strip("_") or "object"
 
 
 def _sha256_file(path: str) -> str:
@@ -518,7 +519,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     for o in objects:
         if not isinstance(o, (str, os.PathLike)):
             raise ValueError(f"each object must be a built-in name or a mesh file's path, got {o!r}")
-    if not isinstance(out, (str, os.PathLike)):
+    if not isinstance(out, (str, os.PathLike)) or not os.fspath(out):
         raise ValueError(f"out must be a folder's path, got {out!r}")
     scale = _checks.positive("scale", scale)
     if params is not None and not isinstance(params, Mapping):
