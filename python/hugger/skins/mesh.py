@@ -16,7 +16,7 @@ def MeshSkin(obj: Any) -> _core.SimulatedWorld:  # noqa: N802 (a factory named l
     if not isinstance(obj, Object):
         raise ValueError(f"obj must be a hugger.Object, got {type(obj).__name__}")
     skin = _core.SimulatedWorld(obj._core)
-    skin.object = obj
+    setattr(skin, "object", obj)  # (an attribute of this skin only: the class declares none)
     return skin
 
 
