@@ -173,7 +173,8 @@ def test_mesh_files_are_read_once_per_process(tmp_path, monkeypatch):
     (["render", "p.npz", "--out", "x.png", "--dpi", "inf"], "--dpi must be a positive finite number"),
     (["render", "p.npz", "--out", "x.gif", "--frames", "0"], "--frames must be at least 1"),
     (["render", "p.npz", "--out", "x.png", "--figure", "fig6"], "invalid choice"),
-    (["export-mjcf", "p.npz", "--out", "hand.mjcf"], "--out must end in .xml"),
+    (["export-mjcf", "p.npz", "--out", "hand.urdf"], "--out must end in .xml or .mjcf"),
+    (["render", "p.npz", "--out", "x.png", "--dpi", "2"], "--dpi must be at least 10"),
     (["export-scene", "p.npz", "--out", "grasp.gltf"], "--out must end in .glb"),
     (["export-scene", "p.npz", "--out", "no/dir/grasp.glb"], "no such directory"),
     (["export-scene", "no/such/plan.npz", "--out", "grasp.glb"], "no such trajectory file"),
@@ -218,6 +219,15 @@ def test_exports_name_the_configuration_out_of_range(command, out, sphere_file, 
         assert code == 2 and err.strip() == (f"hugger: error: --configuration {k} is out of range for {n} "
                                              "configurations"), err
         assert not (tmp_path / out).exists()
+
+
+def test_info_shows_a_file_s_control_characters_as_escapes(sphere_file, tmp_path, capsys):
+    # a name that would retitle the terminal and clear its screen is printed, not obeyed
+    odd = tmp_path / "odd.npz"
+    hugger.Trajectory.load(sphere_file).with_provenance(object="\x1b]0;title\x07\x1b[2Jball").save(odd)
+    code, out, _ = run(["info", odd], capsys)
+    assert code == 0 and "\x1b" not in out and "\x07" not in out
+    assert "\\x1b]0;title\\x07\\x1b[2Jball: " in out
 
 
 def test_info_reports_the_file(sphere_file, capsys):
@@ -273,15 +283,16 @@ def test_plan_report_names_the_two_epsilons_apart(sphere_file, capsys):
 def test_every_output_is_written_atomically(sphere_file, tmp_path, capsys, monkeypatch):
     # a writer that fails half way leaves no file under the final name, and no temporary file
     pytest.importorskip("matplotlib")
-    from hugger import viz
+    from matplotlib.figure import Figure
 
-    def half_written(traj, path, **kwargs):
+    def half_written(fig, path, **kwargs):
         with open(path, "wb") as fh:
             fh.write(b"\x89PNG half")
         raise KeyboardInterrupt
 
-    monkeypatch.setitem(viz.FIGURES, "sheet", (half_written, viz.FIGURES["sheet"][1]))  # what render draws
-    code, _, err = run(["render", sphere_file, "--out", tmp_path / "grasp.png"], capsys)
+    with monkeypatch.context() as m:
+        m.setattr(Figure, "savefig", half_written)  # what render's writer calls
+        code, _, err = run(["render", sphere_file, "--out", tmp_path / "grasp.png"], capsys)
     assert code == 130 and "interrupted" in err
     assert list(tmp_path.iterdir()) == []
     # the trajectory file too
@@ -293,6 +304,42 @@ def test_every_output_is_written_atomically(sphere_file, tmp_path, capsys, monke
     monkeypatch.setattr(np, "savez_compressed", broken)
     with pytest.raises(OSError, match="disk full"):
         traj.save(tmp_path / "p.npz")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs named pipes")
+def test_out_replaces_only_a_regular_file_and_writes_through_a_link(sphere_file, tmp_path, capsys):
+    pipe = tmp_path / "pipe.npz"
+    os.mkfifo(pipe)
+    code, _, err = run(["plan", "sphere", "--out", pipe], capsys)
+    assert code == 2 and "exists and is not a regular file" in err and not pipe.is_file()  # still the pipe
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe.npz"]
+    with pytest.raises(ValueError, match="the output path is empty"):
+        hugger.Trajectory.load(sphere_file).save("")
+    target, link = tmp_path / "target.npz", tmp_path / "link.npz"
+    link.symlink_to(target)
+    code, _, err = run(["plan", "sphere", "--out", link], capsys)
+    assert code == 0, err
+    assert link.is_symlink() and target.is_file() and hugger.Trajectory.load(link).status == "done"
+
+
+def test_what_the_system_refuses_is_a_one_line_error(sphere_file, tmp_path):
+    if not os.path.exists("/dev/full"):
+        pytest.skip("needs /dev/full")
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([sys.executable, "-m", "hugger", "info", str(sphere_file)], stdout=full,
+                           stderr=subprocess.PIPE, text=True)
+    assert r.returncode == 2 and r.stderr.strip() == "hugger: error: [Errno 28] No space left on device", r.stderr
+
+
+@pytest.mark.parametrize("command", [["generate", "sphere", "--approaches", "2"], ["demo"], ["simulate", "sphere"],
+                                     ["plan", "sphere"]])
+def test_an_empty_out_is_refused_and_nothing_is_written(command, tmp_path, monkeypatch, capsys):
+    if command[0] == "simulate":
+        pytest.importorskip("mujoco")
+    monkeypatch.chdir(tmp_path)  # where an empty path would have written
+    code, _, err = run([*command, "--out", ""], capsys)
+    assert code == 2 and "--out is empty" in err and len(err.strip().splitlines()) == 1, err
     assert list(tmp_path.iterdir()) == []
 
 

@@ -6,6 +6,7 @@ import os
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -167,6 +168,8 @@ def test_missing_ffmpeg_names_what_to_install(small_plan, tmp_path, monkeypatch)
     (lambda t, d: viz.animate(t, d / "x.gif", fps=1e9), "fps must be at most 120"),
     (lambda t, d: viz.animate(t, d / "x.gif", hold=3600), "hold must be at most 10"),
     (lambda t, d: viz.animate(t, d / "x.gif", dpi=5000), "dpi must be at most 1200"),
+    (lambda t, d: viz.fig4(t, d / "x.png", dpi=2), "dpi must be at least 10"),  # FreeType refused the fonts
+    (lambda t, d: viz.animate(t, d / "x.gif", max_frames=2, dpi=1), "dpi must be at least 10"),
     (lambda t, d: viz.tipstate_plot(t, max_samples=0), "max_samples"),
     (lambda t, d: viz.fig5(t, max_faces=3), "max_faces"),
     (lambda t, d: viz.fig4("plan.npz"), "hugger.Trajectory"),
@@ -175,6 +178,29 @@ def test_bad_input_raises_value_error_and_writes_nothing(call, match, small_plan
     with pytest.raises(ValueError, match=match):
         call(small_plan, tmp_path)
     assert not list(tmp_path.iterdir())
+
+
+@needs_mpl
+@pytest.mark.parametrize("write", [lambda t, p: viz.fig5(t, p.with_suffix(".png"), dpi=30),
+                                   lambda t, p: viz.animate(t, p.with_suffix(".gif"), max_frames=3, dpi=30)])
+def test_figures_and_animations_are_written_atomically(write, small_plan, tmp_path, monkeypatch):
+    # A writer that fails midway (a full disk, say) leaves nothing under the final name, nor a
+    # temporary file; one that succeeds leaves the file alone.
+    from matplotlib.figure import Figure
+    from matplotlib.animation import PillowWriter
+
+    def fail(path):  # half the file written, then the disk is full
+        Path(path).write_bytes(b"half a file")
+        raise OSError(28, "No space left on device")
+
+    with monkeypatch.context() as m:
+        m.setattr(Figure, "savefig", lambda fig, fname, **kwargs: fail(fname))
+        m.setattr(PillowWriter, "finish", lambda writer: fail(writer.outfile))
+        with pytest.raises(OSError, match="No space left on device"):
+            write(small_plan, tmp_path / "out")
+    assert not list(tmp_path.iterdir())
+    write(small_plan, tmp_path / "out")
+    assert [f.name for f in tmp_path.iterdir()] in (["out.png"], ["out.gif"])
 
 
 # --- Fig. 4 ----------------------------------------------------------------------------------------------

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import secrets
 from pathlib import Path
@@ -15,7 +16,15 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """A temporary path beside ``path`` with the same suffix (writers pick the format from it);
     renamed to ``path`` when the block ends normally, removed when it raises (an interrupted
     write never leaves a half-written file under the final name). The parent directory must exist."""
+    if not os.fspath(path):
+        raise ValueError("the output path is empty")
     final = Path(os.fspath(path))
+    if final.is_symlink():  # written through: the file it points to is replaced, the link kept
+        final = Path(os.path.realpath(final))
+    if final.is_dir():
+        raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(final))
+    if final.exists() and not final.is_file():
+        raise ValueError(f"{str(final)!r} exists and is not a regular file (a device or pipe): not replaced")
     parent = final.parent
     if not parent.is_dir():
         raise FileNotFoundError(f"no such directory: {str(parent)!r} (for {str(final)!r})")
@@ -27,8 +36,8 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp_path.unlink()
-        if isinstance(exc, OSError) and exc.filename == str(tmp_path) and exc.errno is not None:
-            # the same error, naming the file asked for rather than the temporary one
+        if isinstance(exc, OSError) and exc.filename in (None, str(tmp_path)) and exc.errno is not None:
+            # the same error, naming the file asked for (rather than the temporary one, or none)
             raise type(exc)(exc.errno, exc.strerror, str(final)) from None
         raise
 

@@ -32,7 +32,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Mapping, NoReturn, Sequence, TextIO
 
-from ._files import atomic_path, write_atomic
+from ._files import write_atomic
 from ._progress import Progress, print_line
 from ._core import RULES, SKINS
 from ._types import VERSION
@@ -230,6 +230,8 @@ def _out_path(value: str, suffixes: Sequence[str], option: str = "--out") -> Pat
 
 def _out_dir(value: str, option: str = "--out") -> Path:
     """An output folder: created if missing, but its parent must exist."""
+    if not value:
+        raise UsageError(f"{option} is empty, expected a folder")
     out = Path(value)
     if out.exists() and not out.is_dir():
         raise UsageError(f"{option} {value!r} exists and is not a directory")
@@ -263,6 +265,12 @@ def _report(traj: Trajectory, plan_time: float | None = None, obj: Object | None
     return out
 
 
+def _printable(text: str) -> str:
+    """``text`` with its control characters written as escapes: a file's strings (an object's name)
+    reach the terminal as text, never as its commands."""
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in text)
+
+
 def _print_table(d: dict[str, Any], stream: TextIO | None = None) -> None:
     stream = stream or sys.stdout
     for key, value in d.items():
@@ -270,7 +278,7 @@ def _print_table(d: dict[str, Any], stream: TextIO | None = None) -> None:
             value = f"{value:.6g}"
         elif isinstance(value, list):
             value = " ".join(f"{x:.4g}" if isinstance(x, float) else str(x) for x in value)
-        print(f"{key:22s} {value}", file=stream)
+        print(f"{key:22s} {_printable(str(value))}", file=stream)
 
 
 def _note(message: str) -> None:
@@ -402,8 +410,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     figures = ("fig4", "fig5", "tipstate")
     with Progress("drawing figures", total=len(figures)) as p:
         for i, figure in enumerate(figures, start=1):
-            with atomic_path(out / f"{figure}.png") as tmp:
-                viz.render(traj, tmp, figure=figure)
+            viz.render(traj, out / f"{figure}.png", figure=figure)  # (each writer writes atomically)
             p.update(i)
     written += [f"{figure}.png" for figure in figures]
     movies = ["animation.gif"]
@@ -412,8 +419,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
     else:
         _note("ffmpeg not found: writing the GIF only (pip install imageio-ffmpeg for MP4)")
     for name in movies:
-        with Progress(f"writing {name}", total=1) as p, atomic_path(out / name) as tmp:
-            viz.animate(traj, tmp, max_frames=120, hold=1.0, progress=p.update)
+        with Progress(f"writing {name}", total=1) as p:
+            viz.animate(traj, out / name, max_frames=120, hold=1.0, progress=p.update)
         written.append(name)
     written.append("summary.json")
     summary["files"] = written
@@ -452,8 +459,8 @@ def cmd_render(args: argparse.Namespace) -> int:
     kwargs: dict[str, Any] = {key: value for key, value in options if value is not None}
     if figure == "animation":
         kwargs["hold"] = 1.0
-    with Progress(f"rendering {out.name}", total=1) as p, atomic_path(out) as tmp:
-        viz.render(traj, tmp, figure=figure, progress=p.update, **kwargs)
+    with Progress(f"rendering {out.name}", total=1) as p:
+        viz.render(traj, out, figure=figure, progress=p.update, **kwargs)
     print(f"wrote {out}")
     return EXIT_OK
 
@@ -568,6 +575,8 @@ def cmd_generate(args: argparse.Namespace) -> int:
     from . import dataset
     from .scenarios import ImplausibleSize
 
+    if not args.out:
+        raise UsageError("--out is empty, expected the dataset's folder")
     _parent_exists(Path(args.out))  # the dataset's folder is made by dataset.generate
     argv = args._argv
     try:
@@ -598,11 +607,10 @@ def _configuration(traj: Trajectory, k: int) -> None:
 def cmd_export_mjcf(args: argparse.Namespace) -> int:
     from . import physics
 
-    out = _out_path(args.out, (".xml",))
+    out = _out_path(args.out, (".xml", ".mjcf"))
     traj = _load(args.file)
     _configuration(traj, args.configuration)
-    with atomic_path(out) as tmp:
-        physics.export_mjcf(traj, tmp, k=args.configuration)
+    physics.export_mjcf(traj, out, k=args.configuration)
     print(f"wrote {out}")
     return EXIT_OK
 
@@ -683,7 +691,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
     from . import mujoco_skin
 
-    out = _out_path(args.out, (".npz",)) if args.out else None
+    out = _out_path(args.out, (".npz",)) if args.out is not None else None
     hand = _hand(args)
     case = _case(args, hand)
     if args.push < 0 or not np.isfinite(args.push):
@@ -769,7 +777,7 @@ def build_parser() -> _Parser:
                    help="what to draw: " + "; ".join(f"{k}: {what}" for k, (_, what) in FIGURES.items())
                         + " (default: sheet for .png/.pdf/.svg, animation for .gif/.mp4)")
     p.add_argument("--dpi", type=float, help="resolution, dots per inch (default 100 sheet and animation, 120 others; "
-                                             "at most 1200)")
+                                             "10 to 1200)")
     p.add_argument("--fps", type=float, help="animation: frames per second (default 30, at most 120)")
     p.add_argument("--frames", type=int, help="animation: at most this many frames, evenly spread (default 300)")
     p.add_argument("--view", choices=("oblique", "side", "normal"), help="animation: the camera (default oblique)")
@@ -836,7 +844,7 @@ def build_parser() -> _Parser:
 
     p = sub.add_parser("export-mjcf", help="write the hand and object at a configuration as MJCF (hugger[physics])")
     p.add_argument("file", help="trajectory file (.npz)")
-    p.add_argument("--out", required=True, help="MJCF file to write (.xml), in an existing directory")
+    p.add_argument("--out", required=True, help="MJCF file to write (.xml or .mjcf), in an existing directory")
     p.add_argument("--configuration", type=int, default=-1, help="configuration index (default -1, the last)")
     p.set_defaults(func=cmd_export_mjcf)
 
@@ -923,6 +931,11 @@ def _main(argv: Sequence[str] | None) -> int:
         with contextlib.suppress(OSError):
             sys.stdout = open(os.devnull, "w")
         return EXIT_OK
+    except OSError as exc:  # what the system refused: a full disk, a read-only filesystem, an output that fails
+        with contextlib.suppress(OSError):
+            print(f"hugger: error: {exc}", file=sys.stderr)
+        with contextlib.suppress(OSError):
+            sys.stdout = open(os.devnull, "w")  # (its buffer may hold what failed: not written again at exit)
     except Exception as exc:  # an internal error: keep the traceback for the report
         import traceback
 

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import positive as _positive
+from .._files import write_atomic
 from .._rotation import quaternion_wxyz
 from ..trajectory import Trajectory
 from ._common import _floats, _index, _mujoco, _trajectory
@@ -186,7 +187,7 @@ def export_mjcf(traj: Any, path: str | os.PathLike[str] | None = None, k: int = 
     _mujoco()
     xml, _ = _build_mjcf(traj, k, object_mass, friction, bool(decompose), cache_dir, SQUEEZE)
     if path is not None:
-        Path(path).write_text(xml)
+        write_atomic(path, xml)
     return xml
 
 

@@ -25,7 +25,7 @@ display -z axis) and finger 0 along the display x axis, so the grasp reads the s
 way the hand approached. Axes are hidden
 (the figures are about shape, as in the paper); lengths in the titles are in millimetres.
 Configuration indices ``k`` count from 0 (C_init) to K-1, as in the trajectory file.
-Resolutions are at most :data:`MAX_DPI` (1200 dots per inch), frame rates at most :data:`MAX_FPS`
+Resolutions are from :data:`MIN_DPI` to :data:`MAX_DPI` (10 to 1200 dots per inch), frame rates at most :data:`MAX_FPS`
 (120 a second), and an animation's final pause at most :data:`MAX_HOLD` (10 s).
 
 The parts: :mod:`~hugger.viz.backend` (matplotlib, ffmpeg and argument checks),
@@ -44,7 +44,7 @@ from .backend import RENDER_SUFFIXES, _MOVIE_EXTENSIONS as _MOVIE_EXTENSIONS, _S
 from .backend import _VIZ_EXTRA as _VIZ_EXTRA, _backend_unset as _backend_unset, _check_faces as _check_faces
 from .backend import _check_still as _check_still, _check_traj as _check_traj, _ffmpeg as _ffmpeg
 from .backend import _pyplot as _pyplot, _save as _save, _suffix as _suffix, ffmpeg_path, require
-from .backend import MAX_DPI, MAX_FPS, MAX_HOLD, check_dpi, check_fps
+from .backend import MAX_DPI, MAX_FPS, MAX_HOLD, MIN_DPI, check_dpi, check_fps
 from .figures import FIG4_SIZE as FIG4_SIZE, FIG5_SIZE as FIG5_SIZE, OVERVIEW_SIZE as OVERVIEW_SIZE
 from .figures import TIPSTATE_SIZE as TIPSTATE_SIZE, _contact_caption as _contact_caption
 from .figures import _fig4_axes as _fig4_axes, _fig4_panels as _fig4_panels, _fig5_axes as _fig5_axes
@@ -60,6 +60,6 @@ from .scene import _palm_polys as _palm_polys, _phase_name as _phase_name, _rgb 
 from .scene import _setup_axes as _setup_axes, _shade as _shade, _subsample as _subsample, _tube as _tube
 from .scene import _unit_sphere as _unit_sphere, draw_configuration
 
-__all__ = ["CONTACT_DISTANCE", "FIGURES", "MAX_DPI", "MAX_FPS", "MAX_HOLD", "RENDER_SUFFIXES", "STATE_COLORS", "animate",
+__all__ = ["CONTACT_DISTANCE", "FIGURES", "MAX_DPI", "MAX_FPS", "MAX_HOLD", "MIN_DPI", "RENDER_SUFFIXES", "STATE_COLORS", "animate",
            "check_dpi", "check_fps", "draw_configuration", "export_scene", "ffmpeg_path", "fig4", "fig5", "overview",
            "pick_figure", "render", "require", "tipstate_plot", "view"]

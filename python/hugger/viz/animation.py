@@ -11,6 +11,7 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from .._checks import callback, positive, whole
+from .._files import atomic_path
 from ..trajectory import Trajectory
 from .backend import MAX_HOLD, _MOVIE_EXTENSIONS, _check_faces, _check_traj, _ffmpeg, _pyplot, _suffix, check_dpi
 from .backend import check_fps
@@ -47,7 +48,7 @@ def animate(traj: Trajectory, path: str | os.PathLike[str], fps: float = 30, max
     written. The object is simplified to ``max_faces`` triangles for speed. ``hold`` (s) shows the
     final grasp that much longer (repeated frames, not counted). Returns the number of
     configurations drawn. ``ValueError`` for another extension or bad numbers (``fps`` at most
-    :data:`MAX_FPS`, ``dpi`` at most :data:`MAX_DPI`, ``hold`` at most :data:`MAX_HOLD`); ``ImportError`` (naming
+    :data:`MAX_FPS`, ``dpi`` from :data:`MIN_DPI` to :data:`MAX_DPI`, ``hold`` at most :data:`MAX_HOLD`); ``ImportError`` (naming
     what to install) when an MP4 is asked for and no ffmpeg is found (see :func:`ffmpeg_path`)."""
     plt = _pyplot()
     from matplotlib import animation, rc_context
@@ -90,7 +91,7 @@ def animate(traj: Trajectory, path: str | os.PathLike[str], fps: float = 30, max
         # The first frame is drawn before the writer starts: what cannot be drawn (an object-free
         # plan) raises as itself, not as the writer's complaint of a movie without frames.
         artists = draw(int(frames[0]))
-        with rc_context(rc), _ffmpeg_interrupted(), writer.saving(fig, str(out), dpi):
+        with atomic_path(out) as tmp, rc_context(rc), _ffmpeg_interrupted(), writer.saving(fig, str(tmp), dpi):
             for i, k in enumerate(frames, start=1):
                 if i > 1:
                     for a in artists:

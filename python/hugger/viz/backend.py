@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from .._checks import positive, whole
+from .._files import atomic_path
 from ..trajectory import Trajectory
 
 _STILL_EXTENSIONS = (".png", ".pdf", ".svg")
@@ -18,6 +19,8 @@ _VIZ_EXTRA = "pip install 'hugger[viz]'"
 #: The largest resolution a figure or animation is drawn at (dots per inch): print needs 300-600,
 #: and a page-wide figure at this resolution is already about 20,000 pixels wide.
 MAX_DPI = 1200.0
+#: The smallest: below it the titles' fonts cannot be drawn (FreeType refuses a size under one pixel).
+MIN_DPI = 10.0
 #: The highest frame rate of an animation (an MP4's; a GIF's frame delays are whole hundredths of a
 #: second, so it shows at most 100 frames a second).
 MAX_FPS = 120.0
@@ -97,8 +100,11 @@ def _check_faces(max_faces: Any) -> int:
 
 
 def check_dpi(dpi: Any) -> float:
-    """``dpi`` as a float: positive and at most :data:`MAX_DPI`; otherwise a ValueError."""
-    return positive("dpi", dpi, most=MAX_DPI)
+    """``dpi`` as a float: from :data:`MIN_DPI` to :data:`MAX_DPI`; otherwise a ValueError."""
+    x = positive("dpi", dpi, most=MAX_DPI)
+    if x < MIN_DPI:
+        raise ValueError(f"dpi must be at least {MIN_DPI:g}, got {dpi!r}")
+    return x
 
 
 def check_fps(fps: Any) -> float:
@@ -121,11 +127,12 @@ def _check_still(path: Any) -> None:
 
 
 def _save(fig: Any, path: Any, dpi: float) -> None:
-    """Save (creating the parent folder) and close."""
+    """Save (creating the parent folder; atomically: complete under its name, or not there) and close."""
     plt = _pyplot()
     p = Path(os.fspath(path))
     try:
         p.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(p, dpi=dpi)
+        with atomic_path(p) as tmp:
+            fig.savefig(tmp, dpi=dpi)
     finally:
         plt.close(fig)
