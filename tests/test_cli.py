@@ -316,11 +316,14 @@ def test_out_replaces_only_a_regular_file_and_writes_through_a_link(sphere_file,
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe.npz"]
     with pytest.raises(ValueError, match="the output path is empty"):
         hugger.Trajectory.load(sphere_file).save("")
-    target, link = tmp_path / "target.npz", tmp_path / "link.npz"
+    target, link = tmp_path / "target.dat", tmp_path / "link.npz"  # the link's name gives the format
     link.symlink_to(target)
     code, _, err = run(["plan", "sphere", "--out", link], capsys)
     assert code == 0, err
     assert link.is_symlink() and target.is_file() and hugger.Trajectory.load(link).status == "done"
+    (tmp_path / "dev.npz").symlink_to("/dev/null")  # refused before planning, as the pipe
+    code, _, err = run(["plan", "curvy", "--out", tmp_path / "dev.npz"], capsys)
+    assert code == 2 and "'/dev/null' exists and is not a regular file" in err
 
 
 def test_what_the_system_refuses_is_a_one_line_error(sphere_file, tmp_path):

@@ -644,3 +644,6 @@ def test_meshes_named_in_any_script_keep_their_names(tmp_path):
     assert sorted(o["name"] for o in index["objects"]) == ["盒子", "苹果"]
     assert sorted(p.name for p in (tmp_path / "ds" / "shards").iterdir()) == ["盒子__5x5.npz", "苹果__5x5.npz"]
     assert len(hugger.Dataset(tmp_path / "ds")) == 2
+    import unicodedata  # a decomposed accent stays with its letter
+
+    assert dataset._safe(unicodedata.normalize("NFD", "Müsli")) == "Müsli" == unicodedata.normalize("NFC", "Müsli")

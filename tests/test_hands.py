@@ -262,7 +262,7 @@ def test_urdf_with_fixed_spread_joints_imports_and_plans(tmp_path, checker):
         r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--hand", str(f), *holds, *extra,
                             "--out", str(tmp_path / "x.npz")], capture_output=True, text=True)
         assert r.returncode == 2 and message in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
-    with pytest.raises(ValueError, match="fixed_joints: for a URDF or MJCF file only; the preset 'barrett_bh8'"):
+    with pytest.raises(ValueError, match=r"fixed_joints \(--fixed-joint\): for a URDF or MJCF file only; the preset"):
         hugger.hands.load("barrett_bh8", fixed_joints={"f0_spread": 0.0})
 
 
@@ -270,8 +270,8 @@ def test_a_preset_or_json_hand_refuses_joints_and_a_palm_to_choose(tmp_path):
     f = tmp_path / "hand.json"
     f.write_text(hugger.Hand(fingers=3, links=2).to_json())
     for spec in ("barrett_bh8", str(f)):
-        for kwargs, what in (({"fixed_joints": {"x": 0.0}}, "fixed_joints"), ({"palm": "base"}, "palm"),
-                             ({"palm_link": "base"}, "palm_link")):
+        for kwargs, what in (({"fixed_joints": {"x": 0.0}}, r"fixed_joints \(--fixed-joint\)"),
+                             ({"palm": "base"}, r"palm \(--palm-link\)"), ({"palm_link": "base"}, "palm_link")):
             with pytest.raises(ValueError, match=f"^{what}: for a URDF or MJCF file only"):
                 hands.load(spec, **kwargs)
         for option in (["--fixed-joint", "x=0"], ["--palm-link", "base"]):
@@ -282,6 +282,21 @@ def test_a_preset_or_json_hand_refuses_joints_and_a_palm_to_choose(tmp_path):
     r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--palm-link", "base", "--out",
                         str(tmp_path / "x.npz")], capture_output=True, text=True)
     assert r.returncode == 2 and "--palm-link needs --hand FILE" in r.stderr
+
+
+def test_unknown_keys_are_refused_in_a_hand_file_and_ignored_in_a_trajectory_file(tmp_path):
+    d = {**hugger.Hand(fingers=3, links=2).to_dict(), "maker": "another tool"}
+    assert hugger.Hand.from_dict(d).same_as(hugger.Hand(fingers=3, links=2))  # a newer writer's key
+    with pytest.raises(ValueError, match="unknown key 'maker'"):
+        hugger.Hand.from_dict(d, strict=True)
+    c = hugger.scenarios.default_case("sphere", hugger.Hand(fingers=3, links=2))
+    path = tmp_path / "plan.npz"
+    hugger.plan(c.hand, c.obj, c.target, c.palm_pose).save(path)
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files}
+    arrays["hand_json"] = np.array(json.dumps({**json.loads(str(arrays["hand_json"])), "maker": "another tool"}))
+    np.savez(path, **arrays)
+    assert hugger.Trajectory.load(path).hand["maker"] == "another tool"
 
 
 def test_a_hand_mounted_below_a_world_link_takes_its_palm_by_name(tmp_path):
@@ -379,8 +394,8 @@ def test_mjcf_joint_held_beyond_its_range_is_refused(tmp_path):
 
 
 @pytest.mark.parametrize("bad", ["1 -1", "nan 1"])
-def test_an_mjcf_range_with_lower_above_upper_is_refused_as_a_urdf_limit_is(tmp_path, bad):
-    # MuJoCo (autolimits) takes such a range for no limit at all: the hand would be unlimited
+def test_an_mjcf_range_lower_above_upper_is_warned_of_and_one_of_nans_refused(tmp_path, bad):
+    # MuJoCo (autolimits) takes an inverted range for no limit at all, as limited="false" would
     pytest.importorskip("mujoco")
     import re
 
@@ -389,8 +404,14 @@ def test_an_mjcf_range_with_lower_above_upper_is_refused_as_a_urdf_limit_is(tmp_
     assert old in text
     f = tmp_path / "hand.xml"
     f.write_text(text.replace(old, f'range="{bad}"', 1))
-    with pytest.raises(ValueError, match=r"joint 'f0_j0' has range \[(1, -1|nan, 1)\] rad: not a lower limit at most"):
-        hugger.Hand.from_mjcf(f)
+    if bad == "1 -1":
+        with pytest.warns(UserWarning, match=r"joint 'f0_j0' has range \[1, -1\] rad, lower above upper: MuJoCo takes "
+                                             r"it for no limit, and so does the hand"):
+            hand = hugger.Hand.from_mjcf(f)
+        assert np.all(np.isinf(hand.joint_limits[0, 0])) and np.all(np.isfinite(hand.joint_limits[0, 1]))
+    else:
+        with pytest.raises(ValueError, match=r"joint 'f0_j0' has range \[nan, 1\]: not numbers"):
+            hugger.Hand.from_mjcf(f)
 
 
 def test_urdf_grasp_comment_gives_plain_joint_values():

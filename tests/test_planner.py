@@ -101,8 +101,9 @@ def test_a_short_hand_s_defaults_are_named_where_they_meet(sphere):
     with pytest.raises(ValueError, match=r"\(defaults: step the shortest link / 20, contact_tolerance 1e-4 m; give a "
                                          r"smaller contact_tolerance for links this short\)"):
         hugger.Planner(tiny, sphere, [0, 0, 0], start())
-    with pytest.raises(ValueError, match=r"smaller than step \(0.0001 m\)$"):  # both given: nothing defaulted
-        hugger.Planner(tiny, sphere, [0, 0, 0], start(), step=1e-4, contact_tolerance=1e-4)
+    for given in ({"step": 1e-4, "contact_tolerance": 1e-4}, {"contact_tolerance": 1e-4}, {"step": 1e-4}):
+        with pytest.raises(ValueError, match=r"smaller than step \(0.0001 m\)$"):  # not both defaulted
+            hugger.Planner(tiny, sphere, [0, 0, 0], start(), **given)
 
 
 def test_sideways_start_that_would_sweep_through_the_object_is_refused(hand, fine_sphere):

@@ -242,7 +242,8 @@ def test_pickled_objects_are_refused_not_unpickled(saved, tmp_path):
 
 def test_a_decompression_bomb_is_refused_unread(saved, tmp_path):
     # 96 MiB of zeros packed into about 100 kB: refused from the zip's own sizes, before numpy
-    # allocates anything (a larger one would have the reader killed for lack of memory)
+    # allocates anything (a larger one would have the reader killed for lack of memory); beside
+    # 8 MiB of numbers that do not pack, so that the members' total alone would pass
     import tracemalloc
     import zipfile
 
@@ -254,12 +255,14 @@ def test_a_decompression_bomb_is_refused_unread(saved, tmp_path):
             if key != "object_vertices":
                 with zf.open(f"{key}.npy", "w") as fh:
                     np.lib.format.write_array(fh, np.asarray(a), allow_pickle=False)
+        with zf.open("noise.npy", "w") as fh:
+            np.lib.format.write_array(fh, np.random.default_rng(0).random((1 << 20,)), allow_pickle=False)
         with zf.open("object_vertices.npy", "w", force_zip64=True) as fh:
             np.lib.format.write_array_header_1_0(fh, {"descr": "<f8", "fortran_order": False, "shape": (rows, 3)})
             chunk = bytes(1 << 20)
             for _ in range(96):
                 fh.write(chunk)
-    assert path.stat().st_size < 1 << 20
+    assert path.stat().st_size < 9 << 20
     tracemalloc.start()
     try:
         with pytest.raises(ValueError, match=r"object_vertices: \d+ bytes packed into \d+, over 100 times smaller: "
@@ -268,6 +271,28 @@ def test_a_decompression_bomb_is_refused_unread(saved, tmp_path):
         assert tracemalloc.get_traced_memory()[1] < 16 << 20
     finally:
         tracemalloc.stop()
+
+
+def test_a_decompression_bomb_split_over_many_members_is_refused_too(saved, tmp_path):
+    # each member under the member's limit, together 480 MiB from well under a megabyte
+    import zipfile
+
+    _, _, arrays = saved
+    path = tmp_path / "bombs.npz"
+    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for key, a in arrays.items():
+            with zf.open(f"{key}.npy", "w") as fh:
+                np.lib.format.write_array(fh, np.asarray(a), allow_pickle=False)
+        for i in range(8):  # extra keys, which a reader ignores, but must not unpack
+            with zf.open(f"extra{i}.npy", "w", force_zip64=True) as fh:
+                np.lib.format.write_array_header_1_0(fh, {"descr": "<f8", "fortran_order": False,
+                                                          "shape": ((60 << 20) // 8,)})
+                chunk = bytes(1 << 20)
+                for _ in range(60):
+                    fh.write(chunk)
+    assert path.stat().st_size < 1 << 20
+    with pytest.raises(ValueError, match=r"its members: \d+ bytes packed into \d+, over 100 times smaller"):
+        hugger.Trajectory.load(path)
 
 
 def test_a_header_declaring_a_huge_array_is_refused_without_allocating(saved, tmp_path):

@@ -11,11 +11,14 @@ from typing import Any, Iterator
 _PART = ".part"  # marks a temporary name: ".<final name>.<pid>-<random>.part<suffix>"
 
 
-@contextlib.contextmanager
-def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """A temporary path beside ``path`` with the same suffix (writers pick the format from it);
-    renamed to ``path`` when the block ends normally, removed when it raises (an interrupted
-    write never leaves a half-written file under the final name). The parent directory must exist."""
+#: The errors of a write that failed for want of room or of a writable disk: one raised without a
+#: file name inside atomic_path is the output's.
+_WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.EIO}
+
+
+def check_replaceable(path: str | os.PathLike[str]) -> Path:
+    """The file ``path`` names (through a symbolic link), which a write may replace: not empty, and
+    not an existing folder (``IsADirectoryError``), device or pipe (``ValueError``)."""
     if not os.fspath(path):
         raise ValueError("the output path is empty")
     final = Path(os.fspath(path))
@@ -25,20 +28,33 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(final))
     if final.exists() and not final.is_file():
         raise ValueError(f"{str(final)!r} exists and is not a regular file (a device or pipe): not replaced")
+    return final
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """A temporary path beside ``path`` with the same suffix (writers pick the format from it);
+    renamed to ``path`` when the block ends normally, removed when it raises (an interrupted
+    write never leaves a half-written file under the final name). The parent directory must exist."""
+    final = check_replaceable(path)
+    suffix = Path(os.fspath(path)).suffix  # the name asked for says the format, not a link's target
     parent = final.parent
     if not parent.is_dir():
         raise FileNotFoundError(f"no such directory: {str(parent)!r} (for {str(final)!r})")
     # not created here (mkstemp would make it private, mode 0600): the writer creates it as any file
-    tmp_path = parent / f".{final.name}.{os.getpid()}-{secrets.token_hex(6)}{_PART}{final.suffix}"
+    tmp_path = parent / f".{final.name}.{os.getpid()}-{secrets.token_hex(6)}{_PART}{suffix}"
     try:
         yield tmp_path
         os.replace(tmp_path, final)
     except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp_path.unlink()
-        if isinstance(exc, OSError) and exc.filename in (None, str(tmp_path)) and exc.errno is not None:
-            # the same error, naming the file asked for (rather than the temporary one, or none)
+        if isinstance(exc, OSError) and exc.filename == str(tmp_path) and exc.errno is not None:
+            # the same error, naming the file asked for rather than the temporary one
             raise type(exc)(exc.errno, exc.strerror, str(final)) from None
+        if isinstance(exc, OSError) and exc.filename is None and exc.errno in _WRITE_ERRNOS:
+            # a write that failed without a name (a full disk under a writer's buffers): this file's
+            raise type(exc)(exc.errno, exc.strerror, str(final)) from exc
         raise
 
 

@@ -32,7 +32,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Mapping, NoReturn, Sequence, TextIO
 
-from ._files import write_atomic
+from ._files import check_replaceable, write_atomic
 from ._progress import Progress, print_line
 from ._core import RULES, SKINS
 from ._types import VERSION
@@ -224,7 +224,11 @@ def _out_path(value: str, suffixes: Sequence[str], option: str = "--out") -> Pat
         raise UsageError(f"{option} {value!r} is a directory, expected a file name ending in {' or '.join(suffixes)}")
     if out.suffix.lower() not in suffixes:
         raise UsageError(f"{option} must end in {' or '.join(suffixes)}, got {out.name!r}")
-    _parent_exists(out, option)
+    try:  # before the work, not after it: a pipe or device is not replaced (the writers' rule)
+        target = check_replaceable(out)
+    except ValueError as exc:
+        raise UsageError(f"{option}: {exc}") from None
+    _parent_exists(target, option)  # (a link's target is written, in its own folder)
     return out
 
 

@@ -21,6 +21,7 @@ import io
 import json
 import os
 import re
+import unicodedata
 import zipfile
 import zlib
 from dataclasses import dataclass
@@ -79,8 +80,9 @@ def parse_hand(spec: str) -> tuple[str, dict[str, Any]]:
 
 
 def _safe(name: str) -> str:
-    """``name`` as part of a file name: letters and digits of any script, '.', '-' and '_'."""
-    return re.sub(r"[^\w.-]+", "_", name).strip("_") or "object"
+    """``name`` as part of a file name: letters and digits of any script (composed: a decomposed
+    accent is kept with its letter), '.', '-' and '_'."""
+    return re.sub(r"[^\w.-]+", "_", unicodedata.normalize("NFC", name)).strip("_") or "object"
 
 
 def _sha256_file(path: str) -> str:

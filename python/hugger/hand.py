@@ -331,9 +331,10 @@ class Hand:
         return json.dumps(self.to_dict())
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> Hand:
+    def from_dict(cls, d: dict[str, Any], strict: bool = False) -> Hand:
         """The hand of :meth:`to_dict` (or a trajectory file's ``hand_json``); ``ValueError`` if a key is
-        missing or a value is not valid."""
+        missing or a value is not valid. Keys it does not know are ignored (a newer writer's), or,
+        with ``strict`` (a hand file a person wrote), refused, naming the nearest known key."""
         if not isinstance(d, dict):
             raise ValueError(f"a hand description must be a dict, got {type(d).__name__}")
         keys = ("fingers", "links", "link_lengths", "link_radius", "palm_radius", "palm_thickness")
@@ -342,7 +343,7 @@ class Hand:
             raise ValueError(f"the hand description lacks {missing}")
         layout_keys = ("finger_roots", "finger_directions", "rest_angles", "joint_limits")
         known = (*keys, "finger_angles", *layout_keys, "name")
-        for key in d:
+        for key in d if strict else ():
             if key not in known:  # a misspelt key would leave the hand another than described
                 close = difflib.get_close_matches(str(key), known, n=1)
                 hint = f" (did you mean {close[0]!r}?)" if close else f" (the keys: {', '.join(known)})"

@@ -92,7 +92,8 @@ class Planner:
     (docs/skins.md): an analytic shape, a sensor model, a simulator, a real tactile hand. A skin
     need not have a mesh; ``record_object`` (a :class:`hugger.Object`) is then the mesh saved
     with the plan for the record and the checker (without it the trajectory is object-free; a
-    :class:`hugger.skins.SensorModel` made from an Object records that Object). An
+    :func:`hugger.skins.MeshSkin` of an Object, and a :class:`hugger.skins.SensorModel` made from
+    either, record that Object). An
     exception raised by a skin reaches the caller of ``step()``/``plan()`` unchanged and ends the
     plan (status ``error``; the configurations completed before it stay valid).
 

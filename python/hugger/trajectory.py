@@ -184,6 +184,9 @@ class Trajectory:
                     raise ValueError(f"{source!r} holds a single array (.npy), not a trajectory file (.npz)")
                 fh.seek(0)
                 with zipfile.ZipFile(fh) as zf:
+                    members = [i for i in zf.infolist() if i.filename.endswith(".npy") and not i.is_dir()]
+                    _refuse_bomb("its members", sum(i.file_size for i in members),
+                                 sum(i.compress_size for i in members))
                     data = {}
                     for info in zf.infolist():
                         if info.filename.endswith(".npy") and not info.is_dir():
@@ -353,14 +356,20 @@ _BOMB_BYTES = 64 << 20
 _BOMB_RATIO = 100
 
 
+def _refuse_bomb(what: str, size: int, packed: int) -> None:
+    """``what`` (a member, or all of them: a bomb split into many members is one too), unpacking
+    to ``size`` bytes from ``packed``, is refused past _BOMB_BYTES and _BOMB_RATIO."""
+    if size > _BOMB_BYTES and size > _BOMB_RATIO * max(packed, 1):
+        raise ValueError(f"{what}: {size} bytes packed into {packed}, over {_BOMB_RATIO} times smaller: refused "
+                         f"unread, as a decompression bomb (no plan's numbers pack so well)")
+
+
 def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, source: str) -> np.ndarray:
     """One .npy member of the zip, refusing pickled objects, declared sizes the member lacks
     (a damaged header must not make numpy allocate gigabytes) and decompression bombs."""
     fmt = np.lib.format
     key = info.filename[:-4]
-    if info.file_size > _BOMB_BYTES and info.file_size > _BOMB_RATIO * max(info.compress_size, 1):
-        raise ValueError(f"{key}: {info.file_size} bytes packed into {info.compress_size}, over {_BOMB_RATIO} times "
-                         f"smaller: refused unread, as a decompression bomb (no plan's numbers pack so well)")
+    _refuse_bomb(key, info.file_size, info.compress_size)
     with zf.open(info) as member:
         version = fmt.read_magic(member)
         if version == (1, 0):

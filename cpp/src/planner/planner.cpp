@@ -94,7 +94,7 @@ PlannerParams resolve_params(const HandModel& hand, const PlannerParams& params)
                                                        << shortest << " m)");
   out.contact_tolerance = params.contact_tolerance_or_default();
   // Links of 2 mm or less meet the defaults' limit: say which were defaults, and what to give.
-  const bool defaulted = std::isnan(params.step) || std::isnan(params.contact_tolerance);
+  const bool defaulted = std::isnan(params.step) && std::isnan(params.contact_tolerance);
   HUGGER_CHECK_ARGUMENT(out.contact_tolerance < out.step,
                         "contact_tolerance (" << out.contact_tolerance << " m) must be smaller than step ("
                                               << out.step << " m)"

@@ -34,7 +34,8 @@ def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = N
     text = os.fspath(spec)
     ext = os.path.splitext(text)[1].lower()
     if text in PRESETS or ext == ".json":
-        given = [k for k, v in (("fixed_joints", bool(fixed_joints)), ("palm", palm is not None)) if v] + sorted(kwargs)
+        given = [k for k, v in (("fixed_joints (--fixed-joint)", bool(fixed_joints)),
+                                ("palm (--palm-link)", palm is not None)) if v] + sorted(kwargs)
         if given:
             what = f"the preset {text!r}" if text in PRESETS else f"the JSON hand {text!r}"
             raise ValueError(f"{', '.join(given)}: for a URDF or MJCF file only; {what} is a whole hand, with no "
@@ -70,6 +71,6 @@ def load(spec: str | os.PathLike[str], fixed_joints: dict[str, float] | None = N
     except (OSError, ValueError, RecursionError) as exc:  # (nested too deep for the reader)
         raise ValueError(f"hand file {text!r} is not readable JSON ({exc})") from None
     try:
-        return Hand.from_dict(d)
+        return Hand.from_dict(d, strict=True)
     except ValueError as exc:  # the hand's checks, named by the file (as the robot files' readers do)
         raise ValueError(f"hand file {text!r}: {exc}") from None

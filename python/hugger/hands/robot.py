@@ -665,9 +665,11 @@ def from_mjcf(path: str | os.PathLike[str], palm_body: str | None = None, fixed_
             c.anchors.append(to_palm(data.xanchor[j]))
             c.axes.append(_stable.matmul(rot_p.T, data.xaxis[j]))
             lo, hi = (float(x) for x in model.jnt_range[j])
-            if math.isnan(lo) or math.isnan(hi) or lo > hi:  # (MuJoCo takes such a range for no limit)
-                raise ValueError(f"{source}: joint {jname(j)!r} has range [{lo:g}, {hi:g}] rad: not a lower "
-                                 f"limit at most the upper")
+            if math.isnan(lo) or math.isnan(hi):
+                raise ValueError(f"{source}: joint {jname(j)!r} has range [{lo:g}, {hi:g}]: not numbers")
+            if lo > hi:  # MuJoCo takes it for no limit (autolimits), as limited="false" asks
+                warnings.warn(f"{source}: joint {jname(j)!r} has range [{lo:g}, {hi:g}] rad, lower above upper: "
+                              f"MuJoCo takes it for no limit, and so does the hand", stacklevel=3)
             c.limits.append((lo, hi) if model.jnt_limited[j] else (-math.inf, math.inf))
             c.radii += [r for r, _, _ in geoms(b)]
             nxt = [k for k in kids.get(b, []) if moving(k)]

@@ -185,8 +185,9 @@ def validate_robust(traj: Any, k: int = -1, *, workers: int | None = None, bisec
     The grasp is *robustly held* when it holds (all six directions) under every perturbation;
     ``held_fraction`` is the fraction of perturbations it holds under. ``max_force_N`` is the
     largest push (N, nominal settings) under which all six directions hold, found by doubling from
-    9.81 N up to ``max_factor`` x the weight and then ``bisect_steps`` bisections (0 when even a
-    push of ``9.81 N / 2**bisect_steps`` is lost); ``max_force_factor`` is it over the weight.
+    9.81 N up to ``max_factor`` (positive) x the weight and then ``bisect_steps`` (0 to 30)
+    bisections (0 when even a push of ``9.81 N / 2**bisect_steps`` is lost); ``max_force_factor``
+    is it over the weight.
     Deterministic, like :func:`validate`.
     """
     traj = _trajectory(traj, needs_object=True)
