@@ -644,6 +644,35 @@ def test_meshes_named_in_any_script_keep_their_names(tmp_path):
     assert sorted(o["name"] for o in index["objects"]) == ["盒子", "苹果"]
     assert sorted(p.name for p in (tmp_path / "ds" / "shards").iterdir()) == ["盒子__5x5.npz", "苹果__5x5.npz"]
     assert len(hugger.Dataset(tmp_path / "ds")) == 2
+    shown = repr(hugger.Dataset(tmp_path / "ds")[0])  # one line of figures, not every array
+    assert "object=" in shown and "epsilon=" in shown and "contact_points" not in shown and "\n" not in shown
     import unicodedata  # a decomposed accent stays with its letter
 
     assert dataset._safe(unicodedata.normalize("NFD", "Müsli")) == "Müsli" == unicodedata.normalize("NFC", "Müsli")
+
+
+def test_a_shard_is_the_one_the_index_lists(reference, tmp_path):
+    # a shard copied over another opened as the other object's, and re-planning it blamed the version
+    import shutil
+
+    ds_dir = tmp_path / "ds"
+    shutil.copytree(reference, ds_dir)
+    files = sorted((ds_dir / "shards").iterdir())
+    shutil.copyfile(files[0], files[1])
+    ds = hugger.Dataset(ds_dir)
+    listed = [s["file"] for s in ds.shards]
+    with pytest.raises(ValueError, match=f"{files[1].name} is not the shard the index lists: its SHA-256 differs"):
+        ds.shard(listed.index(f"shards/{files[1].name}"))
+    ds.shard(listed.index(f"shards/{files[0].name}"))  # the shard copied reads as before
+    files[1].write_bytes(b"garbage")  # not a zip: said so (NumPy took it for a pickle, and said how to unpickle it)
+    with pytest.raises(ValueError, match=f"{files[1].name} is not a whole shard \\(not a zip archive\\)"):
+        hugger.Dataset(ds_dir)
+    files[1].unlink()  # as the message says: removed, and made again by the same command
+    assert main(["generate", *OBJECTS, "--approaches", "3", "--out", str(ds_dir), "--workers", "1"]) == 0
+    assert files[1].read_bytes() == (reference / "shards" / files[1].name).read_bytes()
+    hugger.Dataset(ds_dir).shard(listed.index(f"shards/{files[1].name}"))
+    index = json.loads((ds_dir / "index.json").read_text())
+    del index["shards"][0]["sha256"]
+    (ds_dir / "index.json").write_text(json.dumps(index))
+    with pytest.raises(ValueError, match="is not the index of a hugger dataset"):
+        hugger.Dataset(ds_dir)

@@ -192,7 +192,9 @@ def test_search_rejects_bad_input(hand):
         hugger.search(hand, obj, approaches=2, keep_all="no")
     # The planner's settings and the callback are checked once, before any approach is planned.
     for kwargs, message in (({"step": -1.0}, "step must be a positive finite number"), ({"rules": "x"}, "rules must be"),
-                            ({"skin": "x"}, "skin must be one of"), ({"progress": 5}, "progress must be callable")):
+                            ({"skin": "x"}, "skin must be one of"), ({"progress": 5}, "progress must be callable"),
+                            ({"step": 0.5}, r"step \(0.5 m\) must not exceed the shortest link"),  # (the hand's)
+                            ({"workers": 2}, "workers runs the simulations of robust=True in parallel")):
         with pytest.raises(ValueError, match=message) as info:
             hugger.search(hand, obj, approaches=2, **kwargs)
         assert "no approach could be planned" not in str(info.value)
@@ -341,5 +343,17 @@ def test_cli_plan_robust_verify(tmp_path, capsys, monkeypatch):
     checked = [s["candidates"][i] for i in s["verified"]]
     assert len(checked) == 2 and all(c["held"] and c["robust"] is False for c in checked)
     assert checked[0]["held_fraction"] == pytest.approx(8 / 9) and s["best"] == s["verified"][0]
+    # the table says what the simulations made of the grasp chosen, and that none was robust
+    assert main(["plan", "box", "--approaches", "3", "--threads", "1", "--verify", "2", "--robust-verify",
+                 "--workers", "1", "--out", str(out)]) == 0
+    out_text, err = capsys.readouterr()
+    rows = dict(line.split(None, 1) for line in out_text.splitlines() if line.strip())
+    assert rows["verified"] == "2" and rows["chosen_held"] == "True" and rows["chosen_robust"] == "False"
+    assert "none of the 2 grasps verified was robustly held in simulation: kept the held one holding under the most " \
+           "perturbations" in err
+    monkeypatch.setattr(physics, "validate", lambda traj, *a, **k: {"held": True})
+    assert main(["plan", "box", "--approaches", "3", "--threads", "1", "--verify", "2", "--out", str(out)]) == 0
+    out_text, err = capsys.readouterr()
+    assert "chosen_held            True" in out_text and "none of" not in err and "chosen_robust" not in out_text
     assert main(["plan", "box", "--approaches", "3", "--robust-verify", "--out", str(out)]) == 2
     assert "--verify" in capsys.readouterr().err

@@ -384,6 +384,18 @@ def cmd_plan(args: argparse.Namespace) -> int:
             report.pop("search")
             report.update({"approaches": searched["approaches"], "chosen_approach": searched["best"],
                            "approach_direction": searched["direction"], "search_time_s": searched["time_s"]})
+            if args.verify:  # what the simulations said of the grasp chosen
+                chosen = searched["candidates"][searched["best"]]
+                report["verified"] = len(searched["verified"])
+                report["chosen_held"] = chosen["held"]
+                if args.robust_verify:
+                    report["chosen_robust"] = chosen["robust"]
+    if searched is not None and args.verify:
+        chosen = searched["candidates"][searched["best"]]
+        if not (chosen["robust"] if args.robust_verify else chosen["held"]):
+            kept = "the held one holding under the most perturbations" if chosen["held"] else "the ranking's best"
+            _note(f"none of the {len(searched['verified'])} grasps verified was {'robustly ' if args.robust_verify else ''}"
+                  f"held in simulation: kept {kept}")
     if args.json:
         print(json.dumps(report))
     else:

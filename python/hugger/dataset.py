@@ -24,7 +24,7 @@ import re
 import unicodedata
 import zipfile
 import zlib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Iterator, Mapping, Sequence
 
@@ -240,12 +240,13 @@ def _open_shard(path: Path) -> Iterator[Any]:
     if not path.is_file():
         raise ValueError(f"{path} is missing; 'hugger generate' with the command in index.json makes it again")
     with open(path, "rb") as fh:
+        if not zipfile.is_zipfile(fh):  # (else NumPy takes it for a pickle, and says how to unpickle it)
+            raise _not_whole(path, "not a zip archive")
+        fh.seek(0)
         try:
             z = np.load(fh, allow_pickle=False)
         except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
             raise _not_whole(path, exc) from None
-        if not isinstance(z, np.lib.npyio.NpzFile):
-            raise _not_whole(path, "a single array, not an .npz")
         with z:
             try:
                 yield z
@@ -269,7 +270,7 @@ def _read_index(path: Path) -> dict[str, Any]:
             isinstance(e, dict) and all(isinstance(e.get(f), t) and not (t is not bool and isinstance(e.get(f), bool))
                                         for f, t in fields.items()) for e in entries)
 
-    if not (listed("shards", {"file": str, "object": str, "hand": str, "task_sha256": str})
+    if not (listed("shards", {"file": str, "object": str, "hand": str, "task_sha256": str, "sha256": str})
             and listed("objects", {"name": str, "path": str, "builtin": bool, "sha256": str, "scale": (int, float)})
             and listed("hands", {"label": str, "kwargs": dict}) and isinstance(index.get("parameters"), dict)):
         raise ValueError(f"{path} is not the index of a hugger dataset: its shards, objects, hands or parameters "
@@ -680,7 +681,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
 
 @dataclass(frozen=True, eq=False)
 class Grasp:
-    """One grasp of a dataset (arrays in the world frame, m, rad)."""
+    """One grasp of a dataset (arrays in the world frame, m, rad; its repr leaves the arrays out)."""
 
     object: str  #: object name
     hand: str  #: hand label
@@ -688,20 +689,20 @@ class Grasp:
     index: int  #: approach index within the shard
     best: bool  #: the one :func:`hugger.search` chose for this (object, hand)
     status: str  #: the plan's status (``error`` when it failed)
-    direction: np.ndarray  #: (3,) approach direction from T
-    start_pose: np.ndarray  #: (4, 4) palm pose the plan started from
-    palm_pose: np.ndarray  #: (4, 4) final palm pose T_WP
-    joints: np.ndarray  #: (M, N+1, 3) final joint positions
-    angles: np.ndarray  #: (M, N) final joint angles
+    direction: np.ndarray = field(repr=False)  #: (3,) approach direction from T
+    start_pose: np.ndarray = field(repr=False)  #: (4, 4) palm pose the plan started from
+    palm_pose: np.ndarray = field(repr=False)  #: (4, 4) final palm pose T_WP
+    joints: np.ndarray = field(repr=False)  #: (M, N+1, 3) final joint positions
+    angles: np.ndarray = field(repr=False)  #: (M, N) final joint angles
     links_in_contact: int
     palm_contact: bool
     force_closure: bool
     epsilon: float  #: Ferrari-Canny epsilon (mu = 0.5) over all contacts
     escape: float | None  #: the largest free slide of the object (m, at most 0.05; None: a shard of format 1)
-    contact_points: np.ndarray  #: (C, 3) contact points on the object
-    contact_normals: np.ndarray  #: (C, 3) outward normals there
-    contact_finger: np.ndarray  #: (C,) finger of each contact, -1 the palm
-    contact_link: np.ndarray  #: (C,) link of each contact, -1 the palm
+    contact_points: np.ndarray = field(repr=False)  #: (C, 3) contact points on the object
+    contact_normals: np.ndarray = field(repr=False)  #: (C, 3) outward normals there
+    contact_finger: np.ndarray = field(repr=False)  #: (C,) finger of each contact, -1 the palm
+    contact_link: np.ndarray = field(repr=False)  #: (C,) link of each contact, -1 the palm
     held: bool | None  #: six-direction physics verdict (None: not validated)
 
 
@@ -780,6 +781,10 @@ class Dataset:
             with _open_shard(path) as z:
                 arrays = {k: z[k] for k in z.files}
             _check_shard(arrays, self._sizes[i], path)
+            # the shard the index lists, not another one copied or renamed there, nor one changed
+            if _sha256_file(str(path)) != self.shards[i]["sha256"]:
+                raise ValueError(f"{path} is not the shard the index lists: its SHA-256 differs (replaced or changed "
+                                 f"since it was made); remove it and repeat the command that made the dataset, which makes it again")
             self._cache[i] = arrays
         return self._cache[i]
 

@@ -343,7 +343,8 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
     With ``robust=True`` the V best are checked with the robust verdict of
     :func:`hugger.physics.validate_robust` instead (without its largest-push search), cheapest first:
     the six-direction test at nominal settings, and only for a candidate that holds there the other
-    eight perturbations (on ``workers`` processes, default: the CPUs available). The first robustly
+    eight perturbations (on ``workers`` processes, default: the CPUs available; ``workers`` is for
+    ``robust=True`` only, a ValueError without it). The first robustly
     held one is chosen; when none is, the held one with the largest ``held_fraction`` (ties: the
     ranking's order), or the ranking's best when none holds. Checked candidates carry ``held``,
     ``robust`` and ``held_fraction`` (None where the nominal test was lost: the perturbations are
@@ -362,12 +363,14 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
         raise ValueError(f"obj must be a hugger.Object, got {type(obj).__name__}")
     if rules is not None:
         params = {**params, "rules": rules}
-    check_params(params)  # before any planning
+    check_params(params, hand=hand)  # before any planning (against the hand: a step longer than a link, say)
     _checks.callback("progress", progress, "progress(done, total)")
     _checks.whole("verify", verify, 0)
     robust, keep_all = _checks.flag("robust", robust), _checks.flag("keep_all", keep_all)
     if robust and not verify:
         raise ValueError("robust=True checks the verify=V best-ranked candidates: give verify >= 1")
+    if workers is not None and not robust:  # (as hugger plan --workers without --robust-verify)
+        raise ValueError("workers runs the simulations of robust=True in parallel: give robust=True, or no workers")
     procs = _checks.workers("workers", workers)
     _checks.callback("score", score, "score(candidate) -> float")
     limit = _timeout(timeout)
