@@ -9,9 +9,10 @@ from typing import Any
 import numpy as np
 
 
-def positive(name: str, value: Any, allow_zero: bool = False, most: float | None = None) -> float:
-    """``value`` as a float, which must be finite and positive (or zero, with ``allow_zero``) and
-    at most ``most`` (if given); otherwise a ValueError naming ``name``."""
+def positive(name: str, value: Any, allow_zero: bool = False, most: float | None = None,
+             least: float | None = None) -> float:
+    """``value`` as a float, which must be finite and positive (or zero, with ``allow_zero``), at
+    least ``least`` and at most ``most`` (each if given); otherwise a ValueError naming ``name``."""
     try:
         x = float(value)
     except (TypeError, ValueError, OverflowError):
@@ -21,6 +22,8 @@ def positive(name: str, value: Any, allow_zero: bool = False, most: float | None
         raise ValueError(f"{name} must be a {kind} finite number, got {value!r}")
     if most is not None and x > most:
         raise ValueError(f"{name} must be at most {most:g}, got {value!r}")
+    if least is not None and x < least:
+        raise ValueError(f"{name} must be at least {least:g}, got {value!r}")
     return x
 
 

@@ -95,9 +95,8 @@ def _job(index: int, case: Any, hand: Hand | None, params: dict[str, Any], timeo
     return _Job(c_hand, obj, target, pose, {**params, **own}, timeout)
 
 
-def _run(job: _Job, batch: _Batch | None = None) -> Trajectory:
-    planner = Planner(job.hand, job.obj, job.target, job.palm_pose, **job.params)
-    return planner.plan(job.timeout) if batch is None else batch.plan(planner, job.timeout)
+def _run(job: _Job, batch: _Batch) -> Trajectory:
+    return batch.plan(Planner(job.hand, job.obj, job.target, job.palm_pose, **job.params), job.timeout)
 
 
 def _run_all(jobs: list[_Job], batch: _Batch) -> list[Trajectory | BaseException]:
@@ -198,10 +197,11 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
         if progress is not None:
             progress(done, total)
 
+    batch = _Batch()  # (the serial path plans through it too: one _run for both)
     if threads == 1 or total <= 1:
         for i, job in enumerate(jobs):
             try:
-                outcome: Trajectory | BaseException = _run(job)
+                outcome: Trajectory | BaseException = _run(job, batch)
             except Exception as exc:  # reported per case below
                 outcome = exc
             finish(i, outcome, i + 1)
@@ -209,7 +209,6 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
         from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 
         groups = _groups(jobs)
-        batch = _Batch()
         with ThreadPoolExecutor(max_workers=min(int(threads), len(groups)), thread_name_prefix="hugger") as pool:
             group_of: dict[Future[Any], list[int]] = {pool.submit(_run_all, [jobs[i] for i in g], batch): g
                                                       for g in groups}
@@ -225,7 +224,8 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
                             done += 1
                             finish(i, outcome, done)
             except BaseException:  # Ctrl-C, or the progress callback raised: the workers stop too
-                batch.stop(pending)
+                pool.shutdown(wait=False, cancel_futures=True)
+                batch.stop()
                 raise
     if failed and errors == "raise":
         err = PlanManyError(failed, results)

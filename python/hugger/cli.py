@@ -384,14 +384,12 @@ def cmd_plan(args: argparse.Namespace) -> int:
             report.pop("search")
             report.update({"approaches": searched["approaches"], "chosen_approach": searched["best"],
                            "approach_direction": searched["direction"], "search_time_s": searched["time_s"]})
-            if args.verify:  # what the simulations said of the grasp chosen
-                chosen = searched["candidates"][searched["best"]]
-                report["verified"] = len(searched["verified"])
-                report["chosen_held"] = chosen["held"]
-                if args.robust_verify:
-                    report["chosen_robust"] = chosen["robust"]
-    if searched is not None and args.verify:
+    if searched is not None and args.verify:  # what the simulations said of the grasp chosen
         chosen = searched["candidates"][searched["best"]]
+        if not args.json:
+            report.update({"verified": len(searched["verified"]), "chosen_held": chosen["held"]})
+            if args.robust_verify:
+                report["chosen_robust"] = chosen["robust"]
         if not (chosen["robust"] if args.robust_verify else chosen["held"]):
             kept = "the held one holding under the most perturbations" if chosen["held"] else "the ranking's best"
             _note(f"none of the {len(searched['verified'])} grasps verified was {'robustly ' if args.robust_verify else ''}"
@@ -943,15 +941,15 @@ def _main(argv: Sequence[str] | None) -> int:
     except KeyboardInterrupt:
         print("hugger: interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:  # the reader of our output went away (hugger ... | head)
-        with contextlib.suppress(OSError):
-            sys.stdout = open(os.devnull, "w")
-        return EXIT_OK
-    except OSError as exc:  # what the system refused: a full disk, a read-only filesystem, an output that fails
-        with contextlib.suppress(OSError):
-            print(f"hugger: error: {exc}", file=sys.stderr)
+    except OSError as exc:  # what the system refused (a full disk, ...), or the reader of our output left
+        broken = isinstance(exc, BrokenPipeError)  # (hugger ... | head): not an error
+        if not broken:
+            with contextlib.suppress(OSError):
+                print(f"hugger: error: {exc}", file=sys.stderr)
         with contextlib.suppress(OSError):
             sys.stdout = open(os.devnull, "w")  # (its buffer may hold what failed: not written again at exit)
+        if broken:
+            return EXIT_OK
     except Exception as exc:  # an internal error: keep the traceback for the report
         import traceback
 

@@ -107,12 +107,11 @@ def _object_entry(spec: str, scale: float, force: bool = False) -> dict[str, Any
         digest = hashlib.sha256(np.ascontiguousarray(obj.vertices).tobytes() +
                                 np.ascontiguousarray(obj.faces).tobytes()).hexdigest()
         return {"name": spec, "path": spec, "builtin": True, "sha256": digest, "scale": scale}
-    if not os.path.isfile(spec):  # refused as the plan command refuses it, in a ValueError
+    if not os.path.isfile(spec):  # refused as the plan command refuses it (no such file: a ValueError)
         try:
-            load_object(spec, scale)
+            load_object(spec, scale)  # raises, saying what the path is
         except FileNotFoundError as exc:
             raise ValueError(str(exc)) from None
-        raise ValueError(f"{spec!r} is not a mesh file")  # (a folder, say)
     # Refuses what a worker would, before any shard is made: a mesh the planner cannot take, or
     # one whose natural target T is not inside it (the start pose depends on the hand; T does not).
     case, message = judged_case(spec, scale=scale, force=force)
@@ -233,13 +232,13 @@ def _not_whole(path: Path, why: object) -> ValueError:
 
 
 @contextlib.contextmanager
-def _open_shard(path: Path) -> Iterator[Any]:
+def _open_shard(path: Path, data: bytes | None = None) -> Iterator[Any]:
     """The arrays of a shard file (np.load without pickles), the file closed whatever happens;
     ``ValueError`` naming the file when it is not a whole .npz (on opening, or on reading an
-    array of it)."""
-    if not path.is_file():
+    array of it). ``data``: the file's bytes, read already (not read again)."""
+    if data is None and not path.is_file():
         raise ValueError(f"{path} is missing; 'hugger generate' with the command in index.json makes it again")
-    with open(path, "rb") as fh:
+    with open(path, "rb") if data is None else io.BytesIO(data) as fh:
         if not zipfile.is_zipfile(fh):  # (else NumPy takes it for a pickle, and says how to unpickle it)
             raise _not_whole(path, "not a zip archive")
         fh.seek(0)
@@ -302,9 +301,9 @@ def _check_index(root: Path, tasks: list[dict[str, Any]]) -> None:
         return
     try:
         old = _read_index(path)
-        listed = [(str(e["file"]), str(e["task_sha256"])) for e in old["shards"]]
-    except (ValueError, TypeError, KeyError) as exc:
+    except ValueError as exc:
         raise ValueError(f"{exc}; write this dataset to a new folder") from None
+    listed = [(e["file"], e["task_sha256"]) for e in old["shards"]]  # (entries _read_index checked)
     ours = {(f"shards/{t['file']}", t["key"]) for t in tasks}
     left_out = [f for f, key in listed if (f, key) not in ours]
     if left_out:
@@ -778,11 +777,12 @@ class Dataset:
         i = int(i) % len(self.shards)
         if i not in self._cache:
             path = self.root / self.shards[i]["file"]
-            with _open_shard(path) as z:
+            data = path.read_bytes() if path.is_file() else None  # once: loaded and hashed (None: missing)
+            with _open_shard(path, data) as z:
                 arrays = {k: z[k] for k in z.files}
             _check_shard(arrays, self._sizes[i], path)
             # the shard the index lists, not another one copied or renamed there, nor one changed
-            if _sha256_file(str(path)) != self.shards[i]["sha256"]:
+            if hashlib.sha256(data or b"").hexdigest() != self.shards[i]["sha256"]:
                 raise ValueError(f"{path} is not the shard the index lists: its SHA-256 differs (replaced or changed "
                                  f"since it was made); remove it and repeat the command that made the dataset, which makes it again")
             self._cache[i] = arrays

@@ -259,12 +259,12 @@ def _finish(sim: Simulation, traj: Any, mode: str, start_centre: np.ndarray) -> 
     import dataclasses
 
     sim.advance(FINAL_SETTLE)
-    T = sim.object_pose()
-    moved = dataclasses.replace(traj, object_vertices=sim.obj.vertices @ T[:3, :3].T + T[:3, 3])
     if _ph._resets(sim.mujoco, sim.data):  # where a reset left the object says nothing of the grasp:
         # the plan keeps the object it was planned with
         return LoopResult(mode=mode, status=traj.status, configurations=len(traj), object_moved_m=None,
                           links_in_contact=None, hold={"held": False, "diverged": True}, trajectory=traj)
+    T = sim.object_pose()
+    moved = dataclasses.replace(traj, object_vertices=sim.obj.vertices @ T[:3, :3].T + T[:3, 3])
     gaps = sim.link_gaps()
     return LoopResult(mode=mode, status=traj.status, configurations=len(traj),
                       object_moved_m=float(np.linalg.norm(sim.data.xpos[sim.body] - start_centre)),

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import json
 import threading
-from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping, Sequence, cast
+from typing import Any, Iterator, Mapping, Sequence, cast
 
 import numpy as np
 
@@ -12,9 +12,6 @@ from ._types import CONTACT, DONE, FROZEN, Configuration  # noqa: F401  (hugger.
 from .hand import Hand, _real_array
 from .trajectory import Trajectory
 from .world import Object
-
-if TYPE_CHECKING:
-    from concurrent.futures import Future
 
 
 def look_at(position: Any, target: Any, up: Any = None) -> np.ndarray:
@@ -249,10 +246,9 @@ class _Batch:
             with self._lock:
                 self._running.discard(planner)
 
-    def stop(self, futures: Iterable[Future[Any]] = ()) -> None:
-        """Cancel ``futures`` (the workers' jobs not started) and stop the plans running."""
-        for fut in futures:
-            fut.cancel()
+    def stop(self) -> None:
+        """Stop the plans running, and refuse those asked for later (the caller cancels its pool's
+        jobs not started: ``pool.shutdown(wait=False, cancel_futures=True)``)."""
         with self._lock:
             self._stopped = True
             for planner in self._running:

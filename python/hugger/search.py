@@ -400,7 +400,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
         return judged, traj, found
 
     k = len(dirs)
-    batch = _Batch()  # (in this thread too: a Ctrl-C here reaches the plan itself)
+    batch = _Batch()  # (the serial path plans through it too: one run() for both)
     slots: list[tuple[Candidate, Trajectory | None, Any] | None] = [None] * k
     if workers == 1 or k == 1:
         for i in range(k):
@@ -418,7 +418,8 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
                     if progress is not None:
                         progress(done, k)
             except BaseException:  # Ctrl-C, or the progress callback raised: the workers stop too
-                batch.stop(futures)
+                pool.shutdown(wait=False, cancel_futures=True)
+                batch.stop()
                 raise
     results = [r for r in slots if r is not None]  # every slot is filled (a failed run raised)
     trajs = [r[1] for r in results]

@@ -187,10 +187,7 @@ class Trajectory:
                     members = [i for i in zf.infolist() if i.filename.endswith(".npy") and not i.is_dir()]
                     _refuse_bomb("its members", sum(i.file_size for i in members),
                                  sum(i.compress_size for i in members))
-                    data = {}
-                    for info in zf.infolist():
-                        if info.filename.endswith(".npy") and not info.is_dir():
-                            data[info.filename[:-4]] = _read_member(zf, info, source)
+                    data = {info.filename[:-4]: _read_member(zf, info, source) for info in members}
         except FileNotFoundError:
             raise
         except _READ_ERRORS as exc:

@@ -193,11 +193,11 @@ def _check_tree(source: str, links: list[str], joints: list[tuple[str, str, str]
 
 
 def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | None, palm_radius: float | None,
-                      palm_thickness: float | None, palm: str) -> Hand:
-    """The hand of the fingers' chains, in the frame of ``palm`` (its description in messages
-    about that frame: "link 'base'", "body 'palm'")."""
-    kind = "palm_link" if palm.startswith("link") else "palm_body"
-    chosen = f" (the palm is {palm}; name another with {kind}= or --palm-link)"
+                      palm_thickness: float | None, kind: str, palm: str) -> Hand:
+    """The hand of the fingers' chains of a ``kind`` file ("URDF" or "MJCF"), in the frame of its
+    link or body ``palm`` (named in messages about that frame)."""
+    chosen = (f" (the palm is {'link' if kind == 'URDF' else 'body'} {palm!r}; name another with "
+              f"{PALM_KEYWORDS[kind]}= or --palm-link)")
     if not chains:
         raise ValueError(f"{source}: no finger found (no revolute joint below the palm)")
     n = len(chains[0].joints)
@@ -462,7 +462,7 @@ def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dic
     palm_r = palm_t = None
     if palm_cyl:
         palm_r, palm_t = max(r for _, r, _ in palm_cyl), max(length for _, _, length in palm_cyl)
-    return _exact(source, _hand_from_chains(chains, source, link_radius, palm_r, palm_t, f"link {palm!r}"))
+    return _exact(source, _hand_from_chains(chains, source, link_radius, palm_r, palm_t, "URDF", palm))
 
 
 def _finger_geometry(hand: Hand) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -696,8 +696,8 @@ def from_mjcf(path: str | os.PathLike[str], palm_body: str | None = None, fixed_
     for g in range(model.ngeom):
         if model.geom_bodyid[g] in palm_group and int(model.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_CYLINDER):
             palm_r, palm_t = float(model.geom_size[g][0]), 2.0 * float(model.geom_size[g][1])
-    return _exact(source, _hand_from_chains(chains, source, link_radius, palm_r, palm_t,
-                                          f"body {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, palm) or palm!r}"))
+    return _exact(source, _hand_from_chains(chains, source, link_radius, palm_r, palm_t, "MJCF",
+                                            mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, palm) or str(palm)))
 
 
 def to_mjcf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:

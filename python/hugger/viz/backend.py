@@ -101,10 +101,7 @@ def _check_faces(max_faces: Any) -> int:
 
 def check_dpi(dpi: Any) -> float:
     """``dpi`` as a float: from :data:`MIN_DPI` to :data:`MAX_DPI`; otherwise a ValueError."""
-    x = positive("dpi", dpi, most=MAX_DPI)
-    if x < MIN_DPI:
-        raise ValueError(f"dpi must be at least {MIN_DPI:g}, got {dpi!r}")
-    return x
+    return positive("dpi", dpi, most=MAX_DPI, least=MIN_DPI)
 
 
 def check_fps(fps: Any) -> float:
