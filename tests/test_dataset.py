@@ -676,3 +676,63 @@ def test_a_shard_is_the_one_the_index_lists(reference, tmp_path):
     (ds_dir / "index.json").write_text(json.dumps(index))
     with pytest.raises(ValueError, match="is not the index of a hugger dataset"):
         hugger.Dataset(ds_dir)
+
+
+def _craft_shard(ds_dir: Path, extra: dict[str, Any] | None = None, raw: tuple[str, bytes] | None = None) -> str:
+    """Rewrites the dataset's first shard with extra members (``extra`` as np.savez writes them,
+    ``raw``: one member's bytes as given) and lists its new SHA-256 in the index, as a crafted
+    dataset from elsewhere would: only the shard reader's own checks stand in the way."""
+    import hashlib
+    import zipfile
+
+    index = json.loads((ds_dir / "index.json").read_text())
+    path = ds_dir / index["shards"][0]["file"]
+    with zipfile.ZipFile(path, "a", compression=zipfile.ZIP_DEFLATED) as zf:
+        for key, value in (extra or {}).items():
+            with zf.open(f"{key}.npy", "w", force_zip64=True) as fh:
+                np.lib.format.write_array(fh, value, allow_pickle=True)
+        if raw is not None:
+            with zf.open(f"{raw[0]}.npy", "w", force_zip64=True) as fh:
+                fh.write(raw[1])
+    index["shards"][0]["sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
+    (ds_dir / "index.json").write_text(json.dumps(index))
+    return path.name
+
+
+def test_crafted_shards_are_refused_as_trajectory_files_are(reference, tmp_path):
+    # shards are read by the trajectory file's reader: no pickle is unpickled, no declared size
+    # allocated, no decompression bomb unpacked, even where the index vouches for the file
+    import shutil
+    import tracemalloc
+
+    ran: list[str] = []
+
+    class Evil:
+        def __reduce__(self):
+            return (ran.append, ("unpickled!",))
+
+    cases = [
+        ({"evil": np.array([Evil()], dtype=object)}, None, "evil holds pickled Python objects"),
+        (None, ("huge", _npy_header((10 ** 11, 3)) + bytes(24)), "huge: its header declares"),
+        (None, ("bomb", _npy_header((((96 << 20) // 8),)) + bytes(96 << 20)), "decompression bomb"),
+    ]
+    for n, (extra, raw, message) in enumerate(cases):
+        ds_dir = tmp_path / f"ds{n}"
+        shutil.copytree(reference, ds_dir)
+        name = _craft_shard(ds_dir, extra, raw)
+        tracemalloc.start()
+        try:
+            with pytest.raises(ValueError, match=f"{name} is not a whole shard .*{message}"):
+                hugger.Dataset(ds_dir).shard(0)
+            assert tracemalloc.get_traced_memory()[1] < 32 << 20
+        finally:
+            tracemalloc.stop()
+    assert ran == []
+
+
+def _npy_header(shape: tuple[int, ...]) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    np.lib.format.write_array_header_1_0(buf, {"descr": "<f8", "fortran_order": False, "shape": shape})
+    return buf.getvalue()

@@ -23,7 +23,6 @@ import os
 import re
 import unicodedata
 import zipfile
-import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Iterator, Mapping, Sequence
@@ -32,6 +31,7 @@ import numpy as np
 
 from . import _checks
 from ._files import remove_temporaries, write_atomic
+from ._npz import READ_ERRORS, Archive, ArchiveError
 from ._types import VERSION
 
 if TYPE_CHECKING:
@@ -232,24 +232,25 @@ def _not_whole(path: Path, why: object) -> ValueError:
 
 
 @contextlib.contextmanager
-def _open_shard(path: Path, data: bytes | None = None) -> Iterator[Any]:
-    """The arrays of a shard file (np.load without pickles), the file closed whatever happens;
+def _open_shard(path: Path, data: bytes | None = None) -> Iterator[Archive]:
+    """The arrays of a shard file, read as trajectory files are (hugger._npz: no pickles, no
+    declared size the file lacks, no decompression bomb), the file closed whatever happens;
     ``ValueError`` naming the file when it is not a whole .npz (on opening, or on reading an
     array of it). ``data``: the file's bytes, read already (not read again)."""
     if data is None and not path.is_file():
         raise ValueError(f"{path} is missing; 'hugger generate' with the command in index.json makes it again")
     with open(path, "rb") if data is None else io.BytesIO(data) as fh:
-        if not zipfile.is_zipfile(fh):  # (else NumPy takes it for a pickle, and says how to unpickle it)
+        if not zipfile.is_zipfile(fh):
             raise _not_whole(path, "not a zip archive")
         fh.seek(0)
         try:
-            z = np.load(fh, allow_pickle=False)
-        except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
+            z = Archive(fh)
+        except READ_ERRORS as exc:
             raise _not_whole(path, exc) from None
         with z:
             try:
                 yield z
-            except (EOFError, zipfile.BadZipFile, zlib.error) as exc:
+            except ArchiveError as exc:
                 raise _not_whole(path, exc) from None
 
 

@@ -4,11 +4,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import struct
-import tokenize
 import warnings
-import zipfile
-import zlib
 from dataclasses import dataclass, field, fields, replace
 from typing import Any, cast
 
@@ -17,18 +13,12 @@ import numpy as np
 from . import _core
 from ._checks import positive
 from ._files import atomic_path
+from ._npz import READ_ERRORS, Archive, ArchiveError
 from ._types import CONTACT_DISTANCE, MAX_FINGERS, MAX_LINKS, VERSION, Configuration
 from .hand import Hand
 from .world import MAX_COORDINATE, Object
 
 FORMAT_VERSION = 1
-
-#: Largest hand a trajectory file may describe (the limits of :class:`hugger.Hand`).
-#: What reading a damaged zip/npy can raise; ``load`` turns each into a ``ValueError``. (numpy
-#: parses a .npy header with ``tokenize`` and ``ast``: a damaged one raises TokenError or SyntaxError.)
-_READ_ERRORS = (OSError, ValueError, TypeError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, KeyError,
-                IndexError, zlib.error, NotImplementedError, struct.error, OverflowError, UnicodeError,
-                RecursionError, MemoryError, tokenize.TokenError, SyntaxError)
 
 # key: (number of dimensions, dtype kind(s))
 _ARRAYS = {
@@ -183,14 +173,13 @@ class Trajectory:
                 if fh.read(6) == b"\x93NUMPY":
                     raise ValueError(f"{source!r} holds a single array (.npy), not a trajectory file (.npz)")
                 fh.seek(0)
-                with zipfile.ZipFile(fh) as zf:
-                    members = [i for i in zf.infolist() if i.filename.endswith(".npy") and not i.is_dir()]
-                    _refuse_bomb("its members", sum(i.file_size for i in members),
-                                 sum(i.compress_size for i in members))
-                    data = {info.filename[:-4]: _read_member(zf, info, source) for info in members}
+                with Archive(fh) as archive:
+                    data = archive.read_all()
         except FileNotFoundError:
             raise
-        except _READ_ERRORS as exc:
+        except ArchiveError as exc:
+            raise ValueError(f"cannot read trajectory file {source!r}: {exc}") from None
+        except READ_ERRORS as exc:
             raise ValueError(f"cannot read trajectory file {source!r}: {type(exc).__name__}: {exc}") from None
         return cls.from_arrays(data, source=source)
 
@@ -344,51 +333,6 @@ class Trajectory:
             "fingers_done": int(np.sum(self.tip_state[-1] == 2)),
             "first_contact_iteration": stats.get("first_contact_iteration"),
         }
-
-
-#: A member unpacking to more than this (bytes) and more than _BOMB_RATIO times its packed size is
-#: refused unread: a plan's numbers pack two to ten times, a crafted run of zeros a thousand times,
-#: and a small file must not make the reader allocate gigabytes.
-_BOMB_BYTES = 64 << 20
-_BOMB_RATIO = 100
-
-
-def _refuse_bomb(what: str, size: int, packed: int) -> None:
-    """``what`` (a member, or all of them: a bomb split into many members is one too), unpacking
-    to ``size`` bytes from ``packed``, is refused past _BOMB_BYTES and _BOMB_RATIO."""
-    if size > _BOMB_BYTES and size > _BOMB_RATIO * max(packed, 1):
-        raise ValueError(f"{what}: {size} bytes packed into {packed}, over {_BOMB_RATIO} times smaller: refused "
-                         f"unread, as a decompression bomb (no plan's numbers pack so well)")
-
-
-def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, source: str) -> np.ndarray:
-    """One .npy member of the zip, refusing pickled objects, declared sizes the member lacks
-    (a damaged header must not make numpy allocate gigabytes) and decompression bombs."""
-    fmt = np.lib.format
-    key = info.filename[:-4]
-    _refuse_bomb(key, info.file_size, info.compress_size)
-    with zf.open(info) as member:
-        version = fmt.read_magic(member)
-        if version == (1, 0):
-            shape, fortran, dtype = fmt.read_array_header_1_0(member)
-        elif version in ((2, 0), (3, 0)):
-            shape, fortran, dtype = fmt.read_array_header_2_0(member)
-        else:
-            raise ValueError(f"{key}: unsupported .npy format version {version}")
-        if dtype.hasobject:
-            raise ValueError(f"{key} holds pickled Python objects ({dtype}); refused, never unpickled")
-        declared = int(np.prod(shape, dtype=object)) * dtype.itemsize
-        if declared != info.file_size - member.tell():
-            raise ValueError(f"{key}: its header declares {declared} bytes of data but the file holds "
-                             f"{info.file_size - member.tell()}")
-    with zf.open(info) as member:
-        array = fmt.read_array(member, allow_pickle=False)
-        # On to the member's end, where zipfile checks its CRC-32 (reading just the array's bytes
-        # can stop short of it in a compressed member): a damaged member is refused rather than
-        # read as other numbers. Nothing is left to read but the end of the stream.
-        if member.read(1):
-            raise ValueError(f"{key}: data beyond its array")
-    return array
 
 
 def _check_hand(hand: dict[str, Any], m: int, n: int, source: str) -> None:

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from .._files import atomic_path
+from .._npz import READ_ERRORS, Archive
 from ._common import _coacd
 from .mass import hull_volume, mass_properties
 
@@ -75,10 +76,10 @@ def _decompose(v: np.ndarray, f: np.ndarray, path: Path, convex_ratio: float) ->
     folder = path.parent
     if path.is_file():
         try:
-            with np.load(path, allow_pickle=False) as z:
+            with open(path, "rb") as fh, Archive(fh) as z:
                 n = int(z["count"])
                 return [(z[f"v{i}"], z[f"f{i}"]) for i in range(n)]
-        except (OSError, ValueError, KeyError):
+        except READ_ERRORS:
             pass  # a damaged cache entry is recomputed below
     coacd = _coacd()
     coacd.set_log_level("error")
