@@ -386,11 +386,11 @@ def _ray_session(ray: Any, address: str | None, workers: int) -> Iterator[None]:
         yield
         return
     if address is None:
-        ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+        ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False, logging_level="WARNING")
     else:
         _probe_ray(address)
         try:
-            ray.init(address=address, log_to_driver=False)
+            ray.init(address=address, log_to_driver=False, logging_level="WARNING")
         except ConnectionError as exc:  # something answered the address check, but no Ray
             raise ValueError(f"no Ray cluster answers at {address}: {exc}") from None
     try:
