@@ -8,6 +8,7 @@ import pytest
 
 import helpers
 import hugger
+from hugger import objects, scenarios
 from helpers import ico, no_warnings
 from hugger.hand import PLAUSIBLE_SIZE
 from hugger.world import MAX_COORDINATE
@@ -270,3 +271,25 @@ def test_segment_distance_ends_must_be_finite():
     o = hugger.objects.sphere(0.04)
     with pytest.raises(ValueError, match="b must be finite"):
         o.segment_distance(np.zeros((1, 3)), np.array([[np.nan, 0.0, 0.0]]))
+
+
+@pytest.mark.parametrize("call, name", [
+    (lambda o, h: objects.sphere(radius="0.04"), "radius"),
+    (lambda o, h: objects.sphere(radius=True), "radius"),
+    (lambda o, h: objects.sphere(center=["0", "0", "0"]), "center"),
+    (lambda o, h: hugger.look_at([0, 0, "0.2"], [0, 0, 0]), "position"),
+    (lambda o, h: hugger.look_at([0, 0, 0.2], [0, 0, 0], up=[True, False, False]), "up"),
+    (lambda o, h: o.inside(["0", "0", "0"]), "points"),
+    (lambda o, h: o.closest([["0", "0", "0.1"]]), "points"),
+    (lambda o, h: o.segment_distance([0, 0, 0.1], ["0", "0", "0.2"]), "b"),
+    (lambda o, h: scenarios.start_pose(o, h, [0, 0, 0], turn_deg="10"), "turn_deg"),
+    (lambda o, h: scenarios.start_pose(o, h, ["0", "0", "0"]), "target"),
+    (lambda o, h: scenarios.start_pose(o, h, [0, 0, 0], distance="0.3"), "distance"),
+    (lambda o, h: hugger.Planner(h, o, ["0", "0", "0"], np.eye(4)), "target"),
+    (lambda o, h: hugger.search(h, o, pole=["0", "0", "1"], approaches=2), "pole"),
+])
+def test_numbers_given_as_text_are_refused_everywhere(call, name):
+    # numpy and float() read "0.04" as a number and True as 1: every public entry refuses them
+    # alike, as Hand(fingers="5") always did, naming the argument
+    with pytest.raises(ValueError, match=f"^{name}( \\(--[a-z]+\\))? must be"):
+        call(objects.sphere(), hugger.Hand())

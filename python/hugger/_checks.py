@@ -13,6 +13,8 @@ def positive(name: str, value: Any, allow_zero: bool = False, most: float | None
              least: float | None = None) -> float:
     """``value`` as a float, which must be finite and positive (or zero, with ``allow_zero``), at
     least ``least`` and at most ``most`` (each if given); otherwise a ValueError naming ``name``."""
+    if isinstance(value, (str, bytes, bool, np.bool_)):  # text and bools are not numbers here
+        raise ValueError(f"{name} must be a number, got {value!r}")
     try:
         x = float(value)
     except (TypeError, ValueError, OverflowError):
@@ -25,6 +27,30 @@ def positive(name: str, value: Any, allow_zero: bool = False, most: float | None
     if least is not None and x < least:
         raise ValueError(f"{name} must be at least {least:g}, got {value!r}")
     return x
+
+
+def real_array(name: str, value: Any) -> np.ndarray:
+    """``value`` as a float64 array; ``ValueError`` for strings, complex, booleans or objects
+    that are not numbers (numpy would otherwise cast them silently or with a warning)."""
+    if value is None:
+        raise ValueError(f"{name} must be an array of real numbers, got None")
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError, OverflowError, RecursionError):
+        raise ValueError(f"{name} must be an array of real numbers") from None
+    if a.dtype.kind == "O":
+        if any(x is None for x in a.flat):  # numpy would turn None into nan
+            raise ValueError(f"{name} must be an array of real numbers, got None in it")
+        try:
+            a = a.astype(np.float64)
+        except (TypeError, ValueError, OverflowError):
+            raise ValueError(f"{name} must be an array of real numbers, got Python objects") from None
+    if a.dtype.kind in "USb":  # (numpy would read "0.04" as a number, and True as 1)
+        raise ValueError(f"{name} must be an array of real numbers, got {'booleans' if a.dtype.kind == 'b' else 'text'}")
+    if a.dtype.kind not in "iuf":
+        raise ValueError(f"{name} must be an array of real numbers, got dtype {a.dtype}")
+    with np.errstate(over="ignore"):
+        return a.astype(np.float64)
 
 
 def whole(name: str, value: Any, lo: int | None = None, hi: int | None = None) -> int:

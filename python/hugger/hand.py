@@ -9,7 +9,7 @@ from typing import Any, Callable
 import numpy as np
 
 from . import _core, _stable
-from ._checks import positive, whole
+from ._checks import positive, real_array, whole
 
 from ._types import MAX_FINGERS, MAX_LINKS  # noqa: F401  (hugger.hand.MAX_FINGERS as before)
 
@@ -46,28 +46,6 @@ def _size(name: str, value: Any, allow_zero: bool = False) -> float:
     if v > MAX_LENGTH:
         raise ValueError(f"{name} = {v:g} m is larger than {MAX_LENGTH:g} m: sizes are in metres")
     return v
-
-
-def _real_array(name: str, value: Any) -> np.ndarray:
-    """``value`` as a float64 array; ``ValueError`` for strings, complex, booleans or objects
-    that are not numbers (numpy would otherwise cast them silently or with a warning)."""
-    if value is None:
-        raise ValueError(f"{name} must be an array of real numbers, got None")
-    try:
-        a = np.asarray(value)
-    except (TypeError, ValueError, OverflowError, RecursionError):
-        raise ValueError(f"{name} must be an array of real numbers") from None
-    if a.dtype.kind == "O":
-        if any(x is None for x in a.flat):  # numpy would turn None into nan
-            raise ValueError(f"{name} must be an array of real numbers, got None in it")
-        try:
-            a = a.astype(np.float64)
-        except (TypeError, ValueError, OverflowError):
-            raise ValueError(f"{name} must be an array of real numbers, got Python objects") from None
-    if a.dtype.kind not in "iuf":
-        raise ValueError(f"{name} must be an array of real numbers, got dtype {a.dtype}")
-    with np.errstate(over="ignore"):
-        return a.astype(np.float64)
 
 
 def implausible_size(what: str, size: float) -> str | None:
@@ -110,7 +88,7 @@ class Hand:
             raise ValueError(f"fingers must be between 1 and {MAX_FINGERS}, got {m}")
         if not 1 <= n <= MAX_LINKS:
             raise ValueError(f"links must be between 1 and {MAX_LINKS}, got {n}")
-        lengths = _real_array("link_length", link_length)
+        lengths = real_array("link_length", link_length)
         if lengths.ndim == 0:
             lengths = np.full((m, n), float(lengths))
         if lengths.shape != (m, n):
@@ -149,16 +127,16 @@ class Hand:
         the palm plane, limits with lower > upper, rest angles outside their limits or behind
         the palm's front plane, fingers that intersect at rest.
         """
-        r = _real_array("roots", roots)
+        r = real_array("roots", roots)
         if r.ndim != 2 or r.shape[1] != 3:
             raise ValueError(f"roots must be an (M, 3) array, got shape {r.shape}")
         m = r.shape[0]
         if not 1 <= m <= MAX_FINGERS:
             raise ValueError(f"the hand must have between 1 and {MAX_FINGERS} fingers, got {m} roots")
-        d = _real_array("directions", directions)
+        d = real_array("directions", directions)
         if d.shape != (m, 3):
             raise ValueError(f"directions must be an (M, 3) = ({m}, 3) array like roots, got shape {d.shape}")
-        lengths = _real_array("link_lengths", link_lengths)
+        lengths = real_array("link_lengths", link_lengths)
         if lengths.ndim == 0:
             raise ValueError("link_lengths must be an (M, N) array (a scalar does not say N)")
         if lengths.ndim != 2 or lengths.shape[0] != m:
@@ -169,13 +147,13 @@ class Hand:
         for label, a in (("roots", r), ("directions", d)):
             if not np.all(np.isfinite(a)):
                 raise ValueError(f"{label} hold non-finite numbers")
-        q = np.zeros((m, n)) if rest is None else _real_array("rest", rest)
+        q = np.zeros((m, n)) if rest is None else real_array("rest", rest)
         if q.shape != (m, n):
             raise ValueError(f"rest must be an (M, N) = ({m}, {n}) array, got shape {q.shape}")
         if limits is None:
             lo, hi = np.full((m, n), -np.inf), np.full((m, n), np.inf)
         else:
-            lim = _real_array("limits", limits)
+            lim = real_array("limits", limits)
             if lim.shape != (m, n, 2):
                 raise ValueError(f"limits must be an (M, N, 2) = ({m}, {n}, 2) array of [lower, upper], got shape {lim.shape}")
             lo, hi = lim[..., 0].copy(), lim[..., 1].copy()
@@ -283,25 +261,25 @@ class Hand:
     def forward(self, palm_pose: Any, angles: Any) -> np.ndarray:
         """Joint positions (M, N+1, 3) in the world (m) from the rigid palm pose T_WP (4, 4) and joint
         angles (M, N) in radians (docs/model.md)."""
-        a = _real_array("angles", angles)
+        a = real_array("angles", angles)
         if a.shape != (self.fingers, self.links):
             raise ValueError(f"angles must have shape ({self.fingers}, {self.links}), got {a.shape}")
         if not np.all(np.isfinite(a)):
             raise ValueError("angles hold non-finite numbers")
-        return self._core.forward(_real_array("palm_pose", palm_pose), a)  # the engine checks the pose
+        return self._core.forward(real_array("palm_pose", palm_pose), a)  # the engine checks the pose
 
     def angles_from_joints(self, palm_pose: Any, joints: Any) -> np.ndarray:
         """Joint angles (M, N) in radians from joint positions (M, N+1, 3) in the world (m)."""
-        j = _real_array("joints", joints)
+        j = real_array("joints", joints)
         if j.shape != (self.fingers, self.links + 1, 3):
             raise ValueError(f"joints must have shape ({self.fingers}, {self.links + 1}, 3), got {j.shape}")
         if not np.all(np.isfinite(j)):
             raise ValueError("joints hold non-finite numbers")
-        return self._core.angles_from_joints(_real_array("palm_pose", palm_pose), j)
+        return self._core.angles_from_joints(real_array("palm_pose", palm_pose), j)
 
     def roots(self, palm_pose: Any) -> np.ndarray:
         """Finger roots R_m (M, 3) in the world (m) for the rigid palm pose T_WP (4, 4)."""
-        return self._core.roots(_real_array("palm_pose", palm_pose))
+        return self._core.roots(real_array("palm_pose", palm_pose))
 
     def to_dict(self) -> dict[str, Any]:
         """The hand as in the trajectory file's ``hand_json``. A general layout adds
@@ -355,7 +333,7 @@ class Hand:
         spread = False
         if "finger_angles" in d:
             m = whole("fingers", fingers)
-            phi = _real_array("finger_angles", d["finger_angles"])
+            phi = real_array("finger_angles", d["finger_angles"])
             if phi.shape != (m,):
                 raise ValueError(f"finger_angles must hold {m} angles, got shape {phi.shape}")
             spread = not np.allclose(phi, 2 * np.pi * np.arange(m) / m, rtol=0.0, atol=1e-12)
@@ -369,7 +347,7 @@ class Hand:
             raise ValueError(f"fingers and links must be in 1..{MAX_FINGERS} and 1..{MAX_LINKS}, got {m}, {n}")
         palm_r = _size("palm_radius", d["palm_radius"])
         rim = rim_directions(2 * np.pi * np.arange(m) / m if phi is None else phi)
-        lengths = _real_array("link_lengths", d["link_lengths"])
+        lengths = real_array("link_lengths", d["link_lengths"])
         if lengths.ndim == 0:
             lengths = np.full((m, n), float(lengths))
         elif lengths.size == m * n:

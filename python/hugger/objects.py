@@ -16,7 +16,7 @@ from typing import Any, Callable
 import numpy as np
 
 from . import _stable
-from ._checks import positive, whole
+from ._checks import positive, real_array, whole
 from .world import MAX_COORDINATE, Object
 
 
@@ -74,8 +74,8 @@ def icosphere(subdivisions: int = 3) -> tuple[np.ndarray, np.ndarray]:
 def _three(name: str, value: Any) -> np.ndarray:
     """``value`` as 3 floats, or a ValueError naming ``name``."""
     try:
-        return np.asarray(value, dtype=np.float64).reshape(3)
-    except (TypeError, ValueError):
+        return real_array(name, value).reshape(3)
+    except ValueError:
         raise ValueError(f"{name} must be 3 numbers, got {value!r}") from None
 
 

@@ -8,21 +8,22 @@ from typing import Any, Iterator, Mapping, Sequence, cast
 import numpy as np
 
 from . import _core, _stable
+from ._checks import real_array
 from ._types import CONTACT, DONE, FROZEN, Configuration  # noqa: F401  (hugger.planner.FROZEN as before)
-from .hand import Hand, _real_array
+from .hand import Hand
 from .trajectory import Trajectory
 from .world import Object
 
 
 def look_at(position: Any, target: Any, up: Any = None) -> np.ndarray:
     """A palm pose (4, 4) at ``position`` whose normal (z axis) points at ``target``."""
-    p = np.asarray(position, dtype=np.float64).reshape(3)
-    z = np.asarray(target, dtype=np.float64).reshape(3) - p
+    p = real_array("position", position).reshape(3)
+    z = real_array("target", target).reshape(3) - p
     length = float(_stable.norm(z))  # not np.linalg.norm, whose BLAS rounds per processor
     if not np.all(np.isfinite(z)) or length == 0:
         raise ValueError("position and target must be finite and distinct")
     z /= length
-    u = np.array([0.0, 0.0, 1.0]) if up is None else np.asarray(up, dtype=np.float64).reshape(3)
+    u = np.array([0.0, 0.0, 1.0]) if up is None else real_array("up", up).reshape(3)
     if not np.all(np.isfinite(u)):
         raise ValueError(f"up must be a finite 3-vector, got {u.tolist()}")
     if float(_stable.norm(np.cross(u, z))) < 1e-6:
@@ -125,8 +126,8 @@ class Planner:
             raise ValueError("record_object is for a skin without a mesh; with an Object the plan records that object")
         if obj is not None and not isinstance(obj, Object):
             raise ValueError(f"record_object must be a hugger.Object or None, got {type(obj).__name__}")
-        t = _real_array("target", target)
-        pose = _real_array("palm_pose", palm_pose)
+        t = real_array("target", target)
+        pose = real_array("palm_pose", palm_pose)
         # The engine checks the parameters (the rules too), the skin's name, T and the pose
         # (ValueError saying what is wrong), then plans Phase 1.
         params = _core.PlannerParams(step=step, epsilon=epsilon, contact_tolerance=contact_tolerance,

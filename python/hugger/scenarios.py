@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from . import _stable, objects
-from ._checks import positive
+from ._checks import positive, real_array
 from .hand import Hand
 from .planner import look_at
 from .world import Object
@@ -38,7 +38,7 @@ class Case:
 def safe_distance(obj: Object, hand: Hand, target: Any, margin: float = 0.005) -> float:
     """A palm distance from T at which the hand, in any orientation, clears the object by
     ``margin``: the object's radius about T plus the hand's radius about the palm centre."""
-    t = np.asarray(target, dtype=np.float64).reshape(3)
+    t = real_array("target", target).reshape(3)
     body = _stable.farthest(obj.vertices, t)
     hand_radius: float = max(math.hypot(hand.palm_radius, hand.reach) + hand.link_radius,
                               math.hypot(hand.palm_radius, hand.palm_thickness))
@@ -50,6 +50,8 @@ def safe_distance(obj: Object, hand: Hand, target: Any, margin: float = 0.005) -
 def _turn(turn_deg: Any) -> float:
     """A start's turn in degrees: a number from -180 to 180 (the one rule of start_pose and default_case)."""
     try:
+        if isinstance(turn_deg, (str, bytes, bool, np.bool_)):  # text and bools are not numbers here
+            raise TypeError
         x = float(turn_deg)
     except (TypeError, ValueError):
         raise ValueError(f"turn_deg (--turn) must be a number, got {turn_deg!r}") from None
@@ -63,9 +65,9 @@ def start_pose(obj: Object, hand: Hand, target: Any, direction: Any = (0.0, 0.0,
     """The palm at ``distance`` (default :func:`safe_distance`) from T along ``direction``, facing T,
     then turned by ``turn_deg`` (-180 to 180) about its own y axis so that Phase 1 has work to do."""
     turn_deg = _turn(turn_deg)
-    t = np.asarray(target, dtype=np.float64).reshape(3)
+    t = real_array("target", target).reshape(3)
     d = _unit("direction", direction)
-    dist = safe_distance(obj, hand, t) if distance is None else float(distance)
+    dist = safe_distance(obj, hand, t) if distance is None else positive("distance", distance)
     pose = look_at(t + dist * d, t)
     if turn_deg:
         c, s = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
@@ -200,8 +202,8 @@ def judged_case(spec: str | os.PathLike[str], hand: Hand | None = None, scale: f
 
 def _finite(name: str, value: Any) -> np.ndarray:
     try:
-        a = np.asarray(value, dtype=np.float64).reshape(3)
-    except (TypeError, ValueError):
+        a = real_array(name, value).reshape(3)
+    except ValueError:
         raise ValueError(f"{name} must be three numbers") from None
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be finite, got {a.tolist()}")

@@ -141,8 +141,8 @@ def approach_directions(count: int, pole: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
     """
     n = _direction_count("approaches", count)
     try:
-        p = np.asarray(pole, dtype=np.float64).reshape(3)
-    except (TypeError, ValueError):
+        p = _checks.real_array("pole", pole).reshape(3)
+    except ValueError:
         raise ValueError(f"pole must be a finite non-zero 3-vector, got {pole!r}") from None
     with np.errstate(over="ignore"):  # a length beyond ~1e154 overflows: refused below
         length = float(_stable.norm(p))
@@ -375,7 +375,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
     _checks.callback("score", score, "score(candidate) -> float")
     limit = _timeout(timeout)
     workers = _checks.workers("threads", threads)
-    t = interior_target(obj) if target is None else np.asarray(target, dtype=np.float64).reshape(3)
+    t = interior_target(obj) if target is None else _checks.real_array("target", target).reshape(3)
     if not np.all(np.isfinite(t)) or not bool(obj.inside(t[None])[0]):
         raise ValueError(f"target T {t.tolist()} is not inside the object")
     dirs = approach_directions(approaches, pole)

@@ -3,12 +3,13 @@ from __future__ import annotations
 
 import math
 import warnings
-from typing import Any, Callable, cast
+from typing import Any, cast
 
 import numpy as np
 
 from . import _core
-from .hand import _real_array, implausible_size
+from ._checks import real_array
+from .hand import implausible_size
 
 #: Vertex coordinates beyond this (m) are refused: no grasp scene spans a thousand kilometres, and
 #: the engine's tolerances are absolute (1e-7 m .. 1e-4 m), which float64 resolves only while
@@ -61,7 +62,7 @@ class Object:
     """
 
     def __init__(self, vertices: Any, faces: Any, *, warn_size: bool = True) -> None:
-        v = np.array(_real_array("vertices", vertices), dtype=np.float64)  # a private copy
+        v = np.array(real_array("vertices", vertices), dtype=np.float64)  # a private copy
         if v.ndim != 2 or v.shape[1] != 3:
             raise ValueError(f"vertices must be (V, 3), got shape {v.shape}")
         f = _face_indices(faces, len(v))
@@ -109,13 +110,13 @@ class Object:
     def inside(self, points: Any) -> np.ndarray:
         """Bool (n,): strictly inside O, for points (n, 3) or one point (3,); ``ValueError`` for a
         point that is not finite."""
-        p = np.asarray(points, dtype=np.float64)
+        p = real_array("points", points)
         return self._core.inside(p.reshape(-1, 3)).reshape(p.shape[:-1])
 
     def signed_distance(self, points: Any) -> np.ndarray:
         """Signed distance to the surface (negative inside) for points (n, 3) or (3,); ``ValueError``
         for a point that is not finite."""
-        p = np.asarray(points, dtype=np.float64)
+        p = real_array("points", points)
         return self._core.signed_distance(p.reshape(-1, 3)).reshape(p.shape[:-1])
 
     def closest(self, points: Any, max_distance: float = math.inf) -> dict[str, np.ndarray]:
@@ -124,7 +125,7 @@ class Object:
         Points farther than ``max_distance`` (m) from the surface may be skipped, which is faster:
         their distance is then +inf or -inf (the sign still says outside or inside), point and
         normal NaN, triangle -1. ``ValueError`` for a point that is not finite."""
-        p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        p = real_array("points", points).reshape(-1, 3)
         try:
             bound = float(max_distance)
         except (TypeError, ValueError):
@@ -134,13 +135,11 @@ class Object:
     def segment_distance(self, a: Any, b: Any) -> np.ndarray:
         """Signed distance (n,) of segments [a_i, b_i] to O (<= 0 when crossing the surface);
         ``ValueError`` for an end that is not finite."""
-        return self._core.segment_distance(np.asarray(a, dtype=np.float64).reshape(-1, 3),
-                                           np.asarray(b, dtype=np.float64).reshape(-1, 3))
+        return self._core.segment_distance(real_array("a", a).reshape(-1, 3), real_array("b", b).reshape(-1, 3))
 
     def section(self, origin: Any, u: Any, v: Any) -> list[np.ndarray]:
         """Planar section by origin + a u + b v (u, v orthonormal): closed loops (k, 2) in (a, b)."""
-        as3: Callable[[Any], np.ndarray] = lambda x: np.asarray(x, dtype=np.float64)  # noqa: E731
-        return self._core.section(as3(origin), as3(u), as3(v))
+        return self._core.section(real_array("origin", origin), real_array("u", u), real_array("v", v))
 
     def __repr__(self) -> str:
         ext = np.ptp(self.bounds, axis=0) * 1000
