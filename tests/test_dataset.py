@@ -213,6 +213,19 @@ def test_the_rule_set_is_honoured_from_the_cli_and_from_params(tmp_path):
         dataset.generate(["box"], tmp_path / "x", approaches=2, rules="papr")
 
 
+def test_the_skin_is_chosen_from_the_cli_and_recorded(tmp_path):
+    # hugger generate had no --skin: a dataset of the reference (mesh) skin needed Python
+    cli_out, api_out = tmp_path / "cli", tmp_path / "api"
+    assert main(["generate", "box", "--approaches", "2", "--skin", "mesh", "--out", str(cli_out), "--workers", "1"]) == 0
+    index = dataset.generate(["box"], api_out, approaches=2, params={"skin": "mesh"}, workers=1)
+    assert json.loads((cli_out / "index.json").read_text())["parameters"]["planner"]["skin"] == "mesh"
+    assert index["parameters"]["planner"]["skin"] == "mesh"
+    assert shard_bytes(cli_out) == shard_bytes(api_out)
+    ds = hugger.Dataset(cli_out)
+    assert json.loads(str(ds.shard(0)["params_json"]))["skin"] == "mesh"
+    ds.trajectory(0)  # re-planned with the recorded skin, it ends in the stored grasp (else it raises)
+
+
 def test_a_run_may_add_objects_to_a_dataset(reference, tmp_path):
     import shutil
 

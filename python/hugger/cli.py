@@ -854,6 +854,7 @@ def build_parser() -> _Parser:
     g = p.add_argument_group("planner (defaults as hugger.Planner; no timeout: datasets are deterministic)")
     _planner_params(g)
     g.add_argument("--rules", choices=RULES, default=None, help="Phase 2 rule set (default hug)")
+    g.add_argument("--skin", choices=SKINS, help=_SKIN_HELP)
     p.set_defaults(func=cmd_generate)
 
     p = sub.add_parser("export-mjcf", help="write the hand and object at a configuration as MJCF (hugger[physics])")
