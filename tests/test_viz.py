@@ -473,3 +473,22 @@ def test_animate_mp4(small_plan, tmp_path):
         return
     frames, seconds = imageio_ffmpeg.count_frames_and_secs(str(out))
     assert frames == 6 and seconds == pytest.approx(0.6, abs=0.05)
+
+
+def test_the_headline_gives_unequal_links_as_a_range():
+    # it gave their mean, a length no link of the hand has
+    from hugger.viz.figures import _headline
+
+    class Plan:
+        object_faces = np.zeros((12, 3))
+        status = "done"
+
+        def __init__(self, lengths):
+            self.hand = {"fingers": 3, "links": 2, "link_lengths": lengths, "link_radius": 0.004}
+
+        def __len__(self):
+            return 5
+
+    assert "3 fingers x 2 links (20-30 mm, radius 4.0 mm), 12 triangles, 5 configurations" in \
+        _headline(Plan([[0.02, 0.03]] * 3))
+    assert "(20 mm, radius" in _headline(Plan([[0.02, 0.02]] * 3))

@@ -112,8 +112,10 @@ def fig4(traj: Trajectory, path: str | os.PathLike[str] | None = None, *, dpi: f
 
 def _headline(traj: Trajectory) -> str:
     h = traj.hand
-    ll = np.asarray(h["link_lengths"], dtype=float)
-    return (f"{h['fingers']} fingers x {h['links']} links ({ll.mean() * 1000:.0f} mm, radius "
+    ll = np.asarray(h["link_lengths"], dtype=float) * 1000
+    lo, hi = round(float(ll.min())), round(float(ll.max()))  # a range for unequal links, not their mean
+    lengths = f"{lo} mm" if lo == hi else f"{lo}-{hi} mm"
+    return (f"{h['fingers']} fingers x {h['links']} links ({lengths}, radius "
             f"{float(h['link_radius']) * 1000:.1f} mm), {len(traj.object_faces)} triangles, "
             f"{len(traj)} configurations, status {traj.status}")
 
