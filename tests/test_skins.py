@@ -190,6 +190,23 @@ def test_a_mesh_skin_records_its_object_as_the_mesh_planner_does(hand):
     assert not hugger.Planner(hand, hugger._core.SimulatedWorld(obj._core), [0, 0, 0], start()).plan().has_object
 
 
+def test_plan_many_takes_record_object_as_the_planner_does(hand):
+    # plan_many had no record_object: a batch through a skin without a mesh made object-free plans
+    obj = hugger.objects.sphere(0.04, subdivisions=3)
+    skin = Ball([0, 0, 0], 0.04)
+    one = hugger.Planner(hand, skin, [0, 0, 0], start(), record_object=obj).plan()
+    many = hugger.plan_many([{"obj": skin, "target": [0, 0, 0], "palm_pose": start(), "record_object": obj},
+                             (hand, skin, [0, 0, 0], start(), {"record_object": obj})], hand=hand, threads=1)
+    for traj in many:
+        assert traj.has_object and np.array_equal(traj.object_faces, obj.faces)
+        assert np.array_equal(traj.joints, one.joints)
+    assert hugger.plan_many([(hand, skin, [0, 0, 0], start())], record_object=obj, threads=1)[0].has_object
+    with pytest.raises(ValueError, match="case 0: record_object must be a hugger.Object"):
+        hugger.plan_many([(hand, skin, [0, 0, 0], start(), {"record_object": obj.faces})])
+    with pytest.raises(ValueError, match="case 0: record_object must be .* for a skin without a mesh"):
+        hugger.plan_many([(hand, obj, [0, 0, 0], start(), {"record_object": obj})])
+
+
 def test_object_free_plan_saves_and_hugger_info_reads_it(hand, tmp_path):
     traj = hugger.Planner(hand, Ball([0, 0, 0], 0.04), [0, 0, 0], start()).plan()
     path = tmp_path / "free.npz"

@@ -59,13 +59,13 @@ def _job(index: int, case: Any, hand: Hand | None, params: dict[str, Any], timeo
     object with ``obj``, ``target`` and ``palm_pose`` attributes (like ``hugger.scenarios.Case``)."""
     own: dict[str, Any] = {}
     if isinstance(case, Mapping):
-        unknown = set(case) - {"hand", "obj", "target", "palm_pose", "timeout", *PARAMS}
+        unknown = set(case) - {"hand", "obj", "target", "palm_pose", "timeout", "record_object", *PARAMS}
         if unknown:
             hint = " (the object's key is 'obj')" if "object" in unknown else ""
             raise ValueError(f"case {index}: unknown keys {sorted(unknown)}{hint}")
         c_hand, obj = case.get("hand", hand), case.get("obj")
         target, pose = case.get("target"), case.get("palm_pose")
-        own = {k: case[k] for k in PARAMS if k in case}
+        own = {k: case[k] for k in (*PARAMS, "record_object") if k in case}
         if "timeout" in case:
             timeout = _timeout(case["timeout"])
     elif isinstance(case, tuple):
@@ -88,8 +88,13 @@ def _job(index: int, case: Any, hand: Hand | None, params: dict[str, Any], timeo
     if obj is None or target is None or pose is None:
         raise ValueError(f"case {index}: obj, target and palm_pose are all required")
     try:  # as the planner would refuse them, before anything is planned
-        check_params({**params, **own}, "parameters", hand=c_hand if isinstance(c_hand, Hand) else None)
+        check_params({**params, **own}, "parameters", also=("record_object",),
+                     hand=c_hand if isinstance(c_hand, Hand) else None)
         _core.check_pose(np.asarray(pose, dtype=np.float64))
+        record = {**params, **own}.get("record_object")
+        if record is not None and (not isinstance(record, Object) or isinstance(obj, Object)):
+            raise ValueError("record_object must be a hugger.Object, for a skin without a mesh (a plan of an "
+                             "Object records that object)")
     except (TypeError, ValueError) as exc:
         raise ValueError(f"case {index}: {exc}") from None
     return _Job(c_hand, obj, target, pose, {**params, **own}, timeout)
@@ -154,7 +159,8 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
 
     Each case is a mapping with ``hand`` (or the ``hand`` argument), ``obj``,
     ``target``, ``palm_pose`` and optionally ``step``, ``epsilon``, ``contact_tolerance``,
-    ``max_iterations``, ``rules``, ``skin`` and ``timeout``; or a tuple ``(hand, obj, target, palm_pose[, params])``;
+    ``max_iterations``, ``rules``, ``skin``, ``timeout`` and ``record_object`` (the mesh a plan
+    through a skin without one records, as :class:`Planner` takes it); or a tuple ``(hand, obj, target, palm_pose[, params])``;
     or an object with ``obj``, ``target`` and ``palm_pose`` attributes such as
     ``hugger.scenarios.Case``. ``**params`` and ``timeout`` (seconds per plan's Phase 2, see
     :meth:`Planner.plan`) apply to every case unless the case gives its own.
@@ -180,7 +186,7 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
     _checks.callback("progress", progress, "progress(done, total)")
     if hand is not None and not isinstance(hand, Hand):
         raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
-    check_params(params)
+    check_params(params, also=("record_object",))
     if isinstance(cases, (str, bytes)) or not isinstance(cases, Iterable):
         raise ValueError(f"cases must be an iterable of cases, got {type(cases).__name__}")
     limit = _timeout(timeout)
