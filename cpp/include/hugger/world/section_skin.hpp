@@ -237,7 +237,7 @@ class PlaneRegion {
   /// How near segment [a, b] comes to the boundary: within `distance` of a piece; apart from
   /// the boundary's box or hull by more (so outside them: outside R); or beyond `distance` of
   /// every piece, found by the tree. A piece found within is kept as a hint for the next query
-  /// starting near a (hints_), which asks it and its successor before the tree: taken where it
+  /// starting near a (hints_), which asks it and its two successors before the tree: taken where it
   /// lies within `distance` less the rounding margin of the tree's node bounds (Query::slack),
   /// so that the walk would have reached it. (At coordinates of a metre or more that margin
   /// exceeds clear()'s touching distance, and clear() takes no hint: the same answers, slower.)
