@@ -1,6 +1,7 @@
 """The planner: step/plan, parameters, refusals of bad targets and starts, timeouts, determinism, threads."""
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
@@ -452,6 +453,69 @@ def test_an_interrupted_plan_goes_on_to_the_same_plan(hand, sphere):
     t = p.trajectory()
     assert t.status == whole.status and np.array_equal(t.joints, whole.joints)
     assert np.array_equal(t.palm_pose, whole.palm_pose) and np.array_equal(t.angles, whole.angles)
+
+
+def test_ctrl_c_while_stepping_loses_no_configuration(hand, sphere):
+    # SIGINT (Ctrl-C) lands while step() plans, many times: each KeyboardInterrupt caught, the
+    # stepping goes on with the next configuration, none lost (Python raised the exception as
+    # the engine's call returned, and the configuration it had made went with it: a jump)
+    import signal
+
+    kw = dict(skin="mesh", step=2e-5, contact_tolerance=1e-5)
+    whole = hugger.Planner(hand, sphere, [0, 0, 0], start(), **kw).plan()
+    p = hugger.Planner(hand, sphere, [0, 0, 0], start(), **kw)
+    stop = threading.Event()
+
+    def press():
+        while not stop.wait(0.002):
+            os.kill(os.getpid(), signal.SIGINT)
+
+    got, interrupts = [], 0
+    presser = threading.Thread(target=press)
+    presser.start()
+    try:
+        while True:
+            try:
+                c = p.step()
+            except KeyboardInterrupt:
+                interrupts += 1
+                if interrupts >= 30:
+                    stop.set()
+                continue
+            if c is None:
+                break
+            got.append(c)
+    finally:
+        stop.set()
+        presser.join()
+        with contextlib.suppress(KeyboardInterrupt):
+            time.sleep(0.01)  # a signal sent as the presser stopped is taken here
+    assert interrupts >= 30
+    assert [c.iteration for c in got] == list(range(len(whole)))
+    assert np.array_equal(np.stack([c.joints for c in got]), whole.joints)
+    assert np.array_equal(p.trajectory().joints, whole.joints)
+
+
+def test_a_configuration_whose_delivery_was_cut_short_is_handed_out_next(hand, sphere):
+    # the same, deterministic: the exception raised after the engine's call returned
+    p = hugger.Planner(hand, sphere, [0, 0, 0], start(), skin="mesh")
+    first = [p.step() for _ in range(3)]
+    real = p._core
+
+    class CutShort:
+        def __getattr__(self, name):
+            return getattr(real, name)
+
+        def configuration(self, k):
+            real.configuration(k)
+            raise KeyboardInterrupt
+
+    p._core = CutShort()
+    with pytest.raises(KeyboardInterrupt):
+        p.step()
+    p._core = real
+    rest = list(p)
+    assert [c.iteration for c in first + rest] == list(range(len(p.trajectory())))
 
 
 LONG_PLAN = """

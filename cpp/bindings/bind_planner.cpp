@@ -254,6 +254,17 @@ void bind_planner(py::module_& m) {
           "Advance by one configuration; a Configuration, or None when the plan has ended. An exception "
           "raised by the skin propagates unchanged and ends the plan (status 'error').")
       .def(
+          "configuration",
+          [](PyPlanner& p, std::size_t k) -> std::optional<Configuration> {
+            Busy busy(p);
+            if (p.failed) return std::nullopt;
+            py::gil_scoped_release release;
+            return guarded(p, [&] { return p.planner->configuration(k); });
+          },
+          py::arg("k"),
+          "Configuration k (from 0, C_init), planning on until it exists (as step() does); None when the plan "
+          "ends before it. step() goes on after it.")
+      .def(
           "plan",
           [](PyPlanner& p, const py::object& timeout) {
             const double limit = timeout.is_none() ? kInf : check_timeout(real_number(timeout, "timeout"));

@@ -374,6 +374,10 @@ class Planner:
         """
         Run to the end (GIL released); returns the status. With ``timeout`` (seconds, positive finite) the plan stops with status 'timeout' once that much wall-clock time has passed. An exception raised by the skin propagates unchanged and ends the plan (status 'error'). A signal's exception (Ctrl-C: KeyboardInterrupt) or interrupt() stops it between iterations, still running: a later call goes on (one raised inside a Python skin's callback ends it, status 'error', as any exception of the skin).
         """
+    def configuration(self, k: typing.SupportsInt | typing.SupportsIndex) -> Configuration | None:
+        """
+        Configuration k (from 0, C_init), planning on until it exists (as step() does); None when the plan ends before it. step() goes on after it.
+        """
     def interrupt(self) -> None:
         """
         Ask a plan() running in another thread to stop between iterations, raising KeyboardInterrupt there (the plan still running). Without one running, the next plan() stops at once.

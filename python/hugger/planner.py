@@ -175,14 +175,22 @@ class Planner:
         return _fields(self._core.stats)
 
     def step(self) -> Configuration | None:
-        """The next configuration (C_init first), or None when the plan has ended."""
-        c = self._core.step()
+        """The next configuration (C_init first), or None when the plan has ended. A Ctrl-C
+        (KeyboardInterrupt) during a step loses nothing: the next call hands out the configuration
+        that step made."""
+        # By index while steps are counted: a configuration whose delivery a signal's exception cut
+        # short (Python raises it as the engine's call returns) is handed out by the next call.
+        k = self._emitted
+        c = self._core.step() if k is None else self._core.configuration(k)
         if c is None:
             return None
+        out = Configuration(palm_pose=c.palm_pose, joints=c.joints, angles=c.angles, tip_state=c.tip_state,
+                            phase=c.phase, iteration=c.iteration)
         if self._emitted is not None:
-            self._emitted = c.iteration + 1
-        return Configuration(palm_pose=c.palm_pose, joints=c.joints, angles=c.angles, tip_state=c.tip_state,
-                             phase=c.phase, iteration=c.iteration)
+            # Last, after the only call that may raise a signal's exception: once counted, the
+            # configuration is returned (no pending signal is taken between here and the caller).
+            self._emitted = out.iteration + 1
+        return out
 
     def __iter__(self) -> Iterator[Configuration]:
         while (c := self.step()) is not None:

@@ -1004,13 +1004,15 @@ void Planner::phase2_iteration() {
     status_ = Status::kMaxIterations;
 }
 
-std::optional<Configuration> Planner::step() {
-  if (next_ < history_.size()) return history_[next_++];
-  while (next_ >= history_.size()) {  // an iteration that ends the plan may emit nothing
+std::optional<Configuration> Planner::step() { return configuration(next_); }
+
+std::optional<Configuration> Planner::configuration(std::size_t k) {
+  while (k >= history_.size()) {  // an iteration that ends the plan may emit nothing
     if (status_ != Status::kRunning) return std::nullopt;
     phase2_iteration();
   }
-  return history_[next_++];
+  next_ = std::max(next_, k + 1);
+  return history_[k];
 }
 
 bool Planner::advance() {

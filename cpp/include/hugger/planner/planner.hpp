@@ -106,6 +106,10 @@ class Planner {
 
   /// The next configuration, or nothing when the plan has ended.
   std::optional<Configuration> step();
+  /// Configuration k of the plan, planning on until it exists; nothing when the plan ends before
+  /// it. step() goes on after it. (The Python binding hands out configurations by their index, so
+  /// that one whose delivery a signal's exception cut short is handed out again.)
+  std::optional<Configuration> configuration(std::size_t k);
   /// Runs one Phase 2 iteration and appends its configurations to history() (step() hands them
   /// out later): one, several for the approach before the first contact (each palm step <= s),
   /// none for an iteration that ends the plan because nothing could move. Returns false, doing
