@@ -424,7 +424,8 @@ def test_analyze_real_plan(reference_plan):
     traj, _ = reference_plan
     r = A.analyze(traj)
     assert set(r) == {"contacts", "links_in_contact", "links", "palm_contact", "per_finger_contacts",
-                      "wrap_angle_deg", "force_closure", "epsilon", "volume", "mu", "torque_scale_m"}
+                      "wrap_angle_deg", "force_closure", "epsilon", "volume", "mu", "torque_scale_m",
+                      "penetration_m"}
     assert json.loads(json.dumps(r)) == r  # plain JSON types
     s = traj.summary()
     assert r["links_in_contact"] == s["links_in_contact"] and r["links"] == s["links"] == 25
@@ -434,6 +435,7 @@ def test_analyze_real_plan(reference_plan):
     assert r["force_closure"] is True and r["epsilon"] > 0 and r["volume"] > 0
     assert r["mu"] == 0.5
     assert r["torque_scale_m"] == pytest.approx(0.04, rel=1e-6)  # the sphere's radius about T
+    assert 0.0 <= r["penetration_m"] <= 5e-5  # the plan's own contacts: within the checker's tolerance
     assert A.analyze(traj) == r  # deterministic
 
 

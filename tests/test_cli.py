@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import io
 import json
+import re
 import os
 import subprocess
 import sys
@@ -228,6 +229,22 @@ def test_info_shows_a_file_s_control_characters_as_escapes(sphere_file, tmp_path
     code, out, _ = run(["info", odd], capsys)
     assert code == 0 and "\x1b" not in out and "\x07" not in out
     assert "\\x1b]0;title\\x07\\x1b[2Jball: " in out
+
+
+def test_info_warns_of_a_hand_sunk_into_a_rescaled_object(sphere_file, tmp_path, capsys):
+    # the object of a file scaled by 1000 (millimetres read as metres): every link lies 40 m inside
+    # it, and the counts alone called it a perfect grasp
+    import dataclasses
+
+    traj = hugger.Trajectory.load(sphere_file)
+    code, out, err = run(["info", sphere_file, "--json"], capsys)
+    assert code == 0 and err == "" and json.loads(out)["penetration_m"] <= 5e-5
+    mm = tmp_path / "mm.npz"
+    dataclasses.replace(traj, object_vertices=traj.object_vertices * 1000).save(mm)
+    code, out, err = run(["info", mm, "--json"], capsys)
+    assert code == 0 and json.loads(out)["penetration_m"] > 30
+    assert "the object is 80 m across, implausibly large" in err
+    assert re.search(r"warning: the hand lies [\d.e+]+ mm inside the object at the final configuration", err)
 
 
 def test_info_reports_the_file(sphere_file, capsys):

@@ -580,7 +580,10 @@ def analyze(traj: Any, k: int = -1, mu: float = 0.5, distance: float = CONTACT_D
     ``palm_contact``, ``per_finger_contacts`` (links in contact per finger), ``wrap_angle_deg``
     (per finger, :func:`wrap_angle`), ``force_closure``, ``epsilon``, ``volume``
     (:func:`grasp_quality` with torques about T, torque scale the object's largest distance
-    from T), ``mu``, ``torque_scale_m``. ``volume=False`` skips the GWS volume (reported as 0),
+    from T), ``mu``, ``torque_scale_m``, ``penetration_m`` (how deep the hand's surface lies
+    inside the object at its deepest contact, 0 when it does not: a contact counts however deep,
+    so a hand sunk into an object, of another tool's plan or one rescaled since, would otherwise
+    look like a firm grasp). ``volume=False`` skips the GWS volume (reported as 0),
     the costly part (see :func:`grasp_quality`).
     """
     k = _trajectory_index(traj, k)
@@ -601,4 +604,5 @@ def analyze(traj: Any, k: int = -1, mu: float = 0.5, distance: float = CONTACT_D
         "volume": q.volume,
         "mu": float(mu),
         "torque_scale_m": q.torque_scale,
+        "penetration_m": float(max(0.0, -found.gap.min())) if len(found) else 0.0,
     }

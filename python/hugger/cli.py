@@ -251,7 +251,7 @@ _ANALYSIS_KEYS = (("palm_contact", "palm_contact"), ("links_in_contact", "links_
                   ("contacts", "contacts"), ("force_closure", "force_closure"),
                   ("ferrari_canny_epsilon", "epsilon"), ("wrench_space_volume", "volume"),
                   ("per_finger_contacts", "per_finger_contacts"), ("wrap_angle_deg", "wrap_angle_deg"),
-                  ("mu", "mu"))
+                  ("mu", "mu"), ("penetration_m", "penetration_m"))
 
 
 def _report(traj: Trajectory, plan_time: float | None = None, obj: Object | None = None) -> dict[str, Any]:
@@ -498,6 +498,11 @@ def _object_info(traj: Trajectory, obj: Object | None) -> dict[str, Any]:
 
 
 def cmd_info(args: argparse.Namespace) -> int:
+    import warnings
+
+    import numpy as np
+
+    from .hand import implausible_size
     from .trajectory import FORMAT_VERSION
 
     traj = _load(args.file)
@@ -505,6 +510,16 @@ def cmd_info(args: argparse.Namespace) -> int:
     obj = traj.object() if traj.has_object else None
     if obj is not None:
         report = _report(traj, obj=obj)
+        # A file's grasp judged as it stands: one the planner did not make (or whose object was
+        # rescaled since) may sink the hand into the object, which the counts above do not show.
+        size = implausible_size("the object", float(np.ptp(obj.bounds, axis=0).max()))
+        if size is not None:
+            warnings.warn(size, UserWarning, stacklevel=1)
+        allowed = max(0.02 * float(traj.hand["link_radius"]), 5e-5)  # the checker's collision tolerance
+        if report["penetration_m"] > allowed:
+            warnings.warn(f"the hand lies {1000 * report['penetration_m']:.3g} mm inside the object at the final "
+                          f"configuration (beyond max(2% of the link radius, 0.05 mm)): not a grasp this planner "
+                          f"makes; the contacts and the quality count it as touching", UserWarning, stacklevel=1)
     else:  # planned with a skin that has no mesh: the motion only
         report = {"status": traj.status, "configurations": len(traj), "phase1_configurations": int((traj.phase == 1).sum())}
     if args.json:
