@@ -201,6 +201,11 @@ def _edit(key, fn):
     (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "palm_radius": 0}))), "palm_radius"),
     (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "links": 4}))), r"\(5, 4\)"),
     (_edit("params_json", lambda x: np.array("[1, 2]")), "params_json"),
+    # angles and joints that disagree: the analysis reads one, the physics test the other
+    (_edit("angles", np.degrees), "angles and joints disagree at configuration"),
+    (_edit("joints", lambda x: x + 1e-4), "angles and joints disagree at configuration 0"),
+    (_edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "link_lengths": [[0.025] * 5] * 5}))),
+     r"angles and joints disagree .*\(angles in degrees, or joints of another hand\?\)"),
 ])
 def test_wrong_dtypes_shapes_and_values_are_refused(saved, tmp_path, edit, match):
     _, _, arrays = saved
@@ -216,12 +221,21 @@ def test_half_precision_arrays_load_without_a_warning(saved, tmp_path):
 
 
 def test_a_hand_of_implausible_size_is_not_warned_of_again_on_loading(saved, tmp_path):
-    # (warnings are errors in the tests) the file loads as it is; its joints no longer match its
-    # hand, which the loader does not check (the checker does)
+    # (warnings are errors in the tests) the whole scene scaled by 45, links of 0.9 m: the file
+    # loads as it is, its size warned of when it was made
     _, _, arrays = saved
-    big = _edit("hand_json", lambda x: np.array(json.dumps({**json.loads(str(x)), "link_lengths": [[0.9] * 5] * 5})))
-    traj = hugger.Trajectory.load(_write(tmp_path, big(dict(arrays))))
-    assert traj.hand["link_lengths"][0][0] == 0.9
+    big = dict(arrays)
+    hand = json.loads(str(big["hand_json"]))
+    for key in ("link_radius", "palm_radius", "palm_thickness"):
+        hand[key] *= 45
+    hand["link_lengths"] = (45 * np.asarray(hand["link_lengths"])).tolist()
+    big["hand_json"] = np.array(json.dumps(hand))
+    pose = big["palm_pose"].copy()
+    pose[:, :3, 3] *= 45
+    big.update(palm_pose=pose, joints=45 * big["joints"], target=45 * big["target"],
+               object_vertices=45 * big["object_vertices"])
+    traj = hugger.Trajectory.load(_write(tmp_path, big))
+    assert traj.hand["link_lengths"][0][0] == pytest.approx(0.9)
 
 
 def test_pickled_objects_are_refused_not_unpickled(saved, tmp_path):

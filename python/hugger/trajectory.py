@@ -236,7 +236,7 @@ class Trajectory:
         for name, count, limit in (("fingers", m, MAX_FINGERS), ("links", n, MAX_LINKS)):
             if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= limit:
                 raise ValueError(f"{source}: hand_json {name} must be a whole number in 1..{limit}, got {count!r}")
-        _check_hand(hand, m, n, source)
+        model = _check_hand(hand, m, n, source)
         k = arrays["palm_pose"].shape[0]
         if k < 1:
             raise ValueError(f"{source}: {EMPTY}")
@@ -263,6 +263,7 @@ class Trajectory:
                 _core.check_pose(pose, f"palm_pose[{i}]")
             except ValueError as exc:
                 raise ValueError(f"{source}: {exc}") from None
+        _check_angles(model, arrays["palm_pose"], arrays["angles"], arrays["joints"], source)
         arrays["tip_state"] = arrays["tip_state"].astype(np.int8)
         arrays["phase"] = arrays["phase"].astype(np.int8)
         arrays["object_faces"] = arrays["object_faces"].astype(np.int64)
@@ -335,7 +336,7 @@ class Trajectory:
         }
 
 
-def _check_hand(hand: dict[str, Any], m: int, n: int, source: str) -> None:
+def _check_hand(hand: dict[str, Any], m: int, n: int, source: str) -> Hand:
     """``hand_json`` holds its link lengths as the format says (an M x N list, which tools read as
     such) and describes a hand :meth:`hugger.Hand.from_dict` takes (the hand's rules), of the
     arrays' M fingers and N links. The hand's size is not warned of again (it was when made)."""
@@ -348,6 +349,24 @@ def _check_hand(hand: dict[str, Any], m: int, n: int, source: str) -> None:
     try:  # (M and N are its own fingers and links: the hand it describes has them)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)
-            Hand.from_dict(hand)
+            return Hand.from_dict(hand)
     except (ValueError, TypeError, OverflowError, RecursionError) as exc:
         raise ValueError(f"{source}: hand_json is not a valid hand: {exc}") from None
+
+
+#: How many configurations, evenly spread from the first to the last, Trajectory.load checks
+#: the angles of against the joints (every one would cost a forward kinematics each: 8 us).
+ANGLE_SAMPLES = 64
+
+
+def _check_angles(hand: Hand, poses: np.ndarray, angles: np.ndarray, joints: np.ndarray, source: str) -> None:
+    """The joint positions of the file's angles (the hand's forward kinematics) are its joints, at
+    ANGLE_SAMPLES configurations: tools read one or the other (the analysis the joints, the
+    physics test and the MJCF export the angles), and files that disagree (angles in degrees,
+    joints of another hand) were judged one way by one and another by the other."""
+    k = len(poses)
+    for i in np.unique(np.linspace(0, k - 1, min(k, ANGLE_SAMPLES)).round().astype(int)):
+        error = float(np.abs(hand.forward(poses[i], angles[i]) - joints[i]).max())
+        if not error <= 1e-6 + 1e-9 * float(np.abs(joints[i]).max()):
+            raise ValueError(f"{source}: angles and joints disagree at configuration {i}: the joints the angles "
+                             f"give are {error:.3g} m from those stored (angles in degrees, or joints of another hand?)")
