@@ -96,6 +96,16 @@ def test_plan_implausible_size_with_force(tmp_path, capsys):
     assert "hugger: warning: " in err and "--force" in err and (tmp_path / "a.npz").is_file()
 
 
+def test_a_hand_in_millimetres_is_refused_unless_forced(tmp_path, capsys):
+    # a mesh of implausible size was refused, a hand only warned of (and planned: epsilon 0.004)
+    code, _, err = run(["plan", "sphere", "--link-length", "20", "--out", tmp_path / "a.npz"], capsys)
+    assert code == 2 and err.startswith("hugger: error: the hand is 100 m across, implausibly large")
+    assert "--force" in err and not (tmp_path / "a.npz").exists()
+    code, _, err = run(["plan", "sphere", "--link-length", "20", "--out", tmp_path / "a.npz", "--force",
+                        "--max-iterations", "5"], capsys)
+    assert code == 0 and "hugger: warning: the hand is 100 m across" in err
+
+
 def test_scale_is_refused_for_a_builtin(tmp_path, capsys):
     code, _, err = run(["plan", "sphere", "--scale", "0.001", "--out", tmp_path / "a.npz"], capsys)
     assert code == 2 and "--scale applies to mesh files only" in err and not (tmp_path / "a.npz").exists()
@@ -564,6 +574,19 @@ def test_plan_timeout_gives_a_partial_plan(tmp_path, capsys, checker):
     assert_checked(checker, out)
     code, _, err = run(["plan", "curvy", "--out", out, "--timeout", "-1"], capsys)
     assert code == 2 and "timeout" in err
+
+
+def test_validate_says_when_the_plan_did_not_finish(tmp_path, sphere_file, capsys, monkeypatch):
+    # a timed-out (or running) plan's last configuration is judged as any: said so, not silently
+    from hugger import physics
+
+    monkeypatch.setattr(physics, "validate", lambda traj: {"held": False, "directions": {}})
+    out = tmp_path / "t.npz"
+    assert run(["plan", "curvy", "--out", out, "--timeout", "1e-6"], capsys)[0] == 0
+    code, _, err = run(["validate", out], capsys)
+    assert code == 1 and "hugger: note: the plan did not finish (status timeout); its last configuration is judged" in err
+    code, _, err = run(["validate", sphere_file], capsys)
+    assert "did not finish" not in err
 
 
 def test_render_draws_palm_contacts_only_where_the_palm_does_not_hide_them(sphere_file):

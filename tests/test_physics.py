@@ -330,6 +330,31 @@ def test_baseline_rejects_bad_starts(hand):
         baselines.plan_baseline(hand, obj, [0, 0, 0], hugger.look_at([0, 0, 0.05], [0, 0, 0]))
 
 
+def test_hugger_baseline_writes_the_same_file_twice_and_refuses_bad_input(tmp_path, capsys):
+    # python -m hugger.baselines printed tracebacks for bad input and wrote its wall-clock times into
+    # the file (two runs differed); it is now hugger baseline, with the CLI's errors and outputs
+    from hugger.cli import main
+
+    out = tmp_path / "base.npz"
+    assert main(["baseline", "sphere", "--out", str(out), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["status"] == "done" and report["plan_time_s"] > 0 and report["penetration_m"] <= 5e-5
+    first = out.read_bytes()
+    assert baselines.main(["--object", "sphere", "--out", str(out), "--json"]) == 0
+    capsys.readouterr()
+    traj = hugger.Trajectory.load(out)
+    assert out.read_bytes() == first  # the same command, the same bytes (the provenance names the command)
+    assert "plan_time_s" not in traj.stats and traj.stats["collision_queries"] > 0
+    assert traj.provenance["object"] == "sphere" and traj.provenance["command"][:3] == ["hugger", "baseline", "sphere"]
+    for argv, message in ((["--object", "nope"], "'nope' is neither a built-in object"),
+                          (["--object", "sphere", "--out", str(tmp_path / "no" / "x.npz")], "no such directory"),
+                          (["--object", "sphere", "--out", str(tmp_path / "x.txt")], "--out must end in .npz"),
+                          (["--object"], "--object needs")):
+        assert baselines.main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("hugger: error: ") and message in err and len(err.strip().splitlines()) == 1
+
+
 def test_compare_script_writes_a_table(tmp_path, capsys):
     pytest.importorskip("scipy", reason="the comparison's grasp quality needs scipy (pip install 'hugger[analysis]')")
     mod = bench_module("compare_baseline")

@@ -23,19 +23,20 @@ queries; building and compiling the MuJoCo model is ``setup_time_s``).
 MuJoCo is imported when :func:`plan_baseline` is first called (extra: ``pip install 'hugger[physics]'``),
 so importing this module needs only numpy.
 
-    python -m hugger.baselines [--object sphere] [--out FILE.npz] [--validate]
+    hugger baseline OBJECT [--out FILE.npz] [--validate] [--json]
+    python -m hugger.baselines [--object sphere] [--out FILE.npz] [--validate] [--json]   (the same)
 """
 from __future__ import annotations
 
-import argparse
 import json
 import math
+import sys
 import time
 from typing import Any, Callable, cast
 
 import numpy as np
 
-from . import physics, scenarios
+from . import physics
 from ._rotation import axis_angle, quaternion_wxyz
 from ._types import CONTACT, DONE
 from .hand import Hand
@@ -281,21 +282,20 @@ def plan_baseline(hand: Hand, obj: Object, target: Any, palm_pose: Any, step: fl
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--object", default="sphere", help="a built-in object name or a mesh file (default sphere)")
-    ap.add_argument("--out", default=None, help="write the baseline trajectory (.npz) here")
-    ap.add_argument("--validate", action="store_true", help="run the six-direction physics check")
-    args = ap.parse_args(argv)
-    hand = Hand()
-    case = scenarios.default_case(args.object, hand)  # the start the hugger command plans from
-    traj = plan_baseline(hand, case.obj, case.target, case.palm_pose)
-    if args.out:
-        traj.save(args.out)
-    print(json.dumps({**traj.summary(), **traj.stats}, indent=2))
-    if args.validate:
-        res = physics.validate(traj)
-        print(json.dumps({"held": res["held"], "directions": res["directions"]}, indent=2))
-    return 0
+    """``python -m hugger.baselines [--object NAME] [options of hugger baseline]``: ``hugger
+    baseline NAME`` (sphere by default), whose errors, outputs and exit status it shares."""
+    from .cli import main as cli_main
+
+    args = list(sys.argv[1:] if argv is None else argv)
+    name = "sphere"
+    if "--object" in args:
+        i = args.index("--object")
+        if i + 1 >= len(args):
+            print("hugger: error: --object needs a built-in object name or a mesh file", file=sys.stderr)
+            return 2
+        name = args[i + 1]
+        del args[i:i + 2]
+    return cli_main(["baseline", name, *args])
 
 
 if __name__ == "__main__":

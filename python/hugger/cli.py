@@ -14,6 +14,8 @@
     hugger hands                                  the preset hands (plan ... --hand PRESET|FILE)
     hugger simulate OBJECT [--push N] [--offset DX DY DZ] [--open-loop] [--json]
                                                   closed-loop hugging in MuJoCo (extra: physics)
+    hugger baseline OBJECT [--out base.npz] [--validate] [--json]
+                                                  the close-until-contact baseline (extra: physics)
 
 Exit status: 0 success, 2 bad input or a missing optional dependency (one line on standard
 error, no traceback), 1 an internal error (or, for ``validate``, a grasp that is not held).
@@ -134,7 +136,8 @@ def _case_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--scale", type=float, help="multiply a mesh file's coordinates (0.001 for millimetres; "
                                                "not for built-in objects)")
     g.add_argument("--force", action="store_true",
-                   help="plan even when the object's size is implausible for a hand (millimetres read as metres)")
+                   help="plan even when the object's or the hand's size is implausible for a grasp "
+                        "(millimetres read as metres)")
 
 
 def _hand(args: argparse.Namespace) -> Hand:
@@ -175,7 +178,20 @@ def _hand(args: argparse.Namespace) -> Hand:
     shape: dict[str, Any] = {k: getattr(args, k) if k in given else v for k, v in defaults.items()}
     for k, v in shape.items():  # as parsed with these defaults: the file's provenance records them
         setattr(args, k, v)
-    return hugger.Hand(**shape)
+    if not hasattr(args, "force"):
+        return hugger.Hand(**shape)
+    # A hand of implausible size is refused unless --force, as a mesh is (millimetres read as metres).
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        hand = hugger.Hand(**shape)
+    for w in caught:
+        text = str(w.message)
+        if text.startswith("the hand is") and "implausibly" in text and not args.force:
+            raise UsageError(f"{text}; refused (give its sizes in metres, or --force to plan it anyway)")
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return hand
 
 
 def _params(args: argparse.Namespace) -> dict[str, Any]:
@@ -569,6 +585,46 @@ def _moved(r: dict[str, Any]) -> str:
             f"{'held' if r['held'] else 'LOST'}")
 
 
+def _hold_test(traj: Trajectory, as_json: bool) -> dict[str, Any]:
+    """The six-direction hold test of the final grasp, printed as a table unless ``as_json``."""
+    from . import physics
+
+    with Progress("simulating"):
+        result = physics.validate(traj)
+    if not as_json:
+        for d, r in result["directions"].items():
+            print(f"{d:3s} {_moved(r)}")
+        print(f"verdict: {'held' if result['held'] else 'not held'}")
+    return result
+
+
+def cmd_baseline(args: argparse.Namespace) -> int:
+    """The close-until-contact baseline from the start ``hugger plan`` takes (the default hand)."""
+    import dataclasses
+
+    from .baselines import plan_baseline
+    from .hand import Hand
+
+    out = _out_path(args.out, (".npz",)) if args.out is not None else None
+    hand = Hand()
+    case = _case(args, hand)
+    traj = plan_baseline(hand, case.obj, case.target, case.palm_pose)
+    stats = traj.stats
+    if out is not None:
+        # The file as the planner's files are: the same input writes the same bytes (the
+        # timings, which the report below gives, are left out of its stats).
+        kept = {k: v for k, v in stats.items() if not k.endswith("_time_s")}
+        dataclasses.replace(traj, stats_json=json.dumps(kept)).with_provenance(**_provenance(args)).save(out)
+    report = {"object": case.name, "out": None if out is None else str(out), **_report(traj, obj=case.obj),
+              "setup_time_s": round(stats["setup_time_s"], 6), "plan_time_s": round(stats["plan_time_s"], 6)}
+    if not args.json:
+        _print_table(report)
+    held = _hold_test(traj, args.json) if args.validate else None
+    if args.json:
+        print(json.dumps({**report, **({"validate": held} if held is not None else {})}))
+    return EXIT_OK
+
+
 def cmd_validate(args: argparse.Namespace) -> int:
     """Exit 0 when the grasp is held in all six directions, 1 when it is not, 2 for bad input."""
     from . import physics
@@ -576,6 +632,8 @@ def cmd_validate(args: argparse.Namespace) -> int:
     if args.workers is not None and not args.robust:
         raise UsageError("--workers runs the perturbations of --robust in parallel; give --robust")
     traj = _load(args.file)
+    if traj.status not in ("done", "stalled"):  # judged all the same: the grasp as it stands
+        _note(f"note: the plan did not finish (status {traj.status}); its last configuration is judged")
     if args.robust:
         with Progress("simulating the perturbations"):
             result = physics.validate_robust(traj, workers=args.workers)
@@ -589,14 +647,9 @@ def cmd_validate(args: argparse.Namespace) -> int:
                   f"({result['max_force_factor']:.1f} x weight)")
             print(f"verdict: {'robustly held' if result['robust'] else 'not robustly held'}")
         return EXIT_OK if result["robust"] else EXIT_NOT_HELD
-    with Progress("simulating"):
-        result = physics.validate(traj)
+    result = _hold_test(traj, args.json)
     if args.json:
         print(json.dumps(result))
-    else:
-        for d, r in result["directions"].items():
-            print(f"{d:3s} {_moved(r)}")
-        print(f"verdict: {'held' if result['held'] else 'not held'}")
     return EXIT_OK if result["held"] else EXIT_NOT_HELD
 
 
@@ -832,6 +885,15 @@ def build_parser() -> _Parser:
                         "held; exit 0 only when held under every perturbation")
     p.add_argument("--workers", type=_count, default=None, help="processes for --robust (default: the CPUs)")
     p.set_defaults(func=cmd_validate)
+
+    p = sub.add_parser("baseline", help="the close-until-contact baseline (GraspIt!'s AutoGrasp) from the same "
+                                        "start, for comparison (hugger[physics]; docs/comparison.md)")
+    p.add_argument("object", help="a built-in object name (see 'hugger objects') or a mesh file (STL, OBJ, PLY, OFF, GLB)")
+    p.add_argument("--out", default=None, help="trajectory file to write (.npz), in an existing directory")
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    p.add_argument("--validate", action="store_true", help="then the six-direction hold test of its grasp")
+    _case_options(p)
+    p.set_defaults(func=cmd_baseline)
 
     p = sub.add_parser("simulate", help="closed-loop hugging in MuJoCo: plan from what a MuJoCo skin feels (hugger[physics])")
     p.add_argument("object", help="a built-in object name or a mesh file")
