@@ -438,7 +438,7 @@ def test_an_interrupted_plan_goes_on_to_the_same_plan(hand, sphere):
     p = hugger.Planner(hand, sphere, [0, 0, 0], start(), **kw)
     sizes = []
     while True:
-        timer = threading.Timer(0.01, p._core.interrupt)
+        timer = threading.Timer(0.01, p.interrupt)
         timer.start()
         try:
             p.plan()

@@ -192,6 +192,13 @@ class Planner:
             self._emitted = out.iteration + 1
         return out
 
+    def interrupt(self) -> None:
+        """Stop a :meth:`plan` running in another thread (a controller's, an e-stop's) between
+        iterations, as Ctrl-C stops one in the main thread: it raises ``KeyboardInterrupt`` there
+        with the plan still running, and a later ``plan()`` or ``step()`` goes on to the same plan,
+        bit for bit. Without a plan() running, the next plan() stops at once."""
+        self._core.interrupt()
+
     def __iter__(self) -> Iterator[Configuration]:
         while (c := self.step()) is not None:
             yield c
@@ -261,7 +268,7 @@ class _Batch:
         with self._lock:
             self._stopped = True
             for planner in self._running:
-                planner._core.interrupt()  # (taken at its next iteration, even before it starts)
+                planner.interrupt()  # (taken at its next iteration, even before it starts)
 
 
 def plan(hand: Hand, obj: Object, target: Any, palm_pose: Any, timeout: float | None = None,
