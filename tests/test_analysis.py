@@ -51,14 +51,15 @@ def point_palm_distance(p: np.ndarray, pose: np.ndarray, radius: float, thicknes
 
 
 def one_configuration(hand: dict, obj: hugger.Object, palm_pose, joints, target) -> hugger.Trajectory:
-    """A checked one-configuration trajectory (format 1) of a hand-made configuration."""
+    """A one-configuration trajectory of a hand-made configuration: joints placed by hand, which
+    no hand's kinematics gives (its angles are zeros), so made directly, not by from_arrays,
+    which checks a file's angles against its joints."""
     m, n1 = np.asarray(joints).shape[:2]
     hand = {**hand, "link_lengths": np.linalg.norm(np.diff(np.asarray(joints), axis=1), axis=2).tolist()}
     data = {
-        "format_version": np.int64(1),
-        "hand_json": np.array(json.dumps(hand)),
-        "params_json": np.array("{}"),
-        "status": np.array("done"),
+        "hand_json": json.dumps(hand),
+        "params_json": "{}",
+        "status": "done",
         "object_vertices": obj.vertices,
         "object_faces": obj.faces,
         "target": np.asarray(target, dtype=float),
@@ -68,7 +69,7 @@ def one_configuration(hand: dict, obj: hugger.Object, palm_pose, joints, target)
         "tip_state": np.full((1, m), 2, dtype=np.int8),
         "phase": np.zeros(1, dtype=np.int8),
     }
-    return hugger.Trajectory.from_arrays(data)
+    return hugger.Trajectory(**data)
 
 
 def hand_dict(fingers=1, links=1, link_radius=0.004, palm_radius=0.03, palm_thickness=0.01) -> dict:
