@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import builtins
 import itertools
+import dataclasses
 import json
 import math
 import subprocess
@@ -408,6 +409,28 @@ def test_wrap_angle_of_a_finger_from_pole_to_equator_is_90_degrees():
     assert w.shape == (1,)
     assert w[0] == pytest.approx(90.0, abs=0.5)
     assert A.wrap_angle(traj)[0] == w[0]
+
+
+def test_penetration_is_the_deepest_point_of_a_link_not_of_its_contacts():
+    # a straight 2-link finger of 8 cm links whose second link runs through a 4 cm sphere at
+    # x = 3 cm: its contacts (the ends of its touching run) lie outside, 0.6 mm off the surface,
+    # and its middle 14 mm deep, which the contacts' gaps did not show
+    hand = hugger.Hand(fingers=1, links=2, link_length=0.08, palm_radius=0.03)
+    obj = hugger.objects.sphere(0.04, subdivisions=4)
+    pose = hugger.look_at([0, 0, 0.12], [0, 0, 0])
+    joints = hand.forward(pose, np.zeros((1, 2)))
+    traj = hugger.Trajectory(hand_json=hand.to_json(), params_json="{}", object_vertices=obj.vertices,
+                             object_faces=obj.faces, target=np.zeros(3), palm_pose=pose[None], joints=joints[None],
+                             angles=np.zeros((1, 1, 2)), tip_state=np.zeros((1, 1), np.int8),
+                             phase=np.zeros(1, np.int8), status="done")
+    assert A.contacts(traj).gap.min() > 0  # every contact outside
+    axis = joints[0, 1] + np.linspace(0, 1, 4001)[:, None] * (joints[0, 2] - joints[0, 1])
+    deepest = float(np.max(hand.link_radius - obj.signed_distance(axis)))
+    assert deepest > 0.013
+    assert A.penetration(traj) == pytest.approx(deepest, abs=1e-5)
+    assert A.analyze(traj)["penetration_m"] == A.penetration(traj)
+    moved = dataclasses.replace(traj, object_vertices=obj.vertices + [0.2, 0, 0])  # away: none
+    assert A.penetration(moved) == 0.0
 
 
 def test_wrap_angles_of_real_plan(reference_plan):

@@ -213,6 +213,17 @@ def test_the_rule_set_is_honoured_from_the_cli_and_from_params(tmp_path):
         dataset.generate(["box"], tmp_path / "x", approaches=2, rules="papr")
 
 
+def test_a_hand_of_implausible_size_is_refused_unless_forced(tmp_path, capsys):
+    # --hands 5x5:link_length=20 (millimetres) only warned, and made the dataset
+    code = main(["generate", "box", "--approaches", "1", "--hands", "5x5:link_length=20", "--out", str(tmp_path / "d")])
+    err = capsys.readouterr().err
+    assert code == 2 and "hand spec '5x5:link_length=20': the hand is 100 m across, implausibly large" in err
+    assert "--force" in err and not (tmp_path / "d").exists()
+    with pytest.warns(UserWarning, match="the hand is 100 m across"):
+        assert dataset.parse_hand("5x5:link_length=20", force=True) == ("5x5_link_length20", {
+            "fingers": 5, "links": 5, "link_length": 20.0})
+
+
 def test_the_skin_is_chosen_from_the_cli_and_recorded(tmp_path):
     # hugger generate had no --skin: a dataset of the reference (mesh) skin needed Python
     cli_out, api_out = tmp_path / "cli", tmp_path / "api"
@@ -724,19 +735,22 @@ def test_crafted_shards_are_refused_as_trajectory_files_are(reference, tmp_path)
         def __reduce__(self):
             return (ran.append, ("unpickled!",))
 
+    # (a member is read when the shard is; a bomb over all the members is refused on opening)
     cases = [
-        ({"evil": np.array([Evil()], dtype=object)}, None, "evil holds pickled Python objects"),
-        (None, ("huge", _npy_header((10 ** 11, 3)) + bytes(24)), "huge: its header declares"),
-        (None, ("bomb", _npy_header((((96 << 20) // 8),)) + bytes(96 << 20)), "decompression bomb"),
+        ({"evil": np.array([Evil()], dtype=object)}, None, "evil holds pickled Python objects", True),
+        (None, ("huge", _npy_header((10 ** 11, 3)) + bytes(24)), "huge: its header declares", True),
+        (None, ("bomb", _npy_header((((96 << 20) // 8),)) + bytes(96 << 20)), "decompression bomb", False),
     ]
-    for n, (extra, raw, message) in enumerate(cases):
+    for n, (extra, raw, message, opens) in enumerate(cases):
         ds_dir = tmp_path / f"ds{n}"
         shutil.copytree(reference, ds_dir)
         name = _craft_shard(ds_dir, extra, raw)
         tracemalloc.start()
         try:
             with pytest.raises(ValueError, match=f"{name} is not a whole shard .*{message}"):
-                hugger.Dataset(ds_dir).shard(0)
+                ds = hugger.Dataset(ds_dir)
+                assert opens  # (else refused above)
+                ds.shard(0)
             assert tracemalloc.get_traced_memory()[1] < 32 << 20
         finally:
             tracemalloc.stop()

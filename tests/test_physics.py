@@ -340,7 +340,7 @@ def test_hugger_baseline_writes_the_same_file_twice_and_refuses_bad_input(tmp_pa
     report = json.loads(capsys.readouterr().out)
     assert report["status"] == "done" and report["plan_time_s"] > 0 and report["penetration_m"] <= 5e-5
     first = out.read_bytes()
-    assert baselines.main(["--object", "sphere", "--out", str(out), "--json"]) == 0
+    assert baselines.main(["--object=sphere", "--out", str(out), "--json"]) == 0
     capsys.readouterr()
     traj = hugger.Trajectory.load(out)
     assert out.read_bytes() == first  # the same command, the same bytes (the provenance names the command)
@@ -349,7 +349,7 @@ def test_hugger_baseline_writes_the_same_file_twice_and_refuses_bad_input(tmp_pa
     for argv, message in ((["--object", "nope"], "'nope' is neither a built-in object"),
                           (["--object", "sphere", "--out", str(tmp_path / "no" / "x.npz")], "no such directory"),
                           (["--object", "sphere", "--out", str(tmp_path / "x.txt")], "--out must end in .npz"),
-                          (["--object"], "--object needs")):
+                          (["--object"], "--object needs"), (["--object="], "--object needs")):
         assert baselines.main(argv) == 2
         err = capsys.readouterr().err
         assert err.startswith("hugger: error: ") and message in err and len(err.strip().splitlines()) == 1

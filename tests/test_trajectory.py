@@ -213,6 +213,24 @@ def test_wrong_dtypes_shapes_and_values_are_refused(saved, tmp_path, edit, match
         hugger.Trajectory.load(_write(tmp_path, edit(dict(arrays))))
 
 
+def test_angles_are_checked_to_the_precision_of_the_file(saved, tmp_path):
+    # a float16 or float32 file's angles and joints agree only to their own rounding: loaded (it
+    # was refused as "in degrees?"); its angles in degrees still refused; and save() refuses what
+    # load() would, rather than write it
+    import dataclasses
+
+    traj, _, arrays = saved
+    for dtype in (np.float16, np.float32):
+        low = {**arrays, **{k: arrays[k].astype(dtype) for k in ("palm_pose", "joints", "angles")}}
+        assert len(hugger.Trajectory.load(_write(tmp_path, low))) == len(traj)
+        low["angles"] = np.degrees(arrays["angles"]).astype(dtype)
+        with pytest.raises(ValueError, match="angles and joints disagree"):
+            hugger.Trajectory.load(_write(tmp_path, low))
+    with pytest.raises(ValueError, match="the trajectory: angles and joints disagree"):
+        dataclasses.replace(traj, angles=np.degrees(traj.angles)).save(tmp_path / "deg.npz")
+    assert not (tmp_path / "deg.npz").exists()
+
+
 def test_half_precision_arrays_load_without_a_warning(saved, tmp_path):
     # (warnings are errors in the tests) the bound on coordinates is compared in double precision
     _, _, arrays = saved

@@ -356,6 +356,35 @@ def contacts_of(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joints: A
                     num_fingers=m, num_links=n)
 
 
+def collision_tolerance(link_radius: float) -> float:
+    """The independent checker's collision tolerance (m) for links of ``link_radius``: a hand part
+    deeper in the object fails it (docs/validation.md)."""
+    return max(0.02 * float(link_radius), 5e-5)
+
+
+def penetration(traj: Any, k: int = -1, obj: Any = None) -> float:
+    """How deep (m) the hand lies inside the object at configuration ``k`` of a
+    :class:`hugger.Trajectory`, at its deepest point; 0 when it does not. Every link's axis is
+    sampled as :func:`contacts_of` samples it (every min(r/4, 1 mm)), all of it and not only
+    where it touches (a link may pass through the object between its contacts), and so are the
+    palm's front face and rim; a point's depth is its signed distance to the surface less the
+    link radius (negative inside)."""
+    k = _trajectory_index(traj, k)
+    obj = obj if obj is not None else traj.object()
+    hand = traj.hand
+    m, n, radius, palm_radius, palm_thickness, pose, j = _configuration(hand, obj, traj.palm_pose[k], traj.joints[k])
+    a, b = j[:, :-1].reshape(-1, 3), j[:, 1:].reshape(-1, 3)
+    counts = [max(2, int(math.ceil(float(_stable.norm(b[i] - a[i])) /
+                                   _link_spacing(radius, float(_stable.norm(b[i] - a[i]))))) + 1) for i in range(len(a))]
+    t = np.concatenate([np.linspace(0.0, 1.0, c) for c in counts])
+    owner = np.repeat(np.arange(len(a)), counts)
+    axis = a[owner] + t[:, None] * (b[owner] - a[owner])
+    local = _palm_samples(palm_radius, palm_thickness, min(_MAX_SPACING, palm_radius / 8.0, palm_thickness / 2.0))
+    palm = _stable.matmul(local, pose[:3, :3].T) + pose[:3, 3]
+    depth = max(float(np.max(radius - obj.signed_distance(axis))), float(np.max(-obj.signed_distance(palm))))
+    return max(0.0, depth)
+
+
 def contacts(traj: Any, k: int = -1, distance: float = CONTACT_DISTANCE, obj: Any = None) -> Contacts:
     """All contacts (palm and every link) of configuration ``k`` of a :class:`hugger.Trajectory`.
 
@@ -580,8 +609,8 @@ def analyze(traj: Any, k: int = -1, mu: float = 0.5, distance: float = CONTACT_D
     ``palm_contact``, ``per_finger_contacts`` (links in contact per finger), ``wrap_angle_deg``
     (per finger, :func:`wrap_angle`), ``force_closure``, ``epsilon``, ``volume``
     (:func:`grasp_quality` with torques about T, torque scale the object's largest distance
-    from T), ``mu``, ``torque_scale_m``, ``penetration_m`` (how deep the hand's surface lies
-    inside the object at its deepest contact, 0 when it does not: a contact counts however deep,
+    from T), ``mu``, ``torque_scale_m``, ``penetration_m`` (:func:`penetration`: how deep the hand
+    lies inside the object, 0 when it does not: a contact counts however deep,
     so a hand sunk into an object, of another tool's plan or one rescaled since, would otherwise
     look like a firm grasp). ``volume=False`` skips the GWS volume (reported as 0),
     the costly part (see :func:`grasp_quality`).
@@ -604,5 +633,5 @@ def analyze(traj: Any, k: int = -1, mu: float = 0.5, distance: float = CONTACT_D
         "volume": q.volume,
         "mu": float(mu),
         "torque_scale_m": q.torque_scale,
-        "penetration_m": float(max(0.0, -found.gap.min())) if len(found) else 0.0,
+        "penetration_m": penetration(traj, k, obj),
     }

@@ -288,13 +288,15 @@ def main(argv: list[str] | None = None) -> int:
 
     args = list(sys.argv[1:] if argv is None else argv)
     name = "sphere"
-    if "--object" in args:
-        i = args.index("--object")
-        if i + 1 >= len(args):
-            print("hugger: error: --object needs a built-in object name or a mesh file", file=sys.stderr)
-            return 2
-        name = args[i + 1]
-        del args[i:i + 2]
+    for i, arg in enumerate(args):
+        if arg == "--object" or arg.startswith("--object="):
+            given = arg.partition("=")[2] if "=" in arg else (args[i + 1] if i + 1 < len(args) else "")
+            if not given:
+                print("hugger: error: --object needs a built-in object name or a mesh file", file=sys.stderr)
+                return 2
+            name = given
+            del args[i:i + (1 if "=" in arg else 2)]
+            break
     return cli_main(["baseline", name, *args])
 
 

@@ -186,11 +186,10 @@ def _hand(args: argparse.Namespace) -> Hand:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         hand = hugger.Hand(**shape)
-    for w in caught:
-        text = str(w.message)
-        if text.startswith("the hand is") and "implausibly" in text and not args.force:
-            raise UsageError(f"{text}; refused (give its sizes in metres, or --force to plan it anyway)")
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if hand.size_warning and not args.force:
+        raise UsageError(f"{hand.size_warning}; refused (give its sizes in metres, or --force to plan it anyway)")
+    for w in caught:  # (the size warning among them, with --force)
+        warnings.warn(w.message, stacklevel=2)
     return hand
 
 
@@ -531,8 +530,9 @@ def cmd_info(args: argparse.Namespace) -> int:
         size = implausible_size("the object", float(np.ptp(obj.bounds, axis=0).max()))
         if size is not None:
             warnings.warn(size, UserWarning, stacklevel=1)
-        allowed = max(0.02 * float(traj.hand["link_radius"]), 5e-5)  # the checker's collision tolerance
-        if report["penetration_m"] > allowed:
+        from .analysis import collision_tolerance
+
+        if report["penetration_m"] > collision_tolerance(traj.hand["link_radius"]):
             warnings.warn(f"the hand lies {1000 * report['penetration_m']:.3g} mm inside the object at the final "
                           f"configuration (beyond max(2% of the link radius, 0.05 mm)): not a grasp this planner "
                           f"makes; the contacts and the quality count it as touching", UserWarning, stacklevel=1)

@@ -51,10 +51,11 @@ _HAND_KEYS = {"link_length": float, "link_radius": float, "palm_radius": float, 
 # hands and tasks
 
 
-def parse_hand(spec: str) -> tuple[str, dict[str, Any]]:
+def parse_hand(spec: str, force: bool = False) -> tuple[str, dict[str, Any]]:
     """A hand spec ``MxN`` or ``MxN:key=value,...`` (keys ``link_length``, ``link_radius``,
     ``palm_radius``, ``palm_thickness``, in m) -> (label for file names, Hand keyword arguments).
-    ``5x5`` is the default hand of ``hugger.Hand()``."""
+    ``5x5`` is the default hand of ``hugger.Hand()``. A hand of implausible size (millimetres read
+    as metres: :attr:`hugger.Hand.size_warning`) is refused unless ``force``."""
     m = re.fullmatch(r"\s*(\d+)x(\d+)\s*(?::(.*))?", str(spec))
     if not m:
         raise ValueError(f"hand spec must be MxN or MxN:key=value,... (e.g. 5x5, 4x3:link_length=0.025), got {spec!r}")
@@ -73,9 +74,18 @@ def parse_hand(spec: str) -> tuple[str, dict[str, Any]]:
         except ValueError:
             raise ValueError(f"hand spec {spec!r}: {key} must be a number, got {value!r}") from None
         label += f"_{key}{kwargs[key]:g}"
+    import warnings
+
     from .hand import Hand
 
-    Hand(**kwargs)  # checks the sizes now, not in a worker
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        hand = Hand(**kwargs)  # checks the sizes now, not in a worker
+    if hand.size_warning and not force:  # refused as a mesh of implausible size is
+        raise ValueError(f"hand spec {spec!r}: {hand.size_warning}; refused (give its sizes in metres, or "
+                         f"force=True, --force, to make its shards anyway)")
+    for w in caught:
+        warnings.warn(w.message, stacklevel=2)
     return label, kwargs
 
 
@@ -506,7 +516,8 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     process joins no cluster within :data:`RAY_PROBE_TIMEOUT`, before the first shard). Shards
     already present are kept; the index is written last. ``command``: the command line recorded
     in the index. A mesh file whose size is implausible for a hand (millimetres read as metres:
-    :data:`hugger.hand.PLAUSIBLE_SIZE`) is refused (``ValueError``) unless ``force``.
+    :data:`hugger.hand.PLAUSIBLE_SIZE`), or a hand of implausible size, is refused (``ValueError``)
+    unless ``force``.
     """
     from .search import approach_directions
 
@@ -560,7 +571,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         raise ValueError(f"rules must be one of {list(RULES)}, got {rules!r}")
     params = {k: params.get(k) for k in PARAMS}
     params["rules"] = None  # the rule set is the task's own "rules" (as in the keys of earlier datasets)
-    hand_list = [parse_hand(h) for h in hands]
+    hand_list = [parse_hand(h, force) for h in hands]
     if len({label for label, _ in hand_list}) != len(hand_list):
         raise ValueError("the same hand is given twice")
     obj_list = [_object_entry(os.fspath(o), float(scale), force) for o in objects]

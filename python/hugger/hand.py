@@ -184,9 +184,16 @@ class Hand:
             raise ValueError(f"link_length = {lengths.max():g} m is larger than {MAX_LENGTH:g} m: sizes are in metres")
         m, n = lengths.shape
         self._core = _core.HandModel(m, n, lengths, radius, palm_r, palm_t, **layout)
-        message = implausible_size("the hand", max(2.0 * palm_r, float(lengths.sum(axis=1).max())))
+        message = self.size_warning
         if message:
             warnings.warn(message, UserWarning, stacklevel=3)
+
+    @property
+    def size_warning(self) -> str | None:
+        """The warning the hand drew when made, for a size implausible for a grasp (its palm's
+        diameter or its longest finger outside :data:`PLAUSIBLE_SIZE`: millimetres read as
+        metres), or None."""
+        return implausible_size("the hand", max(2.0 * self.palm_radius, self.reach))
 
     @property
     def fingers(self) -> int:

@@ -155,6 +155,7 @@ class Planner:
                              f"({MIN_RELATIVE_TOLERANCE:g} x its largest coordinate, {extent:g} m)")
         self.hand, self.object, self.sensing, self.target = hand, obj, sensing, t
         self._emitted: int | None = 0  # configurations handed out by step(); None after plan()
+        self._handed = 0  # the index of the configuration step() hands out next
 
     @property
     def status(self) -> str:
@@ -178,18 +179,18 @@ class Planner:
         """The next configuration (C_init first), or None when the plan has ended. A Ctrl-C
         (KeyboardInterrupt) during a step loses nothing: the next call hands out the configuration
         that step made."""
-        # By index while steps are counted: a configuration whose delivery a signal's exception cut
-        # short (Python raises it as the engine's call returns) is handed out by the next call.
-        k = self._emitted
-        c = self._core.step() if k is None else self._core.configuration(k)
+        # By index: a configuration whose delivery a signal's exception cut short (Python raises it
+        # as the engine's call returns) is handed out by the next call.
+        c = self._core.configuration(self._handed)
         if c is None:
             return None
         out = Configuration(palm_pose=c.palm_pose, joints=c.joints, angles=c.angles, tip_state=c.tip_state,
                             phase=c.phase, iteration=c.iteration)
+        # Last, after the only call that may raise a signal's exception: once counted, the
+        # configuration is returned (no pending signal is taken between here and the caller).
+        self._handed = out.iteration + 1
         if self._emitted is not None:
-            # Last, after the only call that may raise a signal's exception: once counted, the
-            # configuration is returned (no pending signal is taken between here and the caller).
-            self._emitted = out.iteration + 1
+            self._emitted = self._handed
         return out
 
     def interrupt(self) -> None:
@@ -217,6 +218,7 @@ class Planner:
             self._core.plan(limit)
         finally:  # after an exception from a skin too: the configurations completed before it
             self._emitted = None
+            self._handed = self._core.size  # step() goes on after them
         return self.trajectory()
 
     def trajectory(self) -> Trajectory:

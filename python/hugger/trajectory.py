@@ -130,9 +130,15 @@ class Trajectory:
         the same directory (which must exist), then renamed, so that an interrupted save never
         leaves a partial file under ``path``. The provenance gets ``hugger_version`` and
         ``object_sha256`` when it lacks them. ``ValueError`` for a trajectory of no configuration
-        (``Planner.trajectory()`` before the first ``step()``), which no file may hold."""
+        (``Planner.trajectory()`` before the first ``step()``), or whose angles and joints disagree
+        (as :meth:`load` checks them), which no file may hold."""
         if len(self) == 0:
             raise ValueError(f"{EMPTY}: nothing to save")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # (the hand's size was warned of when made)
+            hand = Hand.from_dict(self.hand)
+        _check_angles(hand, np.asarray(self.palm_pose, dtype=np.float64), np.asarray(self.angles, dtype=np.float64),
+                      np.asarray(self.joints, dtype=np.float64), "the trajectory")
         prov = dict(self.provenance)
         prov.setdefault("hugger_version", VERSION)
         if "object_sha256" not in prov:  # hashing the mesh only when the provenance lacks it
@@ -256,6 +262,8 @@ class Trajectory:
             a = arrays[key]
             if a.min() < 0 or a.max() > 2:
                 raise ValueError(f"{source}: {key} holds {a.max() if a.max() > 2 else a.min()}; allowed are {allowed}")
+        # The rounding of the file's own precision (float32 and float16 files are read too).
+        eps = max(float(np.finfo(arrays[key].dtype).eps) for key in ("palm_pose", "joints", "angles"))
         for key in ("object_vertices", "target", "palm_pose", "joints", "angles"):
             arrays[key] = arrays[key].astype(np.float64)
         for i, pose in enumerate(arrays["palm_pose"]):  # rigid, as the engine requires (its rule)
@@ -263,7 +271,7 @@ class Trajectory:
                 _core.check_pose(pose, f"palm_pose[{i}]")
             except ValueError as exc:
                 raise ValueError(f"{source}: {exc}") from None
-        _check_angles(model, arrays["palm_pose"], arrays["angles"], arrays["joints"], source)
+        _check_angles(model, arrays["palm_pose"], arrays["angles"], arrays["joints"], source, eps)
         arrays["tip_state"] = arrays["tip_state"].astype(np.int8)
         arrays["phase"] = arrays["phase"].astype(np.int8)
         arrays["object_faces"] = arrays["object_faces"].astype(np.int64)
@@ -359,14 +367,17 @@ def _check_hand(hand: dict[str, Any], m: int, n: int, source: str) -> Hand:
 ANGLE_SAMPLES = 64
 
 
-def _check_angles(hand: Hand, poses: np.ndarray, angles: np.ndarray, joints: np.ndarray, source: str) -> None:
+def _check_angles(hand: Hand, poses: np.ndarray, angles: np.ndarray, joints: np.ndarray, source: str,
+                  eps: float = 0.0) -> None:
     """The joint positions of the file's angles (the hand's forward kinematics) are its joints, at
-    ANGLE_SAMPLES configurations: tools read one or the other (the analysis the joints, the
-    physics test and the MJCF export the angles), and files that disagree (angles in degrees,
-    joints of another hand) were judged one way by one and another by the other."""
+    ANGLE_SAMPLES configurations, to a micrometre and the rounding of the arrays' precision
+    (``eps``, of the least precise: 0 for float64): tools read one or the other (the analysis the
+    joints, the physics test and the MJCF export the angles), and files that disagree (angles in
+    degrees, joints of another hand) were judged one way by one and another by the other."""
     k = len(poses)
+    relative = max(1e-9, 16.0 * eps)
     for i in np.unique(np.linspace(0, k - 1, min(k, ANGLE_SAMPLES)).round().astype(int)):
         error = float(np.abs(hand.forward(poses[i], angles[i]) - joints[i]).max())
-        if not error <= 1e-6 + 1e-9 * float(np.abs(joints[i]).max()):
+        if not error <= 1e-6 + relative * (float(np.abs(joints[i]).max()) + hand.reach):
             raise ValueError(f"{source}: angles and joints disagree at configuration {i}: the joints the angles "
                              f"give are {error:.3g} m from those stored (angles in degrees, or joints of another hand?)")
