@@ -224,15 +224,20 @@ class Trajectory:
             if a.dtype.kind == "f" and a.size and key != "palm_pose" and float(np.abs(a).max()) > bound:
                 raise ValueError(f"{source}: {key} holds numbers beyond +-{bound:g}")
             arrays[key] = a
-        try:
-            hand = json.loads(strings["hand_json"])
-            params = json.loads(strings["params_json"])
-            stats = json.loads(strings["stats_json"])
-            provenance = json.loads(strings["provenance_json"])
-            m, n = hand["fingers"], hand["links"]
-        except (ValueError, KeyError, TypeError, RecursionError) as exc:
-            raise ValueError(f"{source}: hand_json/params_json/stats_json/provenance_json are not valid: "
-                             f"{type(exc).__name__}: {exc}") from None
+        parsed = {}
+        for key in ("hand_json", "params_json", "stats_json", "provenance_json"):  # each named when not JSON
+            try:
+                parsed[key] = json.loads(strings[key])
+            except (ValueError, RecursionError) as exc:
+                raise ValueError(f"{source}: {key} is not valid JSON: {type(exc).__name__}: {exc}") from None
+        hand, params, stats, provenance = (parsed[k] for k in ("hand_json", "params_json", "stats_json",
+                                                               "provenance_json"))
+        if not isinstance(hand, dict):
+            raise ValueError(f"{source}: hand_json must be a JSON object (a hand description)")
+        lacks = [k for k in ("fingers", "links") if k not in hand]
+        if lacks:
+            raise ValueError(f"{source}: hand_json lacks {lacks} (a hand description: docs/file-format.md)")
+        m, n = hand["fingers"], hand["links"]
         if not isinstance(params, dict) or not isinstance(stats, dict) or not isinstance(provenance, dict):
             raise ValueError(f"{source}: params_json, stats_json and provenance_json must be JSON objects")
         if isinstance(m, float) and m.is_integer():
