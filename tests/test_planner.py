@@ -506,6 +506,27 @@ def test_ctrl_c_while_stepping_loses_no_configuration(hand, sphere):
     assert np.array_equal(p.trajectory().joints, whole.joints)
 
 
+def step_cut_short(p: hugger.Planner) -> None:
+    """One step() whose delivery is cut short: the engine makes the configuration, and a
+    KeyboardInterrupt comes as its call returns (as Python raises a signal's exception there)."""
+    real = p._core
+
+    class CutShort:
+        def __getattr__(self, name):
+            return getattr(real, name)
+
+        def configuration(self, k):
+            real.configuration(k)
+            raise KeyboardInterrupt
+
+    p._core = CutShort()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            p.step()
+    finally:
+        p._core = real
+
+
 def test_stepping_after_an_interrupted_plan_loses_nothing_either(hand, sphere):
     # plan() interrupted, then step(): the configurations after plan()'s come one by one, and a
     # delivery cut short is handed out again there too
@@ -516,20 +537,7 @@ def test_stepping_after_an_interrupted_plan_loses_nothing_either(hand, sphere):
     with pytest.raises(KeyboardInterrupt):
         p.plan()
     done = p._core.size
-    real = p._core
-
-    class CutShort:
-        def __getattr__(self, name):
-            return getattr(real, name)
-
-        def configuration(self, k):
-            real.configuration(k)
-            raise KeyboardInterrupt
-
-    p._core = CutShort()
-    with pytest.raises(KeyboardInterrupt):
-        p.step()
-    p._core = real
+    step_cut_short(p)
     rest = list(p)
     assert [c.iteration for c in rest] == list(range(done, len(whole)))
     assert np.array_equal(p.trajectory().joints, whole.joints)
@@ -539,20 +547,7 @@ def test_a_configuration_whose_delivery_was_cut_short_is_handed_out_next(hand, s
     # the same, deterministic: the exception raised after the engine's call returned
     p = hugger.Planner(hand, sphere, [0, 0, 0], start(), skin="mesh")
     first = [p.step() for _ in range(3)]
-    real = p._core
-
-    class CutShort:
-        def __getattr__(self, name):
-            return getattr(real, name)
-
-        def configuration(self, k):
-            real.configuration(k)
-            raise KeyboardInterrupt
-
-    p._core = CutShort()
-    with pytest.raises(KeyboardInterrupt):
-        p.step()
-    p._core = real
+    step_cut_short(p)
     rest = list(p)
     assert [c.iteration for c in first + rest] == list(range(len(p.trajectory())))
 
