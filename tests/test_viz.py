@@ -492,3 +492,33 @@ def test_the_headline_gives_unequal_links_as_a_range():
     assert "3 fingers x 2 links (20-30 mm, radius 4.0 mm), 12 triangles, 5 configurations" in \
         _headline(Plan([[0.02, 0.03]] * 3))
     assert "(20 mm, radius" in _headline(Plan([[0.02, 0.02]] * 3))
+
+
+def test_ffmpeg_s_complaint_of_a_cut_frame_is_not_shown_on_ctrl_c(caplog):
+    # ffmpeg, stopped by the terminal's Ctrl-C in the middle of a frame, complains of it, and
+    # matplotlib logged that as a warning under "hugger: interrupted" (once in a few runs of the
+    # test above); its output is shown when it failed on its own
+    import logging
+    import subprocess
+
+    from hugger.viz.animation import _ffmpeg_interrupted
+
+    log = logging.getLogger("matplotlib.animation")
+
+    def writer_fails(after_interrupt: bool):
+        with _ffmpeg_interrupted():
+            try:
+                if after_interrupt:
+                    raise KeyboardInterrupt
+                raise OSError("no interrupt")
+            except (KeyboardInterrupt, OSError):
+                log.warning("MovieWriter stderr:\n%s", "Invalid buffer size, packet size 851968")
+                raise subprocess.CalledProcessError(255, ["ffmpeg"]) from None
+
+    caplog.set_level(logging.WARNING, logger="matplotlib.animation")
+    with pytest.raises(KeyboardInterrupt):
+        writer_fails(True)
+    assert "MovieWriter" not in caplog.text
+    with pytest.raises(subprocess.CalledProcessError):
+        writer_fails(False)
+    assert "MovieWriter stderr:\nInvalid buffer size" in caplog.text

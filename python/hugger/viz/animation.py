@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import signal
 import subprocess
@@ -22,21 +23,47 @@ MOVIE_SIZE = (6.4, 4.8)
 
 # --- animation --------------------------------------------------------------------------------------
 
+class _HeldOutput(logging.Filter):
+    """Holds back the movie writer's log of ffmpeg's output (matplotlib logs it as a warning when
+    ffmpeg fails), for _ffmpeg_interrupted to let through or drop."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.records: list[logging.LogRecord] = []
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.getMessage().startswith("MovieWriter std"):
+            self.records.append(record)
+            return False
+        return True
+
+
 @contextlib.contextmanager
 def _ffmpeg_interrupted() -> Iterator[None]:
     """Ctrl-C at a terminal reaches ffmpeg too, which ends first (status 255, or killed by the
     signal) while Python takes its KeyboardInterrupt: the writer's CalledProcessError, raised with
-    that interrupt as its context, is then the interrupt it is. (ffmpeg's own failures end it with
-    255 too, as an error of -1: without the interrupt they stay what they are.)"""
+    that interrupt as its context, is then the interrupt it is, and ffmpeg's complaint of the
+    frame it was cut off in is not shown. (ffmpeg's own failures end it with 255 too, as an error
+    of -1: without the interrupt they stay what they are, and its output is shown.)"""
+    log = logging.getLogger("matplotlib.animation")
+    held = _HeldOutput()
+    log.addFilter(held)
+    interrupted = False
     try:
         yield
     except subprocess.CalledProcessError as exc:
         cause: BaseException | None = exc.__context__
         while cause is not None and not isinstance(cause, KeyboardInterrupt):
             cause = cause.__context__
-        if cause is not None and exc.returncode in (255, -signal.SIGINT):
+        interrupted = cause is not None and exc.returncode in (255, -signal.SIGINT)
+        if interrupted:
             raise KeyboardInterrupt from None
         raise
+    finally:
+        log.removeFilter(held)
+        if not interrupted:
+            for record in held.records:
+                log.handle(record)
 
 
 def animate(traj: Trajectory, path: str | os.PathLike[str], fps: float = 30, max_frames: int = 300, *,
