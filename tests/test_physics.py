@@ -355,6 +355,22 @@ def test_hugger_baseline_writes_the_same_file_twice_and_refuses_bad_input(tmp_pa
         assert err.startswith("hugger: error: ") and message in err and len(err.strip().splitlines()) == 1
 
 
+def test_hugger_baseline_plans_with_the_hand_options(checker, tmp_path, capsys):
+    # a preset (or a URDF) hand compared from the command line, as hugger plan takes it
+    import helpers
+    from hugger.cli import main
+
+    out = tmp_path / "robotiq.npz"
+    assert main(["baseline", "sphere", "--hand", "robotiq_3f", "--out", str(out), "--json"]) == 0
+    preset = hugger.hands.load("robotiq_3f")
+    assert json.loads(capsys.readouterr().out)["links"] == preset.fingers * preset.links
+    traj = hugger.Trajectory.load(out)
+    assert traj.hand["name"] == "robotiq_3f" and traj.status == "done"
+    helpers.assert_checked(checker, out)
+    assert main(["baseline", "sphere", "--link-length", "20"]) == 2
+    assert "implausibly large" in capsys.readouterr().err
+
+
 def test_compare_script_writes_a_table(tmp_path, capsys):
     pytest.importorskip("scipy", reason="the comparison's grasp quality needs scipy (pip install 'hugger[analysis]')")
     mod = bench_module("compare_baseline")

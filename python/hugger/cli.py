@@ -599,14 +599,13 @@ def _hold_test(traj: Trajectory, as_json: bool) -> dict[str, Any]:
 
 
 def cmd_baseline(args: argparse.Namespace) -> int:
-    """The close-until-contact baseline from the start ``hugger plan`` takes (the default hand)."""
+    """The close-until-contact baseline from the start ``hugger plan`` takes, with its hand options."""
     import dataclasses
 
     from .baselines import plan_baseline
-    from .hand import Hand
 
     out = _out_path(args.out, (".npz",)) if args.out is not None else None
-    hand = Hand()
+    hand = _hand(args)
     case = _case(args, hand)
     traj = plan_baseline(hand, case.obj, case.target, case.palm_pose)
     stats = traj.stats
@@ -892,6 +891,7 @@ def build_parser() -> _Parser:
     p.add_argument("--out", default=None, help="trajectory file to write (.npz), in an existing directory")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.add_argument("--validate", action="store_true", help="then the six-direction hold test of its grasp")
+    _hand_options(p)
     _case_options(p)
     p.set_defaults(func=cmd_baseline)
 
