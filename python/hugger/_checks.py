@@ -9,16 +9,23 @@ from typing import Any
 import numpy as np
 
 
-def positive(name: str, value: Any, allow_zero: bool = False, most: float | None = None,
-             least: float | None = None) -> float:
-    """``value`` as a float, which must be finite and positive (or zero, with ``allow_zero``), at
-    least ``least`` and at most ``most`` (each if given); otherwise a ValueError naming ``name``."""
-    if isinstance(value, (str, bytes, bool, np.bool_)):  # text and bools are not numbers here
+def number(name: str, value: Any) -> float:
+    """``value`` as a float (any sign, not checked for finiteness); otherwise a ValueError naming
+    ``name``. Text and bools are not numbers here (``float`` reads "0.04" and True as 1)."""
+    if isinstance(value, (str, bytes, bool, np.bool_)):
         raise ValueError(f"{name} must be a number, got {value!r}")
     try:
-        x = float(value)
+        return float(value)
     except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name} must be a number, got {value!r}") from None
+
+
+def positive(name: str, value: Any, allow_zero: bool = False, most: float | None = None,
+             least: float | None = None) -> float:
+    """``value`` as a float (:func:`number`), which must be finite and positive (or zero, with
+    ``allow_zero``), at least ``least`` and at most ``most`` (each if given); otherwise a
+    ValueError naming ``name``."""
+    x = number(name, value)
     if not math.isfinite(x) or x < 0 or (x == 0 and not allow_zero):
         kind = "non-negative" if allow_zero else "positive"
         raise ValueError(f"{name} must be a {kind} finite number, got {value!r}")

@@ -179,6 +179,25 @@ def _golden_min(fun: Callable[[float], float], lo: float, hi: float, iterations:
     return c if fc <= fd else d
 
 
+def _axis_samples(a: np.ndarray, b: np.ndarray, radius: float, links: list[int]) -> tuple[list[np.ndarray], np.ndarray]:
+    """The axes [a_i, b_i] of ``links`` sampled every :func:`_link_spacing`: each link's sample
+    parameters (0 to 1), and all the sample points (k, 3), link after link."""
+    ts = []
+    for i in links:
+        length = float(_stable.norm(b[i] - a[i]))
+        ts.append(np.linspace(0.0, 1.0, max(2, int(math.ceil(length / _link_spacing(radius, length))) + 1)))
+    owner = np.repeat(np.asarray(links, dtype=np.int64), [t.size for t in ts])
+    t = np.concatenate(ts)
+    return ts, a[owner] + t[:, None] * (b[owner] - a[owner])
+
+
+def _palm_points(pose: np.ndarray, radius: float, thickness: float) -> tuple[np.ndarray, np.ndarray]:
+    """The palm's front face and rim sampled (:func:`_palm_samples`, spacing min(1 mm, radius/8,
+    thickness/2)): the points in the palm frame and in the world."""
+    local = _palm_samples(radius, thickness, min(_MAX_SPACING, radius / 8.0, thickness / 2.0))
+    return local, _stable.matmul(local, pose[:3, :3].T) + pose[:3, 3]
+
+
 def _link_contacts(obj: Any, joints: np.ndarray, radius: float, distance: float) -> list[tuple[int, int, np.ndarray]]:
     """Per link in contact, the sample points (k, 3) on its axis whose surface points are emitted."""
     n1 = joints.shape[1]
@@ -188,15 +207,7 @@ def _link_contacts(obj: Any, joints: np.ndarray, radius: float, distance: float)
     if touching.size == 0:
         return []
     # Sample every touching link's axis densely, all in one query.
-    ts, owners = [], []
-    for i in touching.tolist():
-        length = float(_stable.norm(b[i] - a[i]))
-        count = max(2, int(math.ceil(length / _link_spacing(radius, length))) + 1)
-        ts.append(np.linspace(0.0, 1.0, count))
-        owners.append(np.full(count, i))
-    t = np.concatenate(ts)
-    owner = np.concatenate(owners)
-    samples = a[owner] + t[:, None] * (b[owner] - a[owner])
+    ts, samples = _axis_samples(a, b, radius, touching.tolist())
     sample_gap = obj.closest(samples)["distance"] - radius
     out = []
     start = 0
@@ -252,8 +263,7 @@ def _palm_contacts(obj: Any, palm_pose: np.ndarray, radius: float, thickness: fl
     if gap > distance:
         return np.zeros((0, 3))
     rot, origin = palm_pose[:3, :3], palm_pose[:3, 3]
-    local = _palm_samples(radius, thickness, min(_MAX_SPACING, radius / 8.0, thickness / 2.0))
-    world = _stable.matmul(local, rot.T) + origin
+    local, world = _palm_points(palm_pose, radius, thickness)
     d = obj.closest(world, max_distance=distance)["distance"]  # only the touching samples matter
     touching = np.flatnonzero(d <= distance)
     if touching.size == 0:
@@ -273,7 +283,7 @@ def _palm_contacts(obj: Any, palm_pose: np.ndarray, radius: float, thickness: fl
     ang = 2 * math.pi * np.arange(_PALM_CONTACTS) / _PALM_CONTACTS
     proj = _stable.matmul(sel[:, :2], np.stack([_stable.cos(ang), _stable.sin(ang)]))
     extreme = sorted(set(np.argmax(proj, axis=0).tolist()))
-    return cast(np.ndarray, world[touching[extreme]])
+    return world[touching[extreme]]
 
 
 def _configuration(hand: dict[str, Any] | Hand, obj: Any, palm_pose: Any, joints: Any
@@ -371,16 +381,10 @@ def penetration(traj: Any, k: int = -1, obj: Any = None) -> float:
     link radius (negative inside)."""
     k = _trajectory_index(traj, k)
     obj = obj if obj is not None else traj.object()
-    hand = traj.hand
-    m, n, radius, palm_radius, palm_thickness, pose, j = _configuration(hand, obj, traj.palm_pose[k], traj.joints[k])
+    _, _, radius, palm_radius, palm_thickness, pose, j = _configuration(traj.hand, obj, traj.palm_pose[k], traj.joints[k])
     a, b = j[:, :-1].reshape(-1, 3), j[:, 1:].reshape(-1, 3)
-    counts = [max(2, int(math.ceil(float(_stable.norm(b[i] - a[i])) /
-                                   _link_spacing(radius, float(_stable.norm(b[i] - a[i]))))) + 1) for i in range(len(a))]
-    t = np.concatenate([np.linspace(0.0, 1.0, c) for c in counts])
-    owner = np.repeat(np.arange(len(a)), counts)
-    axis = a[owner] + t[:, None] * (b[owner] - a[owner])
-    local = _palm_samples(palm_radius, palm_thickness, min(_MAX_SPACING, palm_radius / 8.0, palm_thickness / 2.0))
-    palm = _stable.matmul(local, pose[:3, :3].T) + pose[:3, 3]
+    _, axis = _axis_samples(a, b, radius, list(range(len(a))))
+    _, palm = _palm_points(pose, palm_radius, palm_thickness)
     depth = max(float(np.max(radius - obj.signed_distance(axis))), float(np.max(-obj.signed_distance(palm))))
     return max(0.0, depth)
 

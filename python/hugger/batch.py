@@ -13,7 +13,7 @@ import numpy as np
 
 from . import _checks, _core
 from .hand import Hand
-from .planner import PARAMS, Planner, _Batch, _timeout, check_params
+from .planner import PARAMS, Planner, _Batch, _timeout, check_params, check_record_object
 from .trajectory import Trajectory
 from .world import Object
 
@@ -87,17 +87,14 @@ def _job(index: int, case: Any, hand: Hand | None, params: dict[str, Any], timeo
         raise ValueError(f"case {index}: no hand (give one in the case or plan_many(..., hand=...))")
     if obj is None or target is None or pose is None:
         raise ValueError(f"case {index}: obj, target and palm_pose are all required")
+    merged = {**params, **own}
     try:  # as the planner would refuse them, before anything is planned
-        check_params({**params, **own}, "parameters", also=("record_object",),
-                     hand=c_hand if isinstance(c_hand, Hand) else None)
+        check_params(merged, "parameters", also=("record_object",), hand=c_hand if isinstance(c_hand, Hand) else None)
         _core.check_pose(np.asarray(pose, dtype=np.float64))
-        record = {**params, **own}.get("record_object")
-        if record is not None and (not isinstance(record, Object) or isinstance(obj, Object)):
-            raise ValueError("record_object must be a hugger.Object, for a skin without a mesh (a plan of an "
-                             "Object records that object)")
+        check_record_object(obj, merged.get("record_object"))
     except (TypeError, ValueError) as exc:
         raise ValueError(f"case {index}: {exc}") from None
-    return _Job(c_hand, obj, target, pose, {**params, **own}, timeout)
+    return _Job(c_hand, obj, target, pose, merged, timeout)
 
 
 def _run(job: _Job, batch: _Batch) -> Trajectory:
@@ -230,8 +227,7 @@ def plan_many(cases: Iterable[Any], threads: int | None = None, hand: Hand | Non
                             done += 1
                             finish(i, outcome, done)
             except BaseException:  # Ctrl-C, or the progress callback raised: the workers stop too
-                pool.shutdown(wait=False, cancel_futures=True)
-                batch.stop()
+                batch.stop(pool)
                 raise
     if failed and errors == "raise":
         err = PlanManyError(failed, results)

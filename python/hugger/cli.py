@@ -180,17 +180,12 @@ def _hand(args: argparse.Namespace) -> Hand:
         setattr(args, k, v)
     if not hasattr(args, "force"):
         return hugger.Hand(**shape)
-    # A hand of implausible size is refused unless --force, as a mesh is (millimetres read as metres).
-    import warnings
+    from .hand import plausible_hand
 
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        hand = hugger.Hand(**shape)
-    if hand.size_warning and not args.force:
-        raise UsageError(f"{hand.size_warning}; refused (give its sizes in metres, or --force to plan it anyway)")
-    for w in caught:  # (the size warning among them, with --force)
-        warnings.warn(w.message, stacklevel=2)
-    return hand
+    try:  # refused unless --force, as a mesh is (millimetres read as metres)
+        return plausible_hand(args.force, "--force to plan it anyway", **shape)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
 
 
 def _params(args: argparse.Namespace) -> dict[str, Any]:
@@ -375,6 +370,14 @@ def _case(args: argparse.Namespace, hand: Hand) -> Case:
     return case
 
 
+def _optional_out_scene(args: argparse.Namespace) -> tuple[Path | None, Hand, Case]:
+    """The trajectory file of an optional --out (.npz; None without it), the hand and the scene,
+    in that order: a bad --out is refused before anything is built."""
+    out = _out_path(args.out, (".npz",)) if args.out is not None else None
+    hand = _hand(args)
+    return out, hand, _case(args, hand)
+
+
 def cmd_plan(args: argparse.Namespace) -> int:
     out = _out_path(args.out, (".npz",))
     hand = _hand(args)
@@ -515,9 +518,7 @@ def _object_info(traj: Trajectory, obj: Object | None) -> dict[str, Any]:
 def cmd_info(args: argparse.Namespace) -> int:
     import warnings
 
-    import numpy as np
-
-    from .hand import implausible_size
+    from .analysis import collision_tolerance
     from .trajectory import FORMAT_VERSION
 
     traj = _load(args.file)
@@ -527,11 +528,8 @@ def cmd_info(args: argparse.Namespace) -> int:
         report = _report(traj, obj=obj)
         # A file's grasp judged as it stands: one the planner did not make (or whose object was
         # rescaled since) may sink the hand into the object, which the counts above do not show.
-        size = implausible_size("the object", float(np.ptp(obj.bounds, axis=0).max()))
-        if size is not None:
-            warnings.warn(size, UserWarning, stacklevel=1)
-        from .analysis import collision_tolerance
-
+        if obj.size_warning is not None:  # (not warned of when the file's object was made)
+            warnings.warn(obj.size_warning, UserWarning, stacklevel=1)
         if report["penetration_m"] > collision_tolerance(traj.hand["link_radius"]):
             warnings.warn(f"the hand lies {1000 * report['penetration_m']:.3g} mm inside the object at the final "
                           f"configuration (beyond max(2% of the link radius, 0.05 mm)): not a grasp this planner "
@@ -604,9 +602,7 @@ def cmd_baseline(args: argparse.Namespace) -> int:
 
     from .baselines import plan_baseline
 
-    out = _out_path(args.out, (".npz",)) if args.out is not None else None
-    hand = _hand(args)
-    case = _case(args, hand)
+    out, hand, case = _optional_out_scene(args)
     traj = plan_baseline(hand, case.obj, case.target, case.palm_pose)
     stats = traj.stats
     if out is not None:
@@ -772,9 +768,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
     from . import mujoco_skin
 
-    out = _out_path(args.out, (".npz",)) if args.out is not None else None
-    hand = _hand(args)
-    case = _case(args, hand)
+    out, hand, case = _optional_out_scene(args)
     if args.push < 0 or not np.isfinite(args.push):
         raise UsageError(f"--push must be a force >= 0 (N), got {args.push}")
     if args.latency < 0:

@@ -25,7 +25,7 @@ import unicodedata
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Iterator, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Mapping, Sequence, cast
 
 import numpy as np
 
@@ -35,6 +35,7 @@ from ._npz import READ_ERRORS, Archive, ArchiveError
 from ._types import VERSION
 
 if TYPE_CHECKING:
+    from .hand import Hand
     from .trajectory import Trajectory
     from .world import Object
 
@@ -56,6 +57,12 @@ def parse_hand(spec: str, force: bool = False) -> tuple[str, dict[str, Any]]:
     ``palm_radius``, ``palm_thickness``, in m) -> (label for file names, Hand keyword arguments).
     ``5x5`` is the default hand of ``hugger.Hand()``. A hand of implausible size (millimetres read
     as metres: :attr:`hugger.Hand.size_warning`) is refused unless ``force``."""
+    label, kwargs, _ = _parse_hand(spec, force)
+    return label, kwargs
+
+
+def _parse_hand(spec: str, force: bool) -> tuple[str, dict[str, Any], Hand]:
+    """:func:`parse_hand`, and the hand it made."""
     m = re.fullmatch(r"\s*(\d+)x(\d+)\s*(?::(.*))?", str(spec))
     if not m:
         raise ValueError(f"hand spec must be MxN or MxN:key=value,... (e.g. 5x5, 4x3:link_length=0.025), got {spec!r}")
@@ -74,19 +81,13 @@ def parse_hand(spec: str, force: bool = False) -> tuple[str, dict[str, Any]]:
         except ValueError:
             raise ValueError(f"hand spec {spec!r}: {key} must be a number, got {value!r}") from None
         label += f"_{key}{kwargs[key]:g}"
-    import warnings
+    from .hand import plausible_hand
 
-    from .hand import Hand
-
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        hand = Hand(**kwargs)  # checks the sizes now, not in a worker
-    if hand.size_warning and not force:  # refused as a mesh of implausible size is
-        raise ValueError(f"hand spec {spec!r}: {hand.size_warning}; refused (give its sizes in metres, or "
-                         f"force=True, --force, to make its shards anyway)")
-    for w in caught:
-        warnings.warn(w.message, stacklevel=2)
-    return label, kwargs
+    try:  # the sizes checked now, not in a worker
+        hand = plausible_hand(force, "force=True, --force, to make its shards anyway", **kwargs)
+    except ValueError as exc:
+        raise ValueError(f"hand spec {spec!r}: {exc}") from None
+    return label, kwargs, hand
 
 
 def _safe(name: str) -> str:
@@ -160,13 +161,17 @@ def _npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:
 def make_shard(task: dict[str, Any]) -> bytes:
     """The shard of one (object, hand) task, as the bytes of its .npz file. Pure: the same task
     gives the same bytes in any process."""
+    import warnings
+
     from .hand import Hand
     from .scenarios import judged_case
     from .analysis import escape
     from .search import search
 
     ob = task["object"]
-    hand = Hand(**task["hand"]["kwargs"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # a hand's size: warned of (or refused) by generate
+        hand = Hand(**task["hand"]["kwargs"])
     case, _ = judged_case(ob["path"], hand, scale=ob["scale"], force=True)  # judged by generate
     if ob["builtin"] is False and _sha256_file(ob["path"]) != ob["sha256"]:
         raise ValueError(f"{ob['path']} changed since the dataset was started (content hash differs)")
@@ -571,8 +576,8 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
         raise ValueError(f"rules must be one of {list(RULES)}, got {rules!r}")
     params = {k: params.get(k) for k in PARAMS}
     params["rules"] = None  # the rule set is the task's own "rules" (as in the keys of earlier datasets)
-    hand_list = [parse_hand(h, force) for h in hands]
-    if len({label for label, _ in hand_list}) != len(hand_list):
+    built = [_parse_hand(h, force) for h in hands]
+    if len({label for label, _, _ in built}) != len(built):
         raise ValueError("the same hand is given twice")
     obj_list = [_object_entry(os.fspath(o), float(scale), force) for o in objects]
     names = [_safe(o["name"]) for o in obj_list]
@@ -581,9 +586,6 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     root = Path(out)
     shard_dir = root / "shards"
     tasks: list[dict[str, Any]] = []
-    from .hand import Hand
-
-    built = [(label, kwargs, Hand(**kwargs)) for label, kwargs in hand_list]
     hand_entries = [{"label": label, "kwargs": kwargs, "json": hand.to_json()} for label, kwargs, hand in built]
     for label, _, hand in built:  # the parameters against each hand, before any shard is made
         try:
@@ -791,10 +793,10 @@ class Dataset:
             path = self.root / self.shards[i]["file"]
             data = path.read_bytes() if path.is_file() else None  # once: loaded and hashed (None: missing)
             with _open_shard(path, data) as z:
-                arrays = {k: z[k] for k in z.files}
+                arrays = z.read_all()
             _check_shard(arrays, self._sizes[i], path)
             # the shard the index lists, not another one copied or renamed there, nor one changed
-            if hashlib.sha256(data or b"").hexdigest() != self.shards[i]["sha256"]:
+            if hashlib.sha256(cast(bytes, data)).hexdigest() != self.shards[i]["sha256"]:  # (None: refused above)
                 raise ValueError(f"{path} is not the shard the index lists: its SHA-256 differs (replaced or changed "
                                  f"since it was made); remove it and repeat the command that made the dataset, which makes it again")
             self._cache[i] = arrays

@@ -52,6 +52,18 @@ DEFAULT_SKIN = "section"
 PARAMS = ("step", "epsilon", "contact_tolerance", "max_iterations", "rules", "skin")
 
 
+def check_record_object(obj: Any, record_object: Any) -> None:
+    """``ValueError`` unless ``record_object`` is None, or a :class:`hugger.Object` given with a skin
+    without a mesh (``obj`` a Sensing skin): the mesh such a plan records."""
+    if record_object is None:
+        return
+    if not isinstance(record_object, Object):
+        raise ValueError(f"record_object must be a hugger.Object or None, got {type(record_object).__name__}")
+    if isinstance(obj, Object):
+        raise ValueError("record_object must be None with an Object, whose plan records that object: it is for a "
+                         "skin without a mesh")
+
+
 def check_params(params: Mapping[str, Any], what: str = "planner parameters", also: Sequence[str] = (),
                  hand: Hand | None = None) -> None:
     """Raise ValueError, saying what is wrong, unless ``params`` are planner parameters (names of
@@ -122,10 +134,7 @@ class Planner:
             sensing, obj = obj, record_object
         elif not isinstance(obj, Object):
             raise ValueError(f"obj must be a hugger.Object or a hugger.skins.Sensing skin, got {type(obj).__name__}")
-        elif record_object is not None:
-            raise ValueError("record_object is for a skin without a mesh; with an Object the plan records that object")
-        if obj is not None and not isinstance(obj, Object):
-            raise ValueError(f"record_object must be a hugger.Object or None, got {type(obj).__name__}")
+        check_record_object(obj if sensing is None else sensing, record_object)
         t = real_array("target", target)
         pose = real_array("palm_pose", palm_pose)
         # The engine checks the parameters (the rules too), the skin's name, T and the pose
@@ -154,8 +163,9 @@ class Planner:
             raise ValueError(f"contact_tolerance {tolerance:g} m{default} is below the resolution this scene allows "
                              f"({MIN_RELATIVE_TOLERANCE:g} x its largest coordinate, {extent:g} m)")
         self.hand, self.object, self.sensing, self.target = hand, obj, sensing, t
-        self._emitted: int | None = 0  # configurations handed out by step(); None after plan()
-        self._handed = 0  # the index of the configuration step() hands out next
+        # Configurations handed out (by step(), or all of them by plan()): the index step() hands
+        # out next, and the end of trajectory().
+        self._handed = 0
 
     @property
     def status(self) -> str:
@@ -189,8 +199,6 @@ class Planner:
         # Last, after the only call that may raise a signal's exception: once counted, the
         # configuration is returned (no pending signal is taken between here and the caller).
         self._handed = out.iteration + 1
-        if self._emitted is not None:
-            self._emitted = self._handed
         return out
 
     def interrupt(self) -> None:
@@ -217,14 +225,13 @@ class Planner:
         try:
             self._core.plan(limit)
         finally:  # after an exception from a skin too: the configurations completed before it
-            self._emitted = None
             self._handed = self._core.size  # step() goes on after them
         return self.trajectory()
 
     def trajectory(self) -> Trajectory:
         """The configurations handed out so far (by ``step()``, or all after ``plan()``), as a
         :class:`Trajectory`."""
-        h = self._core.history() if self._emitted is None else self._core.history(0, self._emitted)
+        h = self._core.history(0, self._handed)
         return Trajectory(
             hand_json=self.hand.to_json(),
             params_json=json.dumps(self.params),
@@ -264,9 +271,11 @@ class _Batch:
             with self._lock:
                 self._running.discard(planner)
 
-    def stop(self) -> None:
-        """Stop the plans running, and refuse those asked for later (the caller cancels its pool's
-        jobs not started: ``pool.shutdown(wait=False, cancel_futures=True)``)."""
+    def stop(self, pool: Any = None) -> None:
+        """Stop the plans running, and refuse those asked for later; ``pool`` (a futures executor):
+        its jobs not started are cancelled, without waiting for those running."""
+        if pool is not None:
+            pool.shutdown(wait=False, cancel_futures=True)
         with self._lock:
             self._stopped = True
             for planner in self._running:

@@ -418,8 +418,7 @@ def search(hand: Hand, obj: Object, target: Any = None, approaches: int = 26, ru
                     if progress is not None:
                         progress(done, k)
             except BaseException:  # Ctrl-C, or the progress callback raised: the workers stop too
-                pool.shutdown(wait=False, cancel_futures=True)
-                batch.stop()
+                batch.stop(pool)
                 raise
     results = [r for r in slots if r is not None]  # every slot is filled (a failed run raised)
     trajs = [r[1] for r in results]

@@ -134,11 +134,6 @@ class Trajectory:
         (as :meth:`load` checks them), which no file may hold."""
         if len(self) == 0:
             raise ValueError(f"{EMPTY}: nothing to save")
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # (the hand's size was warned of when made)
-            hand = Hand.from_dict(self.hand)
-        _check_angles(hand, np.asarray(self.palm_pose, dtype=np.float64), np.asarray(self.angles, dtype=np.float64),
-                      np.asarray(self.joints, dtype=np.float64), "the trajectory")
         prov = dict(self.provenance)
         prov.setdefault("hugger_version", VERSION)
         if "object_sha256" not in prov:  # hashing the mesh only when the provenance lacks it
@@ -159,6 +154,7 @@ class Trajectory:
             "tip_state": np.asarray(self.tip_state, dtype=np.int8),
             "phase": np.asarray(self.phase, dtype=np.int8),
         }
+        _check_angles(_quiet_hand(self.hand), arrays["palm_pose"], arrays["angles"], arrays["joints"], "the trajectory")
         with atomic_path(path) as tmp, open(tmp, "wb") as fh:
             np.savez_compressed(fh, **arrays)
 
@@ -360,11 +356,17 @@ def _check_hand(hand: dict[str, Any], m: int, n: int, source: str) -> Hand:
     if shape != (m, n):
         raise ValueError(f"{source}: hand_json link_lengths must be a ({m}, {n}) list of lengths (m)")
     try:  # (M and N are its own fingers and links: the hand it describes has them)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)
-            return Hand.from_dict(hand)
+        return _quiet_hand(hand)
     except (ValueError, TypeError, OverflowError, RecursionError) as exc:
         raise ValueError(f"{source}: hand_json is not a valid hand: {exc}") from None
+
+
+def _quiet_hand(hand: dict[str, Any]) -> Hand:
+    """:meth:`Hand.from_dict` of a trajectory's hand, whose size is not warned of again (it was
+    when the hand was made)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return Hand.from_dict(hand)
 
 
 #: How many configurations, evenly spread from the first to the last, Trajectory.load checks
@@ -380,9 +382,9 @@ def _check_angles(hand: Hand, poses: np.ndarray, angles: np.ndarray, joints: np.
     joints, the physics test and the MJCF export the angles), and files that disagree (angles in
     degrees, joints of another hand) were judged one way by one and another by the other."""
     k = len(poses)
-    relative = max(1e-9, 16.0 * eps)
+    relative, reach = max(1e-9, 16.0 * eps), hand.reach
     for i in np.unique(np.linspace(0, k - 1, min(k, ANGLE_SAMPLES)).round().astype(int)):
         error = float(np.abs(hand.forward(poses[i], angles[i]) - joints[i]).max())
-        if not error <= 1e-6 + relative * (float(np.abs(joints[i]).max()) + hand.reach):
+        if not error <= 1e-6 + relative * (float(np.abs(joints[i]).max()) + reach):
             raise ValueError(f"{source}: angles and joints disagree at configuration {i}: the joints the angles "
                              f"give are {error:.3g} m from those stored (angles in degrees, or joints of another hand?)")

@@ -77,9 +77,15 @@ class Object:
         v.setflags(write=False)
         f.setflags(write=False)
         self._vertices, self._faces = v, f
-        message = implausible_size("the object", float(np.ptp(self.bounds, axis=0).max())) if warn_size else None
+        message = self.size_warning if warn_size else None
         if message:
             warnings.warn(message, UserWarning, stacklevel=2)
+
+    @property
+    def size_warning(self) -> str | None:
+        """The warning of an object whose size is implausible for a grasp (its largest extent
+        outside :data:`hugger.hand.PLAUSIBLE_SIZE`: millimetres read as metres), or None."""
+        return implausible_size("the object", float(np.ptp(self.bounds, axis=0).max()))
 
     @property
     def vertices(self) -> np.ndarray:
