@@ -89,8 +89,9 @@ def run_one(name: str, spec: str, hand: hugger.Hand, max_extent: float, do_valid
                 t2 = time.perf_counter()
                 r["setup_s"], r["plan_s"] = t1 - t0, t2 - t1
             else:
-                traj = baselines.plan_baseline(hand, case.obj, case.target, case.palm_pose)
-                r["setup_s"], r["plan_s"] = traj.stats["setup_time_s"], traj.stats["plan_time_s"]
+                run = baselines.run_baseline(hand, case.obj, case.target, case.palm_pose)
+                traj = run.trajectory
+                r["setup_s"], r["plan_s"] = run.setup_time_s, run.plan_time_s
         except ValueError as exc:
             results[planner] = {"error": str(exc)}
             print(f"  {name:24s} {planner:8s} error: {exc}", flush=True)

@@ -12,10 +12,10 @@ planners are timed, wall clock (``time.perf_counter``):
                  constructor builds once Phase 1 has ended; the speed targets, docs/performance.md,
                  count the object build and the sections as setup); plan = ``Planner.plan()`` (Phase 2 and the trajectory
                  handed to Python).
-  baseline       :func:`hugger.baselines.plan_baseline`, measured as bench/compare_baseline.py does
-                 it: setup = its ``stats["setup_time_s"]`` (building and compiling the MuJoCo model,
+  baseline       :func:`hugger.baselines.run_baseline`, measured as bench/compare_baseline.py does
+                 it: setup = its ``setup_time_s`` (building and compiling the MuJoCo model,
                  convex pieces from the cache; the Object is given ready-made), plan = its
-                 ``stats["plan_time_s"]`` (the loop of collision queries; the joints' forward
+                 ``plan_time_s`` (the loop of collision queries; the joints' forward
                  kinematics and the Trajectory built afterwards are outside it, and reported in
                  ``--json`` as ``call_s``, the whole call).
 
@@ -119,10 +119,9 @@ def run_hugger(hand: hugger.Hand, case: scenarios.Case, vertices: np.ndarray, fa
 
 def run_baseline(hand: hugger.Hand, case: scenarios.Case) -> tuple[dict[str, Any], hugger.Trajectory]:
     t0 = time.perf_counter()
-    traj = baselines.plan_baseline(hand, case.obj, case.target, case.palm_pose)
+    run = baselines.run_baseline(hand, case.obj, case.target, case.palm_pose)
     call = time.perf_counter() - t0
-    stats = traj.stats
-    return {"setup_s": float(stats["setup_time_s"]), "plan_s": float(stats["plan_time_s"]), "call_s": call}, traj
+    return {"setup_s": run.setup_time_s, "plan_s": run.plan_time_s, "call_s": call}, run.trajectory
 
 
 def run_one(planner: str, hand: hugger.Hand, case: scenarios.Case, arrays: tuple[np.ndarray, np.ndarray]

@@ -301,7 +301,21 @@ def test_baseline_is_a_valid_trajectory(baseline_sphere, checker, tmp_path):
     # it stopped on a touch: every finger ends within the contact tolerance of the object
     gaps = traj.link_gaps(-1)
     assert np.all(gaps.min(axis=1) <= traj.params["contact_tolerance"] + 1e-6)
-    assert traj.stats["plan_time_s"] > 0
+
+
+def test_baseline_plans_the_same_bytes_twice_and_times_apart(hand, tmp_path):
+    # its wall-clock times lived in its stats: two saves of one plan from Python differed
+    obj = hugger.objects.sphere(0.04, subdivisions=2)
+    start = hugger.look_at([0, 0, 0.2], [0, 0, 0])
+    runs = [baselines.run_baseline(hand, obj, [0, 0, 0], start) for _ in range(2)]
+    for i, run in enumerate(runs):
+        assert run.setup_time_s > 0 and run.plan_time_s > 0
+        assert not any(k.endswith("_time_s") for k in run.trajectory.stats)
+        run.trajectory.save(tmp_path / f"{i}.npz")
+    assert (tmp_path / "0.npz").read_bytes() == (tmp_path / "1.npz").read_bytes()
+    plain = baselines.plan_baseline(hand, obj, [0, 0, 0], start)
+    plain.save(tmp_path / "plain.npz")
+    assert (tmp_path / "plain.npz").read_bytes() == (tmp_path / "0.npz").read_bytes()
 
 
 def test_baseline_touches_less_than_hugger(baseline_sphere, sphere_plan):

@@ -17,8 +17,10 @@ distance tolerance, about 1e-6 m).
 The result is a :class:`hugger.Trajectory` (docs/file-format.md): phase 0 for C_init, 1 for the
 reorientation, 2 for approach and closing; tip_state FROZEN during the approach, CONTACT while a
 finger closes, DONE once all its joints have stopped; ``status`` ``done`` (or ``max_iterations``).
-``stats`` holds ``plan_time_s``, the wall-clock time of the planning itself (the loop of collision
-queries; building and compiling the MuJoCo model is ``setup_time_s``).
+Its ``stats`` hold counts only, so the same input gives the same trajectory, bit for bit (saved,
+the same bytes). The wall-clock times come with :func:`run_baseline`'s :class:`BaselineRun`:
+``plan_time_s``, the planning itself (the loop of collision queries), and ``setup_time_s``,
+building and compiling the MuJoCo model.
 
 MuJoCo is imported when :func:`plan_baseline` is first called (extra: ``pip install 'hugger[physics]'``),
 so importing this module needs only numpy.
@@ -32,6 +34,7 @@ import json
 import math
 import sys
 import time
+from dataclasses import dataclass
 from typing import Any, Callable, cast
 
 import numpy as np
@@ -127,6 +130,15 @@ def _land(gap: Callable[[float], float], end: float, delta: float) -> tuple[floa
     return lo, False
 
 
+@dataclass(frozen=True)
+class BaselineRun:
+    """A baseline plan and how long it took (:func:`run_baseline`)."""
+
+    trajectory: Trajectory
+    setup_time_s: float  #: wall-clock time of building and compiling the MuJoCo model (s)
+    plan_time_s: float  #: wall-clock time of the planning itself, the loop of collision queries (s)
+
+
 def plan_baseline(hand: Hand, obj: Object, target: Any, palm_pose: Any, step: float | None = None,
                   contact_tolerance: float = 1e-4, max_iterations: int = 20000, decompose: bool = True,
                   cache_dir: Any = None) -> Trajectory:
@@ -135,8 +147,18 @@ def plan_baseline(hand: Hand, obj: Object, target: Any, palm_pose: Any, step: fl
     ``step`` (m, default shortest link / 20 as in Hugger) bounds how far any point of the hand
     moves per configuration; ``contact_tolerance`` δ (m) is the gap that counts as a touch;
     ``max_iterations`` bounds the Phase 2 configurations. Raises ``ValueError`` when T is not
-    inside the object, or the hand touches the object at the start or while turning.
+    inside the object, or the hand touches the object at the start or while turning. The same
+    input gives the same trajectory, bit for bit; :func:`run_baseline` also times it.
     """
+    return run_baseline(hand, obj, target, palm_pose, step=step, contact_tolerance=contact_tolerance,
+                        max_iterations=max_iterations, decompose=decompose, cache_dir=cache_dir).trajectory
+
+
+def run_baseline(hand: Hand, obj: Object, target: Any, palm_pose: Any, step: float | None = None,
+                 contact_tolerance: float = 1e-4, max_iterations: int = 20000, decompose: bool = True,
+                 cache_dir: Any = None) -> BaselineRun:
+    """:func:`plan_baseline` (the same arguments and errors), timed: its trajectory with the
+    wall-clock times of the setup and of the planning, which the trajectory does not hold."""
     t_setup = time.perf_counter()
     target = np.asarray(target, dtype=np.float64).reshape(3)
     pose = np.array(palm_pose, dtype=np.float64).reshape(4, 4)
@@ -271,14 +293,15 @@ def plan_baseline(hand: Hand, obj: Object, target: Any, palm_pose: Any, step: fl
     params = {"planner": "close-until-contact baseline (AutoGrasp)", "step": s, "epsilon": s / 10.0,
               "contact_tolerance": delta, "max_iterations": int(max_iterations), "joint_step_rad": dtheta,
               "collision": "MuJoCo, object as convex pieces", "decompose": bool(decompose)}
-    stats = {"plan_time_s": plan_time, "setup_time_s": setup_time, "approach_configurations": approach_configurations,
+    stats = {"approach_configurations": approach_configurations,
              "closing_configurations": iterations - approach_configurations, "collision_queries": scene.queries,
              "touched": bool(touched), "phase1_configurations": int(np.sum(np.array(phases) == 1))}
-    return Trajectory(hand_json=hand.to_json(), params_json=json.dumps(params), object_vertices=obj.vertices,
-                             object_faces=obj.faces, target=target, palm_pose=palm, joints=joints, angles=ang,
-                             tip_state=np.array(states, dtype=np.int8), phase=np.array(phases, dtype=np.int8),
-                             status="done" if touched and not active.any() else "max_iterations",
-                             stats_json=json.dumps(stats))
+    traj = Trajectory(hand_json=hand.to_json(), params_json=json.dumps(params), object_vertices=obj.vertices,
+                      object_faces=obj.faces, target=target, palm_pose=palm, joints=joints, angles=ang,
+                      tip_state=np.array(states, dtype=np.int8), phase=np.array(phases, dtype=np.int8),
+                      status="done" if touched and not active.any() else "max_iterations",
+                      stats_json=json.dumps(stats))
+    return BaselineRun(traj, setup_time_s=setup_time, plan_time_s=plan_time)
 
 
 def main(argv: list[str] | None = None) -> int:

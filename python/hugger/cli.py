@@ -598,20 +598,15 @@ def _hold_test(traj: Trajectory, as_json: bool) -> dict[str, Any]:
 
 def cmd_baseline(args: argparse.Namespace) -> int:
     """The close-until-contact baseline from the start ``hugger plan`` takes, with its hand options."""
-    import dataclasses
-
-    from .baselines import plan_baseline
+    from .baselines import run_baseline
 
     out, hand, case = _optional_out_scene(args)
-    traj = plan_baseline(hand, case.obj, case.target, case.palm_pose)
-    stats = traj.stats
-    if out is not None:
-        # The file as the planner's files are: the same input writes the same bytes (the
-        # timings, which the report below gives, are left out of its stats).
-        kept = {k: v for k, v in stats.items() if not k.endswith("_time_s")}
-        dataclasses.replace(traj, stats_json=json.dumps(kept)).with_provenance(**_provenance(args)).save(out)
+    run = run_baseline(hand, case.obj, case.target, case.palm_pose)
+    traj = run.trajectory
+    if out is not None:  # as the planner's files: the same input writes the same bytes
+        traj.with_provenance(**_provenance(args)).save(out)
     report = {"object": case.name, "out": None if out is None else str(out), **_report(traj, obj=case.obj),
-              "setup_time_s": round(stats["setup_time_s"], 6), "plan_time_s": round(stats["plan_time_s"], 6)}
+              "setup_time_s": round(run.setup_time_s, 6), "plan_time_s": round(run.plan_time_s, 6)}
     if not args.json:
         _print_table(report)
     held = _hold_test(traj, args.json) if args.validate else None
