@@ -106,6 +106,34 @@ def test_a_hand_in_millimetres_is_refused_unless_forced(tmp_path, capsys):
     assert code == 0 and "hugger: warning: the hand is 100 m across" in err
 
 
+@pytest.mark.parametrize("command", ["plan", "baseline"])
+def test_a_hand_file_in_millimetres_is_refused_unless_forced(tmp_path, capsys, command):
+    # --hand FILE in millimetres was only warned of; then the analysis sampled its 30 m palm every
+    # millimetre, and plan and baseline hung
+    if command == "baseline":
+        pytest.importorskip("mujoco")
+    with pytest.warns(UserWarning, match="implausibly large"):
+        hand = hugger.Hand(link_length=20, link_radius=4, palm_radius=30, palm_thickness=10)
+    path = tmp_path / "hand_mm.json"
+    path.write_text(hand.to_json())
+    code, _, err = run([command, "sphere", "--hand", path, "--out", tmp_path / "a.npz"], capsys)
+    assert code == 2 and err.startswith("hugger: error: the hand is 100 m across, implausibly large")
+    assert "--force" in err and len(err.strip().splitlines()) == 1 and not (tmp_path / "a.npz").exists()
+    if command == "plan":
+        code, out, err = run([command, "sphere", "--hand", path, "--out", tmp_path / "a.npz", "--force"], capsys)
+        assert code == 0 and "hugger: warning: the hand is 100 m across" in err and "links_in_contact" in out
+
+
+def test_the_palm_samples_are_bounded_for_any_palm():
+    from hugger import analysis
+
+    for radius, thickness in ((0.03, 0.01), (30.0, 10.0), (0.03, 1e-7), (1e-4, 1.0)):
+        local, _ = analysis._palm_points(np.eye(4), radius, thickness)
+        assert 7 <= len(local) <= 120_000, (radius, thickness, len(local))
+        assert np.abs(local[:, :2]).max() <= radius * (1 + 1e-12) and local[:, 2].min() >= -thickness * (1 + 1e-12)
+    assert len(analysis._palm_points(np.eye(4), 0.03, 0.01)[0]) == len(analysis._palm_samples(0.03, 0.01, 1e-3))
+
+
 def test_scale_is_refused_for_a_builtin(tmp_path, capsys):
     code, _, err = run(["plan", "sphere", "--scale", "0.001", "--out", tmp_path / "a.npz"], capsys)
     assert code == 2 and "--scale applies to mesh files only" in err and not (tmp_path / "a.npz").exists()

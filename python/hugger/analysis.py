@@ -50,6 +50,9 @@ _PALM = -1
 _MAX_SPACING = 1e-3
 #: At most this many samples per link axis (bounds the cost for huge, thin links).
 _MAX_LINK_SAMPLES = 400
+#: The palm's samples at least this fraction of its radius or thickness, the larger, apart: at
+#: most about 128 rings and rim levels (bounds the cost for a huge palm, or a hand in millimetres).
+_MAX_PALM_RINGS = 128
 #: At most this many representative contacts from the palm's touching region.
 _PALM_CONTACTS = 8
 #: :func:`escape_distance` slides the object this far at most (m): the hold test's limit on how
@@ -193,8 +196,10 @@ def _axis_samples(a: np.ndarray, b: np.ndarray, radius: float, links: list[int])
 
 def _palm_points(pose: np.ndarray, radius: float, thickness: float) -> tuple[np.ndarray, np.ndarray]:
     """The palm's front face and rim sampled (:func:`_palm_samples`, spacing min(1 mm, radius/8,
-    thickness/2)): the points in the palm frame and in the world."""
-    local = _palm_samples(radius, thickness, min(_MAX_SPACING, radius / 8.0, thickness / 2.0))
+    thickness/2), but at least max(radius, thickness)/128): the points in the palm frame and in
+    the world."""
+    spacing = max(min(_MAX_SPACING, radius / 8.0, thickness / 2.0), max(radius, thickness) / _MAX_PALM_RINGS)
+    local = _palm_samples(radius, thickness, spacing)
     return local, _stable.matmul(local, pose[:3, :3].T) + pose[:3, 3]
 
 

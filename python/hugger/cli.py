@@ -32,7 +32,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Mapping, NoReturn, Sequence, TextIO
+from typing import TYPE_CHECKING, Any, Callable, Mapping, NoReturn, Sequence, TextIO
 
 from ._files import check_replaceable, write_atomic
 from ._progress import Progress, print_line
@@ -171,19 +171,26 @@ def _hand(args: argparse.Namespace) -> Hand:
                 raise UsageError(f"--fixed-joint must be NAME=RAD, got {item!r}")
             if sum(other.partition("=")[0] == name for other in args.fixed_joint) > 1:
                 raise UsageError(f"--fixed-joint holds {name!r} more than once")
-        return hands.load(args.hand, fixed_joints=fixed or None, palm=args.palm_link, **extra)
+        return _plausible(args, lambda: hands.load(args.hand, fixed_joints=fixed or None, palm=args.palm_link,
+                                                   **extra))
     for option in ("fixed_joint", "palm_link"):
         if getattr(args, option, None):
             raise UsageError(f"--{option.replace('_', '-')} needs --hand FILE")
     shape: dict[str, Any] = {k: getattr(args, k) if k in given else v for k, v in defaults.items()}
     for k, v in shape.items():  # as parsed with these defaults: the file's provenance records them
         setattr(args, k, v)
+    return _plausible(args, lambda: hugger.Hand(**shape))
+
+
+def _plausible(args: argparse.Namespace, make: Callable[[], Hand]) -> Hand:
+    """The hand ``make()`` returns; for a command that takes ``--force`` (one that plans), refused
+    unless ``--force`` when its size is implausible, as a mesh is (millimetres read as metres)."""
     if not hasattr(args, "force"):
-        return hugger.Hand(**shape)
+        return make()
     from .hand import plausible_hand
 
-    try:  # refused unless --force, as a mesh is (millimetres read as metres)
-        return plausible_hand(args.force, "--force to plan it anyway", **shape)
+    try:
+        return plausible_hand(args.force, "--force to plan it anyway", make)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
 

@@ -81,10 +81,10 @@ def _parse_hand(spec: str, force: bool) -> tuple[str, dict[str, Any], Hand]:
         except ValueError:
             raise ValueError(f"hand spec {spec!r}: {key} must be a number, got {value!r}") from None
         label += f"_{key}{kwargs[key]:g}"
-    from .hand import plausible_hand
+    from .hand import Hand, plausible_hand
 
     try:  # the sizes checked now, not in a worker
-        hand = plausible_hand(force, "force=True, --force, to make its shards anyway", **kwargs)
+        hand = plausible_hand(force, "force=True, --force, to make its shards anyway", lambda: Hand(**kwargs))
     except ValueError as exc:
         raise ValueError(f"hand spec {spec!r}: {exc}") from None
     return label, kwargs, hand

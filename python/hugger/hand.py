@@ -60,13 +60,14 @@ def implausible_size(what: str, size: float) -> str | None:
     return None
 
 
-def plausible_hand(force: bool, how: str, **kwargs: Any) -> Hand:
-    """``Hand(**kwargs)``, refused with a ``ValueError`` when its size is implausible for a grasp
-    (:attr:`Hand.size_warning`: millimetres read as metres) unless ``force``, as a mesh of
-    implausible size is; ``how``: how to force it, for the message. Forced, it is warned of."""
+def plausible_hand(force: bool, how: str, make: Callable[[], Hand]) -> Hand:
+    """The hand ``make()`` returns (``Hand(...)``, a preset, a URDF file's), refused with a
+    ``ValueError`` when its size is implausible for a grasp (:attr:`Hand.size_warning`:
+    millimetres read as metres) unless ``force``, as a mesh of implausible size is; ``how``: how to
+    force it, for the message. Forced, it is warned of."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        hand = Hand(**kwargs)
+        hand = make()
     if hand.size_warning and not force:
         raise ValueError(f"{hand.size_warning}; refused (give its sizes in metres, or {how})")
     for w in caught:  # (the size warning among them, when forced)
