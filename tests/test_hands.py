@@ -6,6 +6,7 @@ import math
 import os
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -504,6 +505,42 @@ def test_a_urdf_that_is_no_tree_or_has_inverted_limits_is_refused(tmp_path, old,
     path = _edited_urdf(tmp_path, old, new)
     with pytest.raises(ValueError, match=message):
         hands.load(path)
+
+
+LIMITS = 'lower="-0.3490658503988659" upper="1.7453292519943295"'
+
+
+@pytest.mark.parametrize("old, new, message", [
+    # these were taken for a joint without limits, silently; URDF requires both (0 by default)
+    ('<limit effort="10.0" velocity="2.0" ' + LIMITS + '/>', "", "revolute joint 'f0_j0' has no <limit>"),
+    (LIMITS, 'lower="-0.3"', "revolute joint 'f0_j0' has a <limit> without upper"),
+    (LIMITS, "", "revolute joint 'f0_j0' has a <limit> without lower and upper"),
+    (LIMITS, 'lower="nan" upper="1.6"', r"joint 'f0_j0' has limits \[nan, 1.6\]: not numbers"),
+    # these overflowed, or named the wrong joint or none
+    ('<origin xyz="0.0 0.0 0.03"', '<origin xyz="0.0 0.0 1e300"', r"joint 'f0_j1' has origin xyz .*: not a finite"),
+    ('<origin xyz="0.0 0.0 0.03"', '<origin xyz="nan 0.0 0.03"', r"joint 'f0_j1' has origin xyz \[nan"),
+])
+def test_a_urdf_joint_without_limits_or_at_no_finite_place_is_named(tmp_path, old, new, message):
+    path = _edited_urdf(tmp_path, old, new)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # and no numpy overflow on the way
+        with pytest.raises(ValueError, match=message) as info:
+            hands.load(path)
+    assert "\n" not in str(info.value)
+
+
+def test_infinite_urdf_limits_are_no_bound_without_a_warning(tmp_path):
+    path = _edited_urdf(tmp_path, LIMITS, 'lower="-inf" upper="inf"')
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # not "beyond +-2 pi as if in degrees"
+        assert not np.isfinite(hands.load(path).joint_limits[0, 0]).any()
+
+
+@pytest.mark.parametrize("angle", ["0.1", True, None, [0.1]])
+def test_fixed_joints_take_numbers_only(tmp_path, angle):
+    f = thumb_urdf(tmp_path / "thumb.urdf")
+    with pytest.raises(ValueError, match=r"fixed_joints\['f0_spread'\] must be an angle"):
+        hugger.Hand.from_urdf(f, fixed_joints={"f0_spread": angle})
 
 
 def test_a_urdf_without_finger_cylinders_warns_and_takes_a_given_radius(tmp_path):

@@ -20,6 +20,7 @@ from typing import Any, Callable, Mapping, cast
 
 import numpy as np
 
+from .._checks import number
 from .._rotation import axis_angle
 from .. import _stable
 from ..hand import Hand, rim_directions
@@ -285,9 +286,9 @@ def _fixed_joints(value: Any) -> dict[str, float]:
         raise ValueError(f"fixed_joints must map joint names to angles (rad), got {type(value).__name__}")
     out: dict[str, float] = {}
     for name, angle in value.items():
-        try:
-            x = float(angle)
-        except (TypeError, ValueError):
+        try:  # (text and bools are not angles)
+            x = number(f"fixed_joints[{name!r}]", angle)
+        except ValueError:
             raise ValueError(f"fixed_joints[{name!r}] must be an angle (rad), got {angle!r}") from None
         if not math.isfinite(x):
             raise ValueError(f"fixed_joints[{name!r}] must be a finite angle (rad), got {angle!r}")
@@ -302,6 +303,42 @@ def _within_limits(source: str, name: str, value: float, lower: Any, upper: Any,
     if not lo - LIMIT_TOLERANCE <= value <= hi + LIMIT_TOLERANCE:
         raise ValueError(f"{source}: joint {name!r} held at {value:g} {unit} is outside its limits "
                          f"[{lo:g}, {hi:g}] {unit}")
+
+
+#: A joint's origin farther than this (m) from its parent link's frame is no hand's.
+_FARTHEST_ORIGIN = 1e6
+
+
+def _urdf_origin(source: str, j: Any) -> np.ndarray:
+    """Joint ``j``'s origin (4, 4); a ValueError naming it when that is not a finite pose within
+    :data:`_FARTHEST_ORIGIN`."""
+    if j.origin is None:
+        return np.eye(4)
+    origin = np.asarray(j.origin, dtype=np.float64)
+    if not np.all(np.isfinite(origin)) or float(np.abs(origin[:3, 3]).max()) > _FARTHEST_ORIGIN:
+        raise ValueError(f"{source}: joint {j.name!r} has origin xyz {origin[:3, 3].tolist()}: not a finite "
+                         f"position within {_FARTHEST_ORIGIN:g} m")
+    return origin
+
+
+def _urdf_limits(source: str, j: Any) -> tuple[float, float]:
+    """Revolute joint ``j``'s limits (rad); a ValueError naming it when it lacks either, which URDF
+    requires (its defaults, 0 and 0, would hold the joint still), or when they are not numbers."""
+    lim = j.limit
+    if lim is None or lim.lower is None or lim.upper is None:
+        missing = "no <limit>" if lim is None else "a <limit> without " + " and ".join(
+            k for k in ("lower", "upper") if getattr(lim, k) is None)
+        raise ValueError(f"{source}: revolute joint {j.name!r} has {missing} (URDF requires both lower and upper, "
+                         f"in rad; a joint without limits is 'continuous')")
+    lo, hi = float(lim.lower), float(lim.upper)
+    if math.isnan(lo) or math.isnan(hi):
+        raise ValueError(f"{source}: joint {j.name!r} has limits [{lim.lower}, {lim.upper}]: not numbers")
+    if not lo <= hi:
+        raise ValueError(f"{source}: joint {j.name!r} has limits lower = {lim.lower} > upper = {lim.upper} rad")
+    if max((abs(x) for x in (lo, hi) if math.isfinite(x)), default=0.0) > 2 * math.pi:
+        warnings.warn(f"{source}: joint {j.name!r} has limits [{lim.lower}, {lim.upper}], beyond +-2 pi as if in "
+                      f"degrees (URDF limits are radians): a bound beyond +-pi is no bound", stacklevel=4)
+    return lo, hi
 
 
 def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_joints: dict[str, float] | None = None,
@@ -367,7 +404,7 @@ def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dic
         children.setdefault(j.parent, []).append(j)
 
     def motion(j: Any, value: float) -> np.ndarray:
-        origin = np.eye(4) if j.origin is None else np.asarray(j.origin, dtype=np.float64)
+        origin = _urdf_origin(source, j)
         if j.type in ("revolute", "continuous") and value != 0.0:
             rot = np.eye(4)
             rot[:3, :3] = axis_angle(np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0]), value)
@@ -410,18 +447,7 @@ def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dic
             if not (np.all(np.isfinite(axis)) and float(_stable.norm(axis)) > 0.0):
                 raise ValueError(f"{source}: joint {j.name!r} has axis {axis.tolist()}: not a direction")
             c.axes.append(_stable.matmul(f[:3, :3], axis / _stable.norm(axis)))
-            lim = j.limit
-            if j.type == "continuous" or lim is None or lim.lower is None or lim.upper is None:
-                c.limits.append((-math.inf, math.inf))
-            else:
-                if not float(lim.lower) <= float(lim.upper):
-                    raise ValueError(f"{source}: joint {j.name!r} has limits lower = {lim.lower} > upper = "
-                                     f"{lim.upper} rad")
-                if max(abs(float(lim.lower)), abs(float(lim.upper))) > 2 * math.pi:
-                    warnings.warn(f"{source}: joint {j.name!r} has limits [{lim.lower}, {lim.upper}], beyond "
-                                  f"+-2 pi as if in degrees (URDF limits are radians): a bound beyond +-pi is no "
-                                  f"bound", stacklevel=3)
-                c.limits.append((float(lim.lower), float(lim.upper)))
+            c.limits.append((-math.inf, math.inf) if j.type == "continuous" else _urdf_limits(source, j))
             if getattr(j, "mimic", None) is not None:
                 warnings.warn(f"{source}: joint {j.name!r} mimics {j.mimic.joint!r} in the file; the hand moves "
                               f"each joint on its own (the coupling is not kept; hold the joints with fixed_joints "
