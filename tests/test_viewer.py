@@ -185,6 +185,8 @@ def test_viewer_scene_timeline_and_toggles(plans):
             v.show(v.count)
     with viewer.view(str(plans[0]), port=0, open_browser=False, block=False) as v:  # a file's path
         assert len(v.plans) == 1 and len(v.links[0]) == 25
+    with pytest.raises(ValueError, match="the viewer is closed"):  # (viser only warned)
+        v.show(0)
     with pytest.raises(ValueError, match="at least one"):
         viewer.Viewer([])
     with pytest.raises(ValueError, match="port"):

@@ -326,7 +326,7 @@ class Viewer:
         self.play_button.on_click(lambda _: self._toggle())
         self.fps_number.on_update(lambda _: setattr(self, "fps", float(self.fps_number.value)))
         self.transparent.on_update(lambda _: self._set_opacity())
-        self.show_contacts.on_update(lambda _: self.show(self.configuration))
+        self.show_contacts.on_update(lambda _: self._show(self.configuration))
         self.configuration: int = self.count - 1
         self.show(self.count - 1)
 
@@ -341,12 +341,20 @@ class Viewer:
         return self._contact_cache[key]
 
     def show(self, k: int) -> None:
-        """Show configuration k (clamped to each plan's length; negative counts from the end)."""
+        """Show configuration k (clamped to each plan's length; negative counts from the end).
+        ``ValueError`` after :meth:`close`."""
+        if self._closed.is_set():
+            raise ValueError("the viewer is closed: its server has stopped")
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
             raise ValueError(f"k must be a whole number, got {k!r}")
         k = int(k) if k >= 0 else self.count + int(k)
         if not 0 <= k < self.count:
             raise ValueError(f"k must be in 0..{self.count - 1} (or negative from the end), got {k}")
+        self._show(k)
+
+    def _show(self, k: int) -> None:
+        """show(k) for a k in range, from the viewer's own threads (the player, the GUI's callbacks),
+        which may still run while close() stops them."""
         lines = []
         with self._lock, self.server.atomic():
             self.configuration = k
@@ -382,11 +390,11 @@ class Viewer:
     def _on_slider(self) -> None:
         k = int(self.slider.value)
         if k != self.configuration:  # not the echo of show() moving the slider
-            self.show(k)
+            self._show(k)
 
     def _toggle(self) -> None:
         if not self.playing and self.configuration >= self.count - 1:
-            self.show(0)  # play again from C_init
+            self._show(0)  # play again from C_init
         self.playing = not self.playing
 
     def _play_loop(self) -> None:
@@ -396,7 +404,7 @@ class Viewer:
                 if k >= self.count - 1:
                     self.playing = False  # pause on the final grasp
                     k = self.count - 1
-                self.show(k)
+                self._show(k)
 
     @property
     def url(self) -> str:

@@ -589,11 +589,14 @@ def _joint_values(hand: Hand, angles: Any) -> np.ndarray:
         m, n = (int(i) for i in outside[0])
         raise ValueError(f"angles[{m}, {n}] = {a[m, n]:.6g} rad is outside that joint's limits "
                          f"[{lim[m, n, 0]:.6g}, {lim[m, n, 1]:.6g}]")
-    return cast(np.ndarray, a - hand.rest_angles)
+    # Onto the limits where rounding put them beyond (the planner's slack): within the file's limits,
+    # computed as these are, exactly (a controller may refuse a value 1e-16 beyond one).
+    return cast(np.ndarray, np.clip(a, lim[..., 0], lim[..., 1]) - hand.rest_angles)
 
 
 def grasp_joint_values(hand: Hand, angles: Any) -> dict[str, float]:
-    """URDF/MJCF joint values ``{f{m}_j{n}: q}`` (rad) of hugger angles (M, N): q = theta - rest."""
+    """URDF/MJCF joint values ``{f{m}_j{n}: q}`` (rad) of hugger angles (M, N): q = theta - rest,
+    with theta within the joint's limits (an angle beyond one by rounding is taken onto it)."""
     q = _joint_values(hand, angles)
     return {f"f{m}_j{n}": float(q[m, n]) for m in range(hand.fingers) for n in range(hand.links)}
 
