@@ -584,3 +584,22 @@ def test_a_hand_file_that_is_no_hand_json_is_a_one_line_error(tmp_path, text, ma
     r = subprocess.run([sys.executable, "-m", "hugger", "plan", "sphere", "--hand", str(f), "--out",
                         str(tmp_path / "x.npz")], capture_output=True, text=True)
     assert r.returncode == 2 and r.stderr.startswith("hugger: error:") and len(r.stderr.strip().splitlines()) == 1
+
+
+
+def test_exported_joint_values_lie_within_the_exported_limits_exactly():
+    # an angle the planner left 1e-13 beyond a limit (its slack) was exported as q = -1.1e-16
+    # below a lower limit of 0, which a strict controller may refuse
+    import re
+
+    hand = hands.preset("barrett_bh8")
+    angles = np.clip(np.zeros((hand.fingers, hand.links)), hand.joint_limits[..., 0], hand.joint_limits[..., 1])
+    angles[0, 1] = hand.joint_limits[0, 1, 0] - 1e-13
+    angles[1, 0] = hand.joint_limits[1, 0, 1] + 1e-13
+    q = hands.grasp_joint_values(hand, angles)
+    text = hands.to_urdf(hand, angles)
+    for name in ("f0_j1", "f1_j0"):
+        lo, hi = (float(x) for x in re.search(rf'<joint name="{name}".*?lower="([^"]+)" upper="([^"]+)"', text,
+                                               re.S).groups())
+        assert lo <= q[name] <= hi, (name, lo, q[name], hi)
+    assert q["f0_j1"] == hand.joint_limits[0, 1, 0] - hand.rest_angles[0, 1]

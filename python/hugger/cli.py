@@ -558,8 +558,8 @@ def cmd_info(args: argparse.Namespace) -> int:
                f"{' x '.join(f'{1000 * e:.0f}' for e in hi - lo)} mm"
     else:
         what = "none recorded (planned with a skin that has no mesh)"
-    info = {"file": args.file, "hand": f"{h['fingers']} fingers x {h['links']} links, link radius {h['link_radius']} m, "
-                                      f"palm radius {h['palm_radius']} m"
+    info = {"file": args.file, "hand": f"{h['fingers']} fingers x {h['links']} links, link radius {h['link_radius']:.6g} m, "
+                                      f"palm radius {h['palm_radius']:.6g} m"
                     + (", general layout" if "finger_roots" in h else "")
                     + (f" ({h['name']})" if isinstance(h.get("name"), str) else ""),
             "object": what,
