@@ -617,6 +617,49 @@ def test_a_dataset_of_a_relative_mesh_path_reads_from_any_folder_and_a_missing_s
         hugger.Dataset(tmp_path / "ds")
 
 
+def test_a_shard_depends_on_the_mesh_s_content_not_how_its_path_is_spelled(tmp_path, monkeypatch):
+    # objs/ball.stl and ./objs/ball.stl made different shards, and one could not resume the other
+    import shutil
+
+    import trimesh
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "objs").mkdir()
+    trimesh.creation.icosphere(subdivisions=2, radius=0.04).export(tmp_path / "objs" / "ball.stl")
+    dataset.generate(["objs/ball.stl"], "a", approaches=2, workers=1)
+    dataset.generate(["./objs/ball.stl"], "b", approaches=2, workers=1)
+    shard = Path("shards") / "ball__5x5.npz"
+    assert (tmp_path / "a" / shard).read_bytes() == (tmp_path / "b" / shard).read_bytes()
+    made = (tmp_path / "a" / shard).stat().st_mtime_ns
+    (tmp_path / "moved").mkdir()
+    shutil.copy(tmp_path / "objs" / "ball.stl", tmp_path / "moved" / "ball.stl")  # the same content elsewhere
+    lines: list[str] = []
+    index = dataset.generate([str(tmp_path / "moved" / "ball.stl")], "a", approaches=2, workers=1, log=lines.append)
+    assert "1 of 1 shards already done; making 0" in lines and (tmp_path / "a" / shard).stat().st_mtime_ns == made
+    assert index["objects"][0]["abspath"] == str(tmp_path / "moved" / "ball.stl")
+    assert hugger.Dataset(tmp_path / "a")[0].status == hugger.Dataset(tmp_path / "b")[0].status
+
+
+def test_a_shard_keyed_by_its_path_as_given_is_still_resumed(tmp_path, monkeypatch):
+    # shards of earlier versions hashed the mesh's path as given into their key
+    import trimesh
+
+    monkeypatch.chdir(tmp_path)
+    trimesh.creation.icosphere(subdivisions=2, radius=0.04).export(tmp_path / "ball.stl")
+    keyed = dataset._task_key
+    monkeypatch.setattr(dataset, "_task_key", lambda task, spelled=False: keyed(task, spelled=True))
+    dataset.generate(["ball.stl"], "ds", approaches=2, workers=1)
+    monkeypatch.setattr(dataset, "_task_key", keyed)
+    shard = tmp_path / "ds" / "shards" / "ball__5x5.npz"
+    made = shard.stat().st_mtime_ns
+    lines: list[str] = []
+    dataset.generate(["ball.stl"], "ds", approaches=2, workers=1, log=lines.append)
+    assert "1 of 1 shards already done; making 0" in lines and shard.stat().st_mtime_ns == made
+    assert hugger.Dataset(tmp_path / "ds")[0].status in ("done", "stalled", "max_iterations")
+    with pytest.raises(ValueError, match="other settings or objects"):  # other settings are still refused
+        dataset.generate(["ball.stl"], "ds", approaches=3, workers=1)
+
+
 def test_opening_what_is_no_dataset_says_what_it_is(tmp_path):
     (tmp_path / "file").write_text("x")
     for path, match in ((tmp_path / "nowhere", "nowhere: no such folder"), (tmp_path / "file", "is not a folder"),

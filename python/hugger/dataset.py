@@ -133,9 +133,13 @@ def _object_entry(spec: str, scale: float, force: bool = False) -> dict[str, Any
     return {"name": Path(spec).stem, "path": spec, "builtin": False, "sha256": _sha256_file(spec), "scale": scale}
 
 
-def _task_key(task: dict[str, Any]) -> str:
-    """Hash of everything a shard depends on (not the worker count, backend or output folder)."""
+def _task_key(task: dict[str, Any], spelled: bool = False) -> str:
+    """Hash of everything a shard depends on: not the worker count, backend or output folder, nor
+    how its mesh file's path is spelled (its content hash stands for the file). ``spelled``: the
+    key earlier versions gave, which hashed the path as given too (their shards are resumed)."""
     keep = {k: task[k] for k in ("object", "hand", "approaches", "params", "rules", "validate", "format")}
+    if not spelled:
+        keep["object"] = {k: v for k, v in keep["object"].items() if k != "path"}
     return hashlib.sha256(json.dumps(keep, sort_keys=True).encode()).hexdigest()
 
 
@@ -293,19 +297,21 @@ def _read_index(path: Path) -> dict[str, Any]:
     return index
 
 
-def _shard_done(path: Path, key: str) -> bool:
-    """Whether the shard under its final name exists and was made for this task."""
+def _shard_done(path: Path, keys: tuple[str, ...]) -> str | None:
+    """The key of the shard under its final name when it exists and was made for this task (one of
+    the task's ``keys``), else None."""
     if not path.is_file():
-        return False
+        return None
     try:
         with _open_shard(path) as z:
             stored = str(z["task_sha256"])
     except (OSError, ValueError, KeyError):
-        return False  # not ours or damaged: made again
-    if stored != key:
+        return None  # not ours or damaged: made again
+    if stored not in keys:
         raise ValueError(f"{path} was made with other settings (objects, hand, approaches, planner parameters or "
-                         f"--validate); write this dataset to a new --out folder")
-    return True
+                         f"--validate); remove it and repeat the command to make it again, or write this dataset "
+                         f"to a new --out folder")
+    return stored
 
 
 def _check_index(root: Path, tasks: list[dict[str, Any]]) -> None:
@@ -320,7 +326,7 @@ def _check_index(root: Path, tasks: list[dict[str, Any]]) -> None:
     except ValueError as exc:
         raise ValueError(f"{exc}; write this dataset to a new folder") from None
     listed = [(e["file"], e["task_sha256"]) for e in old["shards"]]  # (entries _read_index checked)
-    ours = {(f"shards/{t['file']}", t["key"]) for t in tasks}
+    ours = {(f"shards/{t['file']}", key) for t in tasks for key in t["keys"]}
     left_out = [f for f, key in listed if (f, key) not in ours]
     if left_out:
         made_by = old.get("hugger_version")
@@ -606,11 +612,13 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
             task: dict[str, Any] = {"format": SHARD_FORMAT, "object": ob, "hand": entry, "approaches": int(approaches),
                                     "params": params, "rules": rules, "validate": bool(validate)}
             task["file"] = f"{safe_name}__{entry['label']}.npz"
-            task["key"] = _task_key(task)
+            task["keys"] = (_task_key(task), _task_key(task, spelled=True))
+            task["key"] = task["keys"][0]
             tasks.append(task)
     with _exclusive(root):  # this run alone writes the folder, from its check of the index to its index
         _check_index(root, tasks)
-        todo = [t for t in tasks if not _shard_done(shard_dir / t["file"], t["key"])]
+        kept = {t["file"]: _shard_done(shard_dir / t["file"], t["keys"]) for t in tasks}
+        todo = [t for t in tasks if kept[t["file"]] is None]
         # Ray first: a cluster that cannot be reached is refused before anything is written (and a Ray
         # started here is shut down however the block ends).
         with _ray_session(ray if todo else None, address, workers):
@@ -676,12 +684,12 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
             "command": list(command) if command is not None else None,
             "parameters": {"approaches": int(approaches), "validate": bool(validate), "rules": rules, "scale": float(scale),
                            "planner": params},
-            # a mesh file's absolute path beside the path as given (which the shards' keys hold): the
-            # dataset is then read from any folder
+            # a mesh file's absolute path beside the path as given (this run's): the dataset is then
+            # read from any folder
             "objects": [o if o["builtin"] else {**o, "abspath": os.path.abspath(o["path"])} for o in obj_list],
             "hands": hand_entries,
             "shards": [{"file": f"shards/{t['file']}", "object": t["object"]["name"], "hand": t["hand"]["label"],
-                        "task_sha256": t["key"],
+                        "task_sha256": kept[t["file"]] or t["key"],
                         "sha256": digests.get(t["file"]) or _sha256_file(str(shard_dir / t["file"]))} for t in tasks],
         }
         write_atomic(root / "index.json", json.dumps(index, indent=1, sort_keys=True) + "\n")
