@@ -104,6 +104,9 @@ def test_a_hand_in_millimetres_is_refused_unless_forced(tmp_path, capsys):
     code, _, err = run(["plan", "sphere", "--link-length", "20", "--out", tmp_path / "a.npz", "--force",
                         "--max-iterations", "5"], capsys)
     assert code == 0 and "hugger: warning: the hand is 100 m across" in err
+    # every size of the hand counts: a palm 15 m thick planned without a word
+    code, _, err = run(["plan", "sphere", "--palm-thickness", "15", "--out", tmp_path / "b.npz"], capsys)
+    assert code == 2 and err.startswith("hugger: error: the hand is 15 m across, implausibly large")
 
 
 @pytest.mark.parametrize("command", ["plan", "baseline"])

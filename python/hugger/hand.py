@@ -205,10 +205,11 @@ class Hand:
 
     @property
     def size_warning(self) -> str | None:
-        """The warning the hand drew when made, for a size implausible for a grasp (its palm's
-        diameter or its longest finger outside :data:`PLAUSIBLE_SIZE`: millimetres read as
-        metres), or None."""
-        return implausible_size("the hand", max(2.0 * self.palm_radius, self.reach))
+        """The warning the hand drew when made, for a size implausible for a grasp (the largest of
+        its palm's diameter and thickness, its longest finger and its links' diameter outside
+        :data:`PLAUSIBLE_SIZE`: millimetres read as metres), or None."""
+        return implausible_size("the hand", max(2.0 * self.palm_radius, self.palm_thickness, self.reach,
+                                                2.0 * self.link_radius))
 
     @property
     def fingers(self) -> int:
