@@ -274,8 +274,11 @@ def test_loader_and_every_saved_grasp_passes_the_checker(reference, tmp_path, ch
 def test_a_shard_index_out_of_range_says_so(reference):
     ds = hugger.Dataset(reference)
     assert ds.shard(-1) is ds.shard(len(ds.shards) - 1)  # negative counts from the end, as for grasps
-    for bad in (len(ds.shards), -len(ds.shards) - 1, 1.0, True):
+    for bad in (len(ds.shards), -len(ds.shards) - 1):
         with pytest.raises(IndexError, match="out of range for a dataset of"):
+            ds.shard(bad)
+    for bad in (1.0, True, "0"):  # as for grasps (ds[1.5]) and Python's lists: not an index at all
+        with pytest.raises(TypeError, match="a shard index must be an integer"):
             ds.shard(bad)
 
 
@@ -585,6 +588,19 @@ def test_bad_python_arguments_are_value_errors(tmp_path, kwargs, message):
     with pytest.raises(ValueError, match=message):
         dataset.generate(**args)
     assert not (tmp_path / "ds").exists()
+
+
+def test_repeated_hands_are_all_made_and_a_file_is_no_dataset_folder(tmp_path, capsys):
+    from hugger.cli import main
+
+    # --hands 5x5 --hands 3x3 made the 3x3 hand's shard alone
+    assert main(["generate", "sphere", "--hands", "5x5", "--hands", "3x3", "--approaches", "1", "--workers", "1",
+                 "--out", str(tmp_path / "d")]) == 0
+    assert sorted(p.name for p in (tmp_path / "d" / "shards").iterdir()) == ["sphere__3x3.npz", "sphere__5x5.npz"]
+    (tmp_path / "f").write_text("x")
+    for out in (tmp_path / "f", tmp_path / "f" / "d"):  # were NotADirectoryError and FileExistsError
+        with pytest.raises(ValueError, match="f is a file; a dataset is a folder"):
+            dataset.generate(["sphere"], out, approaches=1, workers=1)
 
 
 def test_a_shard_records_its_rule_set(tmp_path):

@@ -913,9 +913,9 @@ def build_parser() -> _Parser:
     p.add_argument("objects", nargs="+", metavar="OBJECT", help="built-in object names or mesh files")
     p.add_argument("--out", required=True, help="dataset folder (index.json and shards/); an existing one is resumed")
     p.add_argument("--approaches", type=_count, default=26, metavar="K", help="approaches per object and hand (default 26)")
-    p.add_argument("--hands", nargs="+", metavar="SPEC",
+    p.add_argument("--hands", nargs="+", action="extend", metavar="SPEC",
                    help="hands as MxN or MxN:key=value,... (link_length, link_radius, palm_radius, palm_thickness; "
-                        "default 5x5, the default hand)")
+                        "default 5x5, the default hand); repeated, the hands of each")
     p.add_argument("--validate", action="store_true", help="the six-direction physics test of every grasp (hugger[physics])")
     p.add_argument("--workers", type=_count, default=None, help="worker processes or Ray tasks in flight (default: the CPUs)")
     p.add_argument("--backend", choices=("local", "ray"), default="local",

@@ -555,9 +555,10 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
     force = _checks.flag("force", force)
     _checks.callback("log", log, "log(line)")
     _checks.callback("progress", progress, "progress(done, total)")
-    if Path(out).exists() and not Path(out).is_dir():
-        raise NotADirectoryError(f"{out} is a file; a dataset is a folder (give a new folder, or the folder of a "
-                                 f"dataset to finish)")
+    blocking = next((p for p in (Path(out), *Path(out).parents) if p.exists() and not p.is_dir()), None)
+    if blocking is not None:  # (mkdir would raise NotADirectoryError or FileExistsError)
+        raise ValueError(f"{blocking} is a file; a dataset is a folder (give a new folder, or the folder of a "
+                         f"dataset to finish)")
     workers = _checks.workers("workers", workers)
     if address is not None and backend != "ray":
         raise ValueError("an address applies to the Ray backend only")
@@ -794,7 +795,9 @@ class Dataset:
 
     def shard(self, i: int) -> dict[str, np.ndarray]:
         """Every array of shard i (see docs/generation.md), loaded without pickles."""
-        if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not -len(self.shards) <= i < len(self.shards):
+        if isinstance(i, bool) or not isinstance(i, (int, np.integer)):
+            raise TypeError(f"a shard index must be an integer, got {type(i).__name__}")
+        if not -len(self.shards) <= i < len(self.shards):
             raise IndexError(f"shard {i!r} is out of range for a dataset of {len(self.shards)} shards")
         i = int(i) % len(self.shards)
         if i not in self._cache:
