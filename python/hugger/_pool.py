@@ -33,14 +33,42 @@ def _end_with_parent(parent: int) -> None:
         os._exit(1)
 
 
+@contextlib.contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """SIGINT held back from this thread meanwhile, and from the processes it spawns meanwhile,
+    which keep the mask for good (it survives fork and exec, and Python leaves it): a terminal's
+    Ctrl-C, sent to the whole process group, then reaches the pool's owner alone, which stops the
+    workers (stop_pool). A worker interrupted as it started printed a fatal error and a traceback.
+    A SIGINT that comes meanwhile is delivered as the block ends. (Where there is no
+    pthread_sigmask: nothing held back.)"""
+    import signal
+
+    block = getattr(signal, "pthread_sigmask", None)
+    if block is None:
+        yield
+        return
+    old = block(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        block(signal.SIG_SETMASK, old)
+
+
 def process_pool(workers: int, jobs: int) -> Any:
     """A ``ProcessPoolExecutor`` of min(workers, jobs) spawned processes (not forked: MuJoCo and
-    the planner's threads do not survive a fork), which end with the thread that made them."""
+    the planner's threads do not survive a fork), which end with the thread that made them and
+    take no SIGINT (their owner is interrupted, and stops them). A spawning pool starts its
+    processes in ``submit``, as the jobs come, which is where SIGINT is held back."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
-    return ProcessPoolExecutor(max_workers=min(workers, jobs), mp_context=multiprocessing.get_context("spawn"),
-                               initializer=_end_with_parent, initargs=(os.getpid(),))
+    class Pool(ProcessPoolExecutor):
+        def submit(self, fn: Any, /, *args: Any, **kwargs: Any) -> Any:
+            with _sigint_blocked():
+                return super().submit(fn, *args, **kwargs)
+
+    return Pool(max_workers=min(workers, jobs), mp_context=multiprocessing.get_context("spawn"),
+                initializer=_end_with_parent, initargs=(os.getpid(),))
 
 
 def stop_pool(pool: Any) -> None:

@@ -994,7 +994,10 @@ def _show_warning(message: Warning | str, category: type[Warning], filename: str
 def main(argv: Sequence[str] | None = None) -> int:
     import warnings
 
-    with warnings.catch_warnings():
+    from . import _signals
+
+    # (argv None: run as the program, which ends after this)
+    with warnings.catch_warnings(), _signals.installed(program=argv is None):
         warnings.simplefilter("default")
         warnings.showwarning = _show_warning
         return _main(argv)

@@ -303,8 +303,11 @@ def load_mesh(path: str | os.PathLike[str], scale: float = 1.0) -> tuple[Object,
     with holes or non-manifold edges that remain is refused: guessing its surface could make
     the planner grasp something that is not there.
     """
+    from ._signals import kept
+
     try:
-        import trimesh
+        with kept():  # (trimesh swallows an interrupt while it imports)
+            import trimesh
     except ImportError:
         raise ImportError("reading mesh files needs trimesh: pip install 'hugger[mesh]'") from None
     path = os.fspath(path)
@@ -318,7 +321,8 @@ def load_mesh(path: str | os.PathLike[str], scale: float = 1.0) -> tuple[Object,
     if not os.path.splitext(path)[1]:
         raise ValueError(f"{path} has no extension: name it by its format (.stl, .obj, .ply, .off, .glb, ...)")
     try:
-        mesh = trimesh.load(path, force="mesh", process=False)
+        with kept():
+            mesh = trimesh.load(path, force="mesh", process=False)
     except Exception as exc:  # trimesh raises many types for unreadable files
         raise ValueError(f"cannot read mesh file {path!r}: {exc}") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
@@ -329,7 +333,7 @@ def load_mesh(path: str | os.PathLike[str], scale: float = 1.0) -> tuple[Object,
     if np.isfinite(size) and size < _SMALLEST_READ:
         raise ValueError(f"{os.path.basename(path)} is {size:g} m across (scale {scale:g}): too small to read, its "
                          f"vertices would merge; hugger works in metres")
-    with np.errstate(divide="ignore", invalid="ignore"):  # trimesh's mass properties of a flat part
+    with np.errstate(divide="ignore", invalid="ignore"), kept():  # trimesh's mass properties of a flat part
         vertices, faces, repairs = _repair(vertices, faces)
     try:
         return Object(vertices, faces), repairs
