@@ -158,9 +158,10 @@ def test_progress_reports_every_case_in_the_calling_thread(cases):
 
 
 def test_a_failing_case_is_reported_with_its_index(cases, sequential, hand):
-    bad = dict(cases[1], target=[1.0, 1.0, 1.0])  # T outside the object
+    # a well-formed case the planner refuses: the hand starts inside the object
+    bad = dict(cases[1], palm_pose=hugger.look_at(np.add(cases[1]["target"], [0, 0, 0.01]), cases[1]["target"]))
     batch = [cases[0], bad, cases[2]]
-    with pytest.raises(hugger.PlanManyError, match=r"1 of 3 cases failed:\n  case 1: ValueError: .*not inside") as info:
+    with pytest.raises(hugger.PlanManyError, match=r"1 of 3 cases failed:\n  case 1: ValueError: .*at the start") as info:
         hugger.plan_many(batch, threads=2)
     err = info.value
     assert set(err.errors) == {1} and isinstance(err.errors[1], ValueError)
@@ -217,12 +218,31 @@ def test_bad_arguments(cases, kwargs, match):
     ({"wat": 1}, "case 0: unknown keys"),
     ((1, 2, 3), "case 0: a tuple case"),
     (42, "case 0: expected a mapping"),
-    ({"target": [0, 0, 0], "palm_pose": np.eye(3), "obj": "o"}, r"case 0: palm_pose must have shape \(4, 4\)"),
+    ({"target": [0, 0, 0], "palm_pose": np.eye(3), "obj": hugger.objects.sphere(0.04)},
+     r"case 0: palm_pose must have shape \(4, 4\)"),
     ({"target": [0, 0, 0], "palm_pose": np.eye(4), "obj": "o", "epsilon": -1}, "case 0: epsilon must be a positive"),
+    ((None, None, None, None, 5), "case 0: a tuple case's fifth item must be a mapping of planner parameters, got int"),
 ])
 def test_malformed_cases_are_refused_before_planning(hand, case, match):
     with pytest.raises(ValueError, match=match):
         hugger.plan_many([case], threads=2, hand=hand)
+
+
+@pytest.mark.parametrize("edit, match", [
+    # these were planned, and failed after the good cases (a PlanManyError, not a ValueError)
+    ({"target": [0, 0]}, r"case 1: target must have shape \(3\)"),
+    ({"target": [np.nan, 0, 0]}, "case 1: target must be a finite 3-vector"),
+    ({"target": "abc"}, "case 1: target must be an array of real numbers"),
+    ({"target": [1.0, 1.0, 1.0]}, "case 1: target T = .* is not inside the object"),
+    ({"obj": "sphere"}, "case 1: obj must be a hugger.Object or a hugger.skins.Sensing skin, got str"),
+    ({"hand": "5x5"}, "case 1: hand must be a hugger.Hand, got str"),
+])
+def test_every_malformed_case_is_refused_before_any_is_planned(cases, edit, match):
+    planned: list[int] = []
+    with pytest.raises(ValueError, match=match):
+        hugger.plan_many([cases[0], dict(cases[1], **edit)], threads=1, errors="return",
+                         progress=lambda done, total: planned.append(done))
+    assert planned == []
 
 
 def test_empty_and_not_iterable():

@@ -5,10 +5,12 @@
 #include "hugger/hand/hand_model.hpp"
 #include "hugger/planner/planner.hpp"
 #include "hugger/types.hpp"
+#include "hugger/world/object.hpp"
 
 namespace py = pybind11;
 using hugger::py_helpers::ArrayD;
 using hugger::py_helpers::to_pose;
+using hugger::py_helpers::to_vec3;
 
 void bind_hand(py::module_& m);
 void bind_world(py::module_& m);
@@ -32,6 +34,21 @@ PYBIND11_MODULE(_core, m) {
         py::arg("pose"), py::arg("name") = "palm_pose",
         "Raise ValueError, saying what is wrong, unless ``pose`` is a rigid (4, 4) transform: finite, last row "
         "(0, 0, 0, 1), rotation orthonormal with determinant +1 within RIGID_TOLERANCE (the engine's rule).");
+  m.def(
+      "check_target",
+      [](const ArrayD& target, const py::object& obj) {
+        const hugger::Vec3 t = to_vec3(target, "target");
+        hugger::check_target_point(t);
+        if (py::isinstance<hugger::Object>(obj)) {
+          const hugger::Object& o = obj.cast<const hugger::Object&>();
+          py::gil_scoped_release release;
+          hugger::check_target(o, t);
+        }
+      },
+      py::arg("target"), py::arg("obj") = py::none(),
+      "Raise ValueError, saying what is wrong, unless ``target`` is a finite point (3,) within MAX_COORDINATE of "
+      "the origin, and inside ``obj`` where that is an Object (the planner's rules for T; with a skin, T is "
+      "taken as given).");
   bind_hand(m);
   bind_world(m);
   bind_sensing(m);

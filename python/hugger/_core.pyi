@@ -444,6 +444,10 @@ def check_pose(pose: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], na
     """
     Raise ValueError, saying what is wrong, unless ``pose`` is a rigid (4, 4) transform: finite, last row (0, 0, 0, 1), rotation orthonormal with determinant +1 within RIGID_TOLERANCE (the engine's rule).
     """
+def check_target(target: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], obj: typing.Any = None) -> None:
+    """
+    Raise ValueError, saying what is wrong, unless ``target`` is a finite point (3,) within MAX_COORDINATE of the origin, and inside ``obj`` where that is an Object (the planner's rules for T; with a skin, T is taken as given).
+    """
 def check_timeout(seconds: typing.Any) -> float:
     """
     ``seconds`` as a float: raise ValueError unless it is a positive finite number.

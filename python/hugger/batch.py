@@ -13,7 +13,7 @@ import numpy as np
 
 from . import _checks, _core
 from .hand import Hand
-from .planner import PARAMS, Planner, _Batch, _timeout, check_params, check_record_object
+from .planner import PARAMS, Planner, _Batch, _timeout, check_case, check_params
 from .trajectory import Trajectory
 from .world import Object
 
@@ -69,7 +69,10 @@ def _job(index: int, case: Any, hand: Hand | None, params: dict[str, Any], timeo
         if "timeout" in case:
             timeout = _timeout(case["timeout"])
     elif isinstance(case, tuple):
-        if len(case) == 5 and isinstance(case[4], Mapping):
+        if len(case) == 5:
+            if not isinstance(case[4], Mapping):
+                raise ValueError(f"case {index}: a tuple case's fifth item must be a mapping of planner parameters, "
+                                 f"got {type(case[4]).__name__}")
             c_hand, obj, target, pose = case[:4]
             own = dict(case[4])
         elif len(case) == 4:
@@ -90,8 +93,7 @@ def _job(index: int, case: Any, hand: Hand | None, params: dict[str, Any], timeo
     merged = {**params, **own}
     try:  # as the planner would refuse them, before anything is planned
         check_params(merged, "parameters", also=("record_object",), hand=c_hand if isinstance(c_hand, Hand) else None)
-        _core.check_pose(np.asarray(pose, dtype=np.float64))
-        check_record_object(obj, merged.get("record_object"))
+        check_case(c_hand, obj, target, pose, merged.get("record_object"))
     except (TypeError, ValueError) as exc:
         raise ValueError(f"case {index}: {exc}") from None
     return _Job(c_hand, obj, target, pose, merged, timeout)

@@ -52,6 +52,26 @@ DEFAULT_SKIN = "section"
 PARAMS = ("step", "epsilon", "contact_tolerance", "max_iterations", "rules", "skin")
 
 
+def check_sources(hand: Any, obj: Any) -> None:
+    """``ValueError`` unless ``hand`` is a :class:`hugger.Hand` and ``obj`` a :class:`hugger.Object`
+    or a Sensing skin: what :class:`Planner` plans with."""
+    if not isinstance(hand, Hand):
+        raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
+    if not isinstance(obj, (Object, _core.Sensing)):
+        raise ValueError(f"obj must be a hugger.Object or a hugger.skins.Sensing skin, got {type(obj).__name__}")
+
+
+def check_case(hand: Any, obj: Any, target: Any, palm_pose: Any, record_object: Any = None) -> None:
+    """``ValueError``, saying what is wrong, unless :class:`Planner` takes these arguments (up to
+    its parameters, :func:`check_params`): :func:`check_sources`, T a finite point inside an Object
+    (with a skin, T is taken as given), a rigid palm pose and :func:`check_record_object`.
+    ``plan_many`` asks it of every case before it plans any."""
+    check_sources(hand, obj)
+    check_record_object(obj, record_object)
+    _core.check_target(real_array("target", target), obj._core if isinstance(obj, Object) else None)
+    _core.check_pose(real_array("palm_pose", palm_pose))
+
+
 def check_record_object(obj: Any, record_object: Any) -> None:
     """``ValueError`` unless ``record_object`` is None, or a :class:`hugger.Object` given with a skin
     without a mesh (``obj`` a Sensing skin): the mesh such a plan records."""
@@ -125,15 +145,12 @@ class Planner:
                  epsilon: float | None = None, contact_tolerance: float | None = None,
                  max_iterations: int | None = None, rules: str | None = "hug", skin: str | None = None,
                  record_object: Object | None = None) -> None:
-        if not isinstance(hand, Hand):
-            raise ValueError(f"hand must be a hugger.Hand, got {type(hand).__name__}")
+        check_sources(hand, obj)
         sensing = None
         if isinstance(obj, _core.Sensing):
             if skin is not None:
                 raise ValueError("skin= chooses how an Object is sensed; a Sensing skin is used as given")
             sensing, obj = obj, record_object
-        elif not isinstance(obj, Object):
-            raise ValueError(f"obj must be a hugger.Object or a hugger.skins.Sensing skin, got {type(obj).__name__}")
         check_record_object(obj if sensing is None else sensing, record_object)
         t = real_array("target", target)
         pose = real_array("palm_pose", palm_pose)

@@ -108,14 +108,18 @@ PlannerParams resolve_params(const HandModel& hand, const PlannerParams& params)
   return out;
 }
 
+void check_target_point(const Vec3& target) {
+  HUGGER_CHECK_ARGUMENT(target.allFinite(), "target must be a finite 3-vector, got (" << target.x() << ", "
+                                                                                     << target.y() << ", " << target.z() << ")");
+  HUGGER_CHECK_ARGUMENT(target.cwiseAbs().maxCoeff() <= kMaxCoordinate,
+                        "target lies beyond " << kMaxCoordinate << " m of the origin (where an object's coordinates may lie)");
+}
+
 Planner::Planner(HandModel hand, std::shared_ptr<const Sensing> sensing, const Vec3& target, const Pose& palm_pose,
                  PlannerParams params)
     : hand_(std::move(hand)), sensing_(std::move(sensing)), target_(target), params_(params) {
   HUGGER_CHECK_ARGUMENT(sensing_, "the planner needs a sensing interface");
-  HUGGER_CHECK_ARGUMENT(target_.allFinite(), "target must be a finite 3-vector, got (" << target_.x() << ", "
-                                                                                      << target_.y() << ", " << target_.z() << ")");
-  HUGGER_CHECK_ARGUMENT(target_.cwiseAbs().maxCoeff() <= kMaxCoordinate,
-                        "target lies beyond " << kMaxCoordinate << " m of the origin (where an object's coordinates may lie)");
+  check_target_point(target_);
   params_ = resolve_params(hand_, params);
   check_pose(palm_pose.matrix(), "palm_pose");
   // Re-orthonormalise so that every emitted pose is rigid to machine precision.

@@ -65,6 +65,11 @@ void check_params(const PlannerParams& params);
 /// contact_tolerance < step, epsilon <= step (std::invalid_argument otherwise). What a Planner of
 /// this hand plans with; callable before any plan (a batch of plans is checked up front).
 PlannerParams resolve_params(const HandModel& hand, const PlannerParams& params);
+
+/// Throws std::invalid_argument, saying what is wrong, unless `target` is a finite point within
+/// kMaxCoordinate of the origin: the planner's rule for T (that T lies inside an Object is
+/// check_target's, where the planner has one).
+void check_target_point(const Vec3& target);
 /// A wall-clock limit for Planner::plan given by a caller: positive and finite seconds (plan
 /// itself takes kInf for no limit). Throws std::invalid_argument otherwise; returns `seconds`.
 double check_timeout(double seconds);
