@@ -24,7 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import hugger  # noqa: E402
 from generation_common import auc, fitting_objects, ranking_value  # noqa: E402
 from hugger import physics  # noqa: E402
-from hugger._pool import process_pool  # noqa: E402
+from hugger._pool import running_pool  # noqa: E402
 from hugger.physics.hold import NOMINAL_FORCE, PERTURBATIONS  # noqa: E402
 from hugger.scenarios import default_case  # noqa: E402
 from hugger.search import _default_key  # noqa: E402
@@ -51,7 +51,7 @@ def main() -> int:
                     key=lambda n: ["mu=0.5", "squeeze=0.03", "mass+10%", "kp-20%"].index(n)
                     if n in ["mu=0.5", "squeeze=0.03", "mass+10%", "kp-20%"] else 9)
     everything = []
-    with process_pool(args.workers, args.workers) as pool:
+    with running_pool(args.workers, args.workers) as pool:  # (stopped at once when interrupted)
         for spec in fitting_objects():
             name = Path(spec).stem
             if args.objects is not None and name not in args.objects:

@@ -5,6 +5,7 @@ import math
 import os
 import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -49,7 +50,7 @@ def test_a_second_interrupt_at_once_does_not_cut_the_cleanup_short(handler, tmp_
         _interrupt()
 
 
-def test_an_interrupt_a_library_swallowed_is_raised_again(handler):
+def test_an_interrupt_a_library_swallowed_is_raised_again(handler, monkeypatch):
     # trimesh catches BaseException around its optional imports: a Ctrl-C then was lost
     with pytest.raises(KeyboardInterrupt):
         with _signals.kept():
@@ -57,8 +58,34 @@ def test_an_interrupt_a_library_swallowed_is_raised_again(handler):
                 _interrupt()
             except BaseException:  # noqa: BLE001 - as the library does
                 pass
+    monkeypatch.setattr(_signals, "_last", -math.inf)  # (the next is no repeat)
+    with pytest.raises(KeyboardInterrupt):  # swallowed, and then another failure for it
+        with _signals.kept():
+            try:
+                _interrupt()
+            except BaseException:  # noqa: BLE001
+                pass
+            raise RuntimeError("the library failed, having lost the interrupt")
     with _signals.kept():  # nothing raised within: nothing raised after
         pass
+    with pytest.raises(RuntimeError):
+        with _signals.kept():
+            raise RuntimeError("a failure of its own")
+
+
+def test_an_interrupted_program_ignores_a_repeat_as_it_exits(monkeypatch):
+    monkeypatch.setattr(_signals, "_last", -math.inf)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with _signals.installed(program=True):
+                _interrupt()
+        assert signal.getsignal(signal.SIGINT) is _signals._exiting
+        _interrupt()  # a repeat: ignored (a later one would end the process at once)
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    with _signals.installed(program=True):  # not interrupted: Python's handler again after
+        pass
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
 def test_installed_leaves_another_handler_alone(monkeypatch):
@@ -74,6 +101,23 @@ def test_installed_leaves_another_handler_alone(monkeypatch):
 def _blocked_signals() -> int:
     with open(f"/proc/{os.getpid()}/status") as status:
         return int(next(line for line in status if line.startswith("SigBlk:")).split()[1], 16)
+
+
+def test_an_interrupt_while_a_pool_spawns_is_raised_after_the_spawn():
+    # with another thread alive (a progress bar's) the kernel gave it the SIGINT, and Python raised
+    # KeyboardInterrupt in the main thread midway through a spawn: a worker started unrecorded
+    stop = threading.Event()
+    helper = threading.Thread(target=stop.wait, daemon=True)
+    helper.start()
+    reached = False
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with _pool._sigint_blocked():
+                _interrupt()
+                reached = True
+    finally:
+        stop.set()
+    assert reached and signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads the signal mask from /proc (Linux)")

@@ -39,19 +39,31 @@ def _sigint_blocked() -> Iterator[None]:
     which keep the mask for good (it survives fork and exec, and Python leaves it): a terminal's
     Ctrl-C, sent to the whole process group, then reaches the pool's owner alone, which stops the
     workers (stop_pool). A worker interrupted as it started printed a fatal error and a traceback.
-    A SIGINT that comes meanwhile is delivered as the block ends. (Where there is no
-    pthread_sigmask: nothing held back.)"""
+
+    A SIGINT that comes meanwhile is raised as the block ends, not within it: another thread (a
+    progress bar's) may take it, and Python would run its handler in the main thread at once,
+    midway through a spawn (a worker started and not recorded, which stop_pool misses). In the
+    main thread the handler only notes it meanwhile, and it is raised again after. (Where there
+    is no pthread_sigmask: nothing held back.)"""
     import signal
+    import threading
 
     block = getattr(signal, "pthread_sigmask", None)
     if block is None:
         yield
         return
+    noted: list[int] = []
+    main = threading.current_thread() is threading.main_thread()
+    handler = signal.signal(signal.SIGINT, lambda signum, frame: noted.append(signum)) if main else None
     old = block(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
-        block(signal.SIG_SETMASK, old)
+        block(signal.SIG_SETMASK, old)  # (one pending for this thread is noted now)
+        if main:
+            signal.signal(signal.SIGINT, handler)
+            if noted:
+                signal.raise_signal(signal.SIGINT)  # to the handler in force: KeyboardInterrupt
 
 
 def process_pool(workers: int, jobs: int) -> Any:

@@ -4,7 +4,8 @@ The first SIGINT raises ``KeyboardInterrupt`` as Python's own handler does. Anot
 within :data:`REPEAT_WINDOW` of it is ignored: a terminal's Ctrl-C reaches the process and
 ``timeout -s INT`` sends a second, and a second ``KeyboardInterrupt`` would cut short the cleanup
 the first started (a dataset folder left holding only its lock file, tracebacks from the
-interpreter's exit). A later one raises again: the user insists.
+interpreter's exit). A later one raises again: the user insists (once the command has ended,
+interrupted, it ends the process at once, exit status 130).
 
 An interrupt that a library swallowed is raised again where it returns (:func:`kept`): trimesh
 catches ``BaseException`` around its optional imports, so a Ctrl-C while it loads was lost and the
@@ -13,6 +14,7 @@ command ran on to the end.
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import threading
 import time
@@ -36,29 +38,44 @@ def _handler(signum: int, frame: FrameType | None) -> None:
     raise KeyboardInterrupt
 
 
+def _exiting(signum: int, frame: FrameType | None) -> None:
+    """After an interrupted command, while the interpreter exits (joining the pools' threads, say):
+    a repeat is ignored, a later SIGINT ends the process at once."""
+    if time.monotonic() - _last >= REPEAT_WINDOW:
+        os._exit(130)
+
+
 @contextlib.contextmanager
 def installed(program: bool) -> Iterator[None]:
     """The handler above for SIGINT meanwhile, where Python's own is installed (in the main
     thread; elsewhere, or under another handler a caller chose, nothing changes). Python's is
     installed again after, except in a ``program`` (the process ends after the block) that was
-    interrupted: SIGINT is then ignored while the interpreter exits."""
+    interrupted: a repeat is then ignored while the interpreter exits, and a later SIGINT ends the
+    process at once."""
+    global _last
     if threading.current_thread() is not threading.main_thread() or \
             signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
         yield
         return
     before = _raised
+    _last = -float("inf")  # (an interrupt of an earlier call in this process is no repeat)
     signal.signal(signal.SIGINT, _handler)
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, signal.SIG_IGN if program and _raised != before else signal.default_int_handler)
+        signal.signal(signal.SIGINT, _exiting if program and _raised != before else signal.default_int_handler)
 
 
 @contextlib.contextmanager
 def kept() -> Iterator[None]:
-    """Raise ``KeyboardInterrupt`` when the block ends normally although the handler raised one
-    within it: a library swallowed it."""
+    """Raise ``KeyboardInterrupt`` when the block ends although the handler raised one within it:
+    a library swallowed it (and went on, or failed another way for it)."""
     before = _raised
-    yield
+    try:
+        yield
+    except Exception as exc:
+        if _raised != before:
+            raise KeyboardInterrupt from exc
+        raise
     if _raised != before:
         raise KeyboardInterrupt

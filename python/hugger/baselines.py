@@ -320,7 +320,7 @@ def main(argv: list[str] | None = None) -> int:
             name = given
             del args[i:i + (1 if "=" in arg else 2)]
             break
-    return cli_main(["baseline", name, *args])
+    return cli_main(["baseline", name, *args], program=argv is None)
 
 
 if __name__ == "__main__":

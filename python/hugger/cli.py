@@ -991,13 +991,15 @@ def _show_warning(message: Warning | str, category: type[Warning], filename: str
     print_line(f"hugger: warning: {message}")  # above a progress bar being drawn
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def main(argv: Sequence[str] | None = None, program: bool | None = None) -> int:
+    """The ``hugger`` command on ``argv`` (default the command line's). ``program``: run as the
+    program, which ends after this (default: when ``argv`` is None); then a Ctrl-C after an
+    interrupted command ends the process at once."""
     import warnings
 
     from . import _signals
 
-    # (argv None: run as the program, which ends after this)
-    with warnings.catch_warnings(), _signals.installed(program=argv is None):
+    with warnings.catch_warnings(), _signals.installed(program=argv is None if program is None else program):
         warnings.simplefilter("default")
         warnings.showwarning = _show_warning
         return _main(argv)
