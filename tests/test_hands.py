@@ -512,13 +512,14 @@ LIMITS = 'lower="-0.3490658503988659" upper="1.7453292519943295"'
 
 @pytest.mark.parametrize("old, new, message", [
     # these were taken for a joint without limits, silently; URDF requires both (0 by default)
-    ('<limit effort="10.0" velocity="2.0" ' + LIMITS + '/>', "", "revolute joint 'f0_j0' has no <limit>"),
-    (LIMITS, 'lower="-0.3"', "revolute joint 'f0_j0' has a <limit> without upper"),
-    (LIMITS, "", "revolute joint 'f0_j0' has a <limit> without lower and upper"),
+    ('<limit effort="10.0" velocity="2.0" ' + LIMITS + '/>', "", "revolute joint 'f0_j0' has no <limit>, which URDF"),
+    (LIMITS, "", "revolute joint 'f0_j0' has a <limit> with neither lower nor upper: by URDF's defaults"),
     (LIMITS, 'lower="nan" upper="1.6"', r"joint 'f0_j0' has limits \[nan, 1.6\]: not numbers"),
     # these overflowed, or named the wrong joint or none
     ('<origin xyz="0.0 0.0 0.03"', '<origin xyz="0.0 0.0 1e300"', r"joint 'f0_j1' has origin xyz .*: not a finite"),
     ('<origin xyz="0.0 0.0 0.03"', '<origin xyz="nan 0.0 0.03"', r"joint 'f0_j1' has origin xyz \[nan"),
+    ('<origin xyz="0.0 0.0 0.03" rpy="0.0 -0.0 0.0"', '<origin xyz="0.0 0.0 0.03" rpy="nan 0 0"',
+     "joint 'f0_j1' has an origin rpy that is not finite"),
 ])
 def test_a_urdf_joint_without_limits_or_at_no_finite_place_is_named(tmp_path, old, new, message):
     path = _edited_urdf(tmp_path, old, new)
@@ -527,6 +528,26 @@ def test_a_urdf_joint_without_limits_or_at_no_finite_place_is_named(tmp_path, ol
         with pytest.raises(ValueError, match=message) as info:
             hands.load(path)
     assert "\n" not in str(info.value)
+
+
+def test_a_urdf_limit_side_left_out_is_zero_as_urdf_says(tmp_path):
+    with_upper = hands.load(_edited_urdf(tmp_path, LIMITS, 'upper="1.5"'))
+    assert with_upper.joint_limits[0, 0].tolist() == [0.0, 1.5]
+    with_lower = hands.load(_edited_urdf(tmp_path, LIMITS, 'lower="-0.2"'))
+    assert with_lower.joint_limits[0, 0].tolist() == [-0.2, 0.0]
+
+
+def test_a_prismatic_joint_held_by_fixed_joints_moves_what_it_carries(tmp_path):
+    # it was placed as if at 0, whatever value it was held at
+    slide = ('<link name="slider"/><joint name="slide" type="prismatic"><parent link="palm"/><child link="slider"/>'
+             '<axis xyz="1 0 0"/><limit effort="1" velocity="1" lower="0" upper="0.01"/></joint></robot>')
+    text = _edited_urdf(tmp_path, "</robot>", slide).read_text()
+    path = tmp_path / "slide.urdf"
+    path.write_text(text.replace('<parent link="palm"/><child link="f0_l0"/>', '<parent link="slider"/><child link="f0_l0"/>'))
+    at = {x: hands.load(path, fixed_joints={"slide": x}) for x in (0.0, 0.004)}
+    moved = at[0.004].finger_roots - at[0.0].finger_roots  # (f0 comes after the palm's own fingers)
+    assert sorted(np.round(moved[:, 0], 12).tolist()) == [0.0] * (len(moved) - 1) + [0.004]
+    assert np.allclose(moved[:, 1:], 0.0, atol=1e-12)
 
 
 def test_infinite_urdf_limits_are_no_bound_without_a_warning(tmp_path):

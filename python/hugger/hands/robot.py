@@ -21,6 +21,7 @@ from typing import Any, Callable, Mapping, cast
 import numpy as np
 
 from .._checks import number
+from .._signals import kept
 from .._rotation import axis_angle
 from .. import _stable
 from ..hand import Hand, rim_directions
@@ -41,7 +42,8 @@ class _Chain:
 
 def _need(module: str, user: str = "reading robot files") -> Any:
     try:
-        return __import__(module)
+        with kept():  # (yourdfpy imports trimesh, which swallows an interrupt while it imports)
+            return __import__(module)
     except ImportError:
         raise ImportError(f"{user} needs {module}: pip install 'hugger[hands]'") from None
 
@@ -298,8 +300,8 @@ def _fixed_joints(value: Any) -> dict[str, float]:
 
 def _within_limits(source: str, name: str, value: float, lower: Any, upper: Any, unit: str = "rad") -> None:
     """A joint held by fixed_joints must be held within its limits (rounding allowed)."""
-    lo = -math.inf if lower is None else float(lower)
-    hi = math.inf if upper is None else float(upper)
+    lo = 0.0 if lower is None else float(lower)  # (URDF's default for a side left out)
+    hi = 0.0 if upper is None else float(upper)
     if not lo - LIMIT_TOLERANCE <= value <= hi + LIMIT_TOLERANCE:
         raise ValueError(f"{source}: joint {name!r} held at {value:g} {unit} is outside its limits "
                          f"[{lo:g}, {hi:g}] {unit}")
@@ -315,22 +317,26 @@ def _urdf_origin(source: str, j: Any) -> np.ndarray:
     if j.origin is None:
         return np.eye(4)
     origin = np.asarray(j.origin, dtype=np.float64)
-    if not np.all(np.isfinite(origin)) or float(np.abs(origin[:3, 3]).max()) > _FARTHEST_ORIGIN:
-        raise ValueError(f"{source}: joint {j.name!r} has origin xyz {origin[:3, 3].tolist()}: not a finite "
-                         f"position within {_FARTHEST_ORIGIN:g} m")
+    xyz = origin[:3, 3]
+    if not np.all(np.isfinite(xyz)) or float(np.abs(xyz).max()) > _FARTHEST_ORIGIN:
+        raise ValueError(f"{source}: joint {j.name!r} has origin xyz {xyz.tolist()}: not a finite position within "
+                         f"{_FARTHEST_ORIGIN:g} m")
+    if not np.all(np.isfinite(origin)):
+        raise ValueError(f"{source}: joint {j.name!r} has an origin rpy that is not finite")
     return origin
 
 
 def _urdf_limits(source: str, j: Any) -> tuple[float, float]:
-    """Revolute joint ``j``'s limits (rad); a ValueError naming it when it lacks either, which URDF
-    requires (its defaults, 0 and 0, would hold the joint still), or when they are not numbers."""
+    """Revolute joint ``j``'s limits (rad), a side the file leaves out 0 as URDF says; a
+    ValueError naming it when it has no ``<limit>`` (URDF requires one), or one with neither side
+    (it could not move), or limits that are not numbers."""
     lim = j.limit
-    if lim is None or lim.lower is None or lim.upper is None:
-        missing = "no <limit>" if lim is None else "a <limit> without " + " and ".join(
-            k for k in ("lower", "upper") if getattr(lim, k) is None)
-        raise ValueError(f"{source}: revolute joint {j.name!r} has {missing} (URDF requires both lower and upper, "
-                         f"in rad; a joint without limits is 'continuous')")
-    lo, hi = float(lim.lower), float(lim.upper)
+    if lim is None or (lim.lower is None and lim.upper is None):
+        what = "has no <limit>, which URDF requires" if lim is None else \
+            "has a <limit> with neither lower nor upper: by URDF's defaults (0) it cannot move"
+        raise ValueError(f"{source}: revolute joint {j.name!r} {what}; give its limits (rad), make it 'continuous' "
+                         f"(no limits), or hold it with fixed_joints")
+    lo, hi = (0.0 if x is None else float(x) for x in (lim.lower, lim.upper))
     if math.isnan(lo) or math.isnan(hi):
         raise ValueError(f"{source}: joint {j.name!r} has limits [{lim.lower}, {lim.upper}]: not numbers")
     if not lo <= hi:
@@ -363,7 +369,9 @@ def from_urdf(path: str | os.PathLike[str], palm_link: str | None = None, fixed_
     # reads wrong is refused with that complaint, not with the part found missing.
     with _Complaints("yourdfpy") as complaints:
         try:
-            urdf = yourdfpy.URDF.load(source, build_scene_graph=False, load_meshes=False, load_collision_meshes=False)
+            with kept():
+                urdf = yourdfpy.URDF.load(source, build_scene_graph=False, load_meshes=False,
+                                          load_collision_meshes=False)
         except Exception as exc:  # noqa: BLE001 - lxml and yourdfpy raise their own error types
             urdf, failure = None, f"{type(exc).__name__}: {exc}"
     xml_error = complaints.messages[0] if complaints.messages else None
@@ -405,10 +413,14 @@ def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dic
 
     def motion(j: Any, value: float) -> np.ndarray:
         origin = _urdf_origin(source, j)
-        if j.type in ("revolute", "continuous") and value != 0.0:
-            rot = np.eye(4)
-            rot[:3, :3] = axis_angle(np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0]), value)
-            return _stable.matmul(origin, rot)
+        if j.type in ("revolute", "continuous", "prismatic") and value != 0.0:
+            axis = np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0], dtype=np.float64)
+            move = np.eye(4)
+            if j.type == "prismatic":  # (held by fixed_joints, in m: it was taken at 0)
+                move[:3, 3] = value * axis / _stable.norm(axis)
+            else:
+                move[:3, :3] = axis_angle(axis, value)
+            return _stable.matmul(origin, move)
         return origin
 
     def is_fixed(j: Any) -> bool:
