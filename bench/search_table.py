@@ -74,7 +74,8 @@ def row(name, obj, target, pole, hand, args, checker) -> dict:
     single = hugger.Planner(hand, obj, target, start_pose(obj, hand, target, pole), **params).plan()
     a1 = analysis.analyze(single, obj=obj, volume=False)
     res = hugger.search(hand, obj, target, approaches=args.approaches, threads=args.threads, pole=pole,
-                        rules=args.rules, verify=args.verify, robust=args.robust_verify, workers=args.workers)
+                        rules=args.rules, verify=args.verify, robust=args.robust_verify,
+                        workers=args.workers if args.robust_verify else None)  # (the search takes them only so)
     best = res.trajectory
     a2 = analysis.analyze(best, obj=obj, volume=False)
     out = {"object": name, "triangles": len(obj.faces),
