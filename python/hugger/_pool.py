@@ -53,14 +53,16 @@ def _sigint_blocked() -> Iterator[None]:
         yield
         return
     noted: list[int] = []
-    main = threading.current_thread() is threading.main_thread()
-    handler = signal.signal(signal.SIGINT, lambda signum, frame: noted.append(signum)) if main else None
+    # (a handler installed from C, which getsignal gives as None, could not be put back: kept)
+    handler = signal.getsignal(signal.SIGINT) if threading.current_thread() is threading.main_thread() else None
+    if handler is not None:
+        signal.signal(signal.SIGINT, lambda signum, frame: noted.append(signum))
     old = block(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
         block(signal.SIG_SETMASK, old)  # (one pending for this thread is noted now)
-        if main:
+        if handler is not None:
             signal.signal(signal.SIGINT, handler)
             if noted:
                 signal.raise_signal(signal.SIGINT)  # to the handler in force: KeyboardInterrupt

@@ -9,9 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Mapping
 
-import numpy as np
-
-from . import _checks, _core
+from . import _checks
 from .hand import Hand
 from .planner import PARAMS, Planner, _Batch, _timeout, check_case, check_params
 from .trajectory import Trajectory

@@ -618,8 +618,8 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
             tasks.append(task)
     with _exclusive(root):  # this run alone writes the folder, from its check of the index to its index
         _check_index(root, tasks)
-        kept = {t["file"]: _shard_done(shard_dir / t["file"], t["keys"]) for t in tasks}
-        todo = [t for t in tasks if kept[t["file"]] is None]
+        held = {t["file"]: _shard_done(shard_dir / t["file"], t["keys"]) for t in tasks}  # their keys
+        todo = [t for t in tasks if held[t["file"]] is None]
         # Ray first: a cluster that cannot be reached is refused before anything is written (and a Ray
         # started here is shut down however the block ends).
         with _ray_session(ray if todo else None, address, workers):
@@ -690,7 +690,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
             "objects": [o if o["builtin"] else {**o, "abspath": os.path.abspath(o["path"])} for o in obj_list],
             "hands": hand_entries,
             "shards": [{"file": f"shards/{t['file']}", "object": t["object"]["name"], "hand": t["hand"]["label"],
-                        "task_sha256": kept[t["file"]] or t["key"],
+                        "task_sha256": held[t["file"]] or t["key"],
                         "sha256": digests.get(t["file"]) or _sha256_file(str(shard_dir / t["file"]))} for t in tasks],
         }
         write_atomic(root / "index.json", json.dumps(index, indent=1, sort_keys=True) + "\n")
