@@ -415,6 +415,8 @@ def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dic
         origin = _urdf_origin(source, j)
         if j.type in ("revolute", "continuous", "prismatic") and value != 0.0:
             axis = np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0], dtype=np.float64)
+            if not (np.all(np.isfinite(axis)) and float(_stable.norm(axis)) > 0.0):
+                raise ValueError(f"{source}: joint {j.name!r} has axis {axis.tolist()}: not a direction")
             move = np.eye(4)
             if j.type == "prismatic":  # (held by fixed_joints, in m: it was taken at 0)
                 move[:3, 3] = value * axis / _stable.norm(axis)
