@@ -271,7 +271,7 @@ def test_the_engine_gives_typed_results(hand, sphere):
     assert (params.max_iterations, params.rules) == (3, "paper")
     assert p.params == {"step": params.step, "epsilon": params.epsilon, "contact_tolerance": params.contact_tolerance,
                         "max_iterations": 3, "rules": "paper", "skin": "section"}
-    c = p._core.step()
+    c = p._core.configuration(0)
     assert isinstance(c, core.Configuration) and (c.phase, c.iteration) == (0, 0)
     assert c.joints.shape == (5, 6, 3) and c.angles.shape == (5, 5) and c.tip_state.dtype == np.int8
     traj = p.plan()

@@ -112,7 +112,7 @@ def test_an_interrupt_while_a_pool_spawns_is_raised_after_the_spawn():
     reached = False
     try:
         with pytest.raises(KeyboardInterrupt):
-            with _pool._sigint_blocked():
+            with _signals.held_back():
                 _interrupt()
                 reached = True
     finally:

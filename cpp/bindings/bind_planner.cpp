@@ -244,16 +244,6 @@ void bind_planner(py::module_& m) {
            py::arg("hand"), py::arg("sensing"), py::arg("target"), py::arg("palm_pose"),
            py::arg("params") = PlannerParams(), py::arg("skin") = "section")
       .def(
-          "step",
-          [](PyPlanner& p) -> std::optional<Configuration> {
-            Busy busy(p);
-            if (p.failed) return std::nullopt;
-            py::gil_scoped_release release;
-            return guarded(p, [&] { return p.planner->step(); });
-          },
-          "Advance by one configuration; a Configuration, or None when the plan has ended. An exception "
-          "raised by the skin propagates unchanged and ends the plan (status 'error').")
-      .def(
           "configuration",
           [](PyPlanner& p, std::size_t k) -> std::optional<Configuration> {
             Busy busy(p);

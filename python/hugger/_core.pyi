@@ -298,7 +298,7 @@ class Configuration:
     One hand configuration of a plan (docs/model.md).
     """
     def __init__(self, *args: typing.Any, **kwargs: typing.Any) -> None:
-        """Not constructible from Python: returned by Planner.step."""
+        """Not constructible from Python: returned by Planner.configuration."""
     @property
     def palm_pose(self) -> numpy.typing.NDArray[numpy.float64]:
         """
@@ -381,10 +381,6 @@ class Planner:
     def interrupt(self) -> None:
         """
         Ask a plan() running in another thread to stop between iterations, raising KeyboardInterrupt there (the plan still running). Without one running, the next plan() stops at once.
-        """
-    def step(self) -> Configuration | None:
-        """
-        Advance by one configuration; a Configuration, or None when the plan has ended. An exception raised by the skin propagates unchanged and ends the plan (status 'error').
         """
     @property
     def params(self) -> PlannerParams:

@@ -6,6 +6,8 @@ import os
 import sys
 from typing import Any, Iterator
 
+from ._signals import held_back
+
 #: prctl's option that sends the calling process a signal when its parent ends (Linux).
 _PR_SET_PDEATHSIG = 1
 
@@ -33,41 +35,6 @@ def _end_with_parent(parent: int) -> None:
         os._exit(1)
 
 
-@contextlib.contextmanager
-def _sigint_blocked() -> Iterator[None]:
-    """SIGINT held back from this thread meanwhile, and from the processes it spawns meanwhile,
-    which keep the mask for good (it survives fork and exec, and Python leaves it): a terminal's
-    Ctrl-C, sent to the whole process group, then reaches the pool's owner alone, which stops the
-    workers (stop_pool). A worker interrupted as it started printed a fatal error and a traceback.
-
-    A SIGINT that comes meanwhile is raised as the block ends, not within it: another thread (a
-    progress bar's) may take it, and Python would run its handler in the main thread at once,
-    midway through a spawn (a worker started and not recorded, which stop_pool misses). In the
-    main thread the handler only notes it meanwhile, and it is raised again after. (Where there
-    is no pthread_sigmask: nothing held back.)"""
-    import signal
-    import threading
-
-    block = getattr(signal, "pthread_sigmask", None)
-    if block is None:
-        yield
-        return
-    noted: list[int] = []
-    # (a handler installed from C, which getsignal gives as None, could not be put back: kept)
-    handler = signal.getsignal(signal.SIGINT) if threading.current_thread() is threading.main_thread() else None
-    if handler is not None:
-        signal.signal(signal.SIGINT, lambda signum, frame: noted.append(signum))
-    old = block(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        yield
-    finally:
-        block(signal.SIG_SETMASK, old)  # (one pending for this thread is noted now)
-        if handler is not None:
-            signal.signal(signal.SIGINT, handler)
-            if noted:
-                signal.raise_signal(signal.SIGINT)  # to the handler in force: KeyboardInterrupt
-
-
 def process_pool(workers: int, jobs: int) -> Any:
     """A ``ProcessPoolExecutor`` of min(workers, jobs) spawned processes (not forked: MuJoCo and
     the planner's threads do not survive a fork), which end with the thread that made them and
@@ -78,7 +45,7 @@ def process_pool(workers: int, jobs: int) -> Any:
 
     class Pool(ProcessPoolExecutor):
         def submit(self, fn: Any, /, *args: Any, **kwargs: Any) -> Any:
-            with _sigint_blocked():
+            with held_back():
                 return super().submit(fn, *args, **kwargs)
 
     return Pool(max_workers=min(workers, jobs), mp_context=multiprocessing.get_context("spawn"),

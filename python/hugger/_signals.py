@@ -10,6 +10,9 @@ interrupted, it ends the process at once, exit status 130).
 An interrupt that a library swallowed is raised again where it returns (:func:`kept`): trimesh
 catches ``BaseException`` around its optional imports, so a Ctrl-C while it loads was lost and the
 command ran on to the end.
+
+The package's process pools spawn their workers with SIGINT held back (:func:`held_back`), from
+the command line or not.
 """
 from __future__ import annotations
 
@@ -79,3 +82,35 @@ def kept() -> Iterator[None]:
         raise
     if _raised != before:
         raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def held_back() -> Iterator[None]:
+    """SIGINT held back from this thread meanwhile, and from the processes it spawns meanwhile,
+    which keep the mask for good (it survives fork and exec, and Python leaves it): a terminal's
+    Ctrl-C, sent to the whole process group, then reaches the pool's owner alone, which stops the
+    workers (stop_pool). A worker interrupted as it started printed a fatal error and a traceback.
+
+    A SIGINT that comes meanwhile is raised as the block ends, not within it: another thread (a
+    progress bar's) may take it, and Python would run its handler in the main thread at once,
+    midway through a spawn (a worker started and not recorded, which stop_pool misses). In the
+    main thread the handler only notes it meanwhile, and it is raised again after. (Where there
+    is no pthread_sigmask: nothing held back.)"""
+    block = getattr(signal, "pthread_sigmask", None)
+    if block is None:
+        yield
+        return
+    noted: list[int] = []
+    # (a handler installed from C, which getsignal gives as None, could not be put back: kept)
+    handler = signal.getsignal(signal.SIGINT) if threading.current_thread() is threading.main_thread() else None
+    if handler is not None:
+        signal.signal(signal.SIGINT, lambda signum, frame: noted.append(signum))
+    old = block(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        block(signal.SIG_SETMASK, old)  # (one pending for this thread is noted now)
+        if handler is not None:
+            signal.signal(signal.SIGINT, handler)
+            if noted:
+                signal.raise_signal(signal.SIGINT)  # to the handler in force: KeyboardInterrupt

@@ -390,8 +390,8 @@ def penetration(traj: Any, k: int = -1, obj: Any = None) -> float:
     a, b = j[:, :-1].reshape(-1, 3), j[:, 1:].reshape(-1, 3)
     _, axis = _axis_samples(a, b, radius, list(range(len(a))))
     _, palm = _palm_points(pose, palm_radius, palm_thickness)
-    depth = max(float(np.max(radius - obj.signed_distance(axis))), float(np.max(-obj.signed_distance(palm))))
-    return max(0.0, depth)
+    d = obj.signed_distance(np.concatenate([axis, palm]))  # one query: links less their radius, the palm
+    return max(0.0, float(np.max(np.concatenate([radius - d[:len(axis)], -d[len(axis):]]))))
 
 
 def contacts(traj: Any, k: int = -1, distance: float = CONTACT_DISTANCE, obj: Any = None) -> Contacts:

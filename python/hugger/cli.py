@@ -537,9 +537,10 @@ def cmd_info(args: argparse.Namespace) -> int:
         # rescaled since) may sink the hand into the object, which the counts above do not show.
         if obj.size_warning is not None:  # (not warned of when the file's object was made)
             warnings.warn(obj.size_warning, UserWarning, stacklevel=1)
-        if report["penetration_m"] > collision_tolerance(traj.hand["link_radius"]):
+        tolerance = collision_tolerance(traj.hand["link_radius"])
+        if report["penetration_m"] > tolerance:
             warnings.warn(f"the hand lies {1000 * report['penetration_m']:.3g} mm inside the object at the final "
-                          f"configuration (beyond max(2% of the link radius, 0.05 mm)): not a grasp this planner "
+                          f"configuration (beyond the checker's {1000 * tolerance:.3g} mm): not a grasp this planner "
                           f"makes; the contacts and the quality count it as touching", UserWarning, stacklevel=1)
     else:  # planned with a skin that has no mesh: the motion only
         report = {"status": traj.status, "configurations": len(traj), "phase1_configurations": int((traj.phase == 1).sum())}

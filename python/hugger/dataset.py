@@ -613,8 +613,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
             task: dict[str, Any] = {"format": SHARD_FORMAT, "object": ob, "hand": entry, "approaches": int(approaches),
                                     "params": params, "rules": rules, "validate": bool(validate)}
             task["file"] = f"{safe_name}__{entry['label']}.npz"
-            task["keys"] = (_task_key(task), _task_key(task, spelled=True))
-            task["key"] = task["keys"][0]
+            task["keys"] = (_task_key(task), _task_key(task, spelled=True))  # this version's first
             tasks.append(task)
     with _exclusive(root):  # this run alone writes the folder, from its check of the index to its index
         _check_index(root, tasks)
@@ -690,7 +689,7 @@ def generate(objects: Sequence[str], out: str | os.PathLike[str], approaches: in
             "objects": [o if o["builtin"] else {**o, "abspath": os.path.abspath(o["path"])} for o in obj_list],
             "hands": hand_entries,
             "shards": [{"file": f"shards/{t['file']}", "object": t["object"]["name"], "hand": t["hand"]["label"],
-                        "task_sha256": held[t["file"]] or t["key"],
+                        "task_sha256": held[t["file"]] or t["keys"][0],
                         "sha256": digests.get(t["file"]) or _sha256_file(str(shard_dir / t["file"]))} for t in tasks],
         }
         write_atomic(root / "index.json", json.dumps(index, indent=1, sort_keys=True) + "\n")

@@ -146,12 +146,12 @@ class Planner:
                  max_iterations: int | None = None, rules: str | None = "hug", skin: str | None = None,
                  record_object: Object | None = None) -> None:
         check_sources(hand, obj)
+        check_record_object(obj, record_object)
         sensing = None
         if isinstance(obj, _core.Sensing):
             if skin is not None:
                 raise ValueError("skin= chooses how an Object is sensed; a Sensing skin is used as given")
             sensing, obj = obj, record_object
-        check_record_object(obj if sensing is None else sensing, record_object)
         t = real_array("target", target)
         pose = real_array("palm_pose", palm_pose)
         # The engine checks the parameters (the rules too), the skin's name, T and the pose

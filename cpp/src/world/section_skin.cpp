@@ -1467,19 +1467,12 @@ PlaneRegion::Reach PlaneRegion::reach(const Vec2& a, const Vec2& b, double dista
   const int h = hint.load(std::memory_order_relaxed);
   if (h >= 0) {
     const double sure = distance - q.slack(extent_);
-    if (within(h, sure)) return Reach::kWithin;
-    const int h1 = next_[h];
-    if (h1 >= 0) {
-      if (within(h1, sure)) {
-        hint.store(h1, std::memory_order_relaxed);
+    int c = h;
+    for (int i = 0; i < 3 && c >= 0; ++i, c = next_[c])
+      if (within(c, sure)) {
+        if (i > 0) hint.store(c, std::memory_order_relaxed);
         return Reach::kWithin;
       }
-      const int h2 = next_[h1];
-      if (h2 >= 0 && within(h2, sure)) {
-        hint.store(h2, std::memory_order_relaxed);
-        return Reach::kWithin;
-      }
-    }
   }
   int found = -1;
   // (The root's box was asked above.)
