@@ -463,19 +463,24 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
   const double rest_gap = 2.0 * snake_tolerance();
   // A chain Tail2Head made (`turned` given) has every link found free: its joints lie outside O.
   const bool joints_outside = turned != nullptr;
-  int last = -1;  // the distal-most link sampled
+  std::array<double, kMaxLinks> D;
   for (int n = 0; n < N; ++n) {
     cum += a1[n] - a0[n];
     reach += hand_.link_length(m, n) * std::abs(cum);
-    const double D = d_root + reach;
-    bound = std::max(bound, D);
-    sample[n] = (turned != nullptr && turned[n] && D > rest_gap) ||
-                sensing_->link_gap_below(planes_[m], next[n], next[n + 1], r, D, joints_outside);
+    D[n] = d_root + reach;
+    bound = std::max(bound, D[n]);
+  }
+  const double h = std::max(r, s) / 4.0;
+  const int S = std::clamp(static_cast<int>(std::ceil(bound / h - 1e-9)), 1, 128);
+  // No sample between the ends (checked as configurations): no link needs asking.
+  if (S == 1) return true;
+  int last = -1;  // the distal-most link sampled
+  for (int n = 0; n < N; ++n) {
+    sample[n] = (turned != nullptr && turned[n] && D[n] > rest_gap) ||
+                sensing_->link_gap_below(planes_[m], next[n], next[n + 1], r, D[n], joints_outside);
     if (sample[n]) last = n;
   }
   if (last < 0) return true;
-  const double h = std::max(r, s) / 4.0;
-  const int S = std::clamp(static_cast<int>(std::ceil(bound / h - 1e-9)), 1, 128);
   std::array<Vec2, kMaxLinks + 1> c;  // the joints up to the last sampled link's end
   for (int i = 1; i < S; ++i) {
     const double t = static_cast<double>(i) / S;
