@@ -1,8 +1,10 @@
 #include "hugger/world/section_skin.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <condition_variable>
+#include <cstdint>
 #include <cstring>
 #include <exception>
 #include <stdexcept>
@@ -19,6 +21,12 @@
 namespace hugger {
 
 namespace {
+
+/// A new region's id: 1, 2, ... in the order regions are made, in any thread.
+std::uint64_t next_region_id() {
+  static std::atomic<std::uint64_t> next{1};
+  return next.fetch_add(1, std::memory_order_relaxed);
+}
 
 /// Distances at or below this count as touching (closes rounding gaps between pieces).
 constexpr double kTouch = 1e-12;
@@ -190,7 +198,7 @@ PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane
 
 PlaneRegion::PlaneRegion(std::shared_ptr<const Object> object, const FingerPlane& plane, double radius, double flatten,
                          FirstStage)
-    : object_(std::move(object)), plane_(plane), radius_(radius), flatten_(flatten) {
+    : object_(std::move(object)), id_(next_region_id()), plane_(plane), radius_(radius), flatten_(flatten) {
   HUGGER_CHECK_ARGUMENT(object_, "PlaneRegion needs an object");
   check_plane_frame(plane.origin, plane.u, plane.p);
   HUGGER_CHECK_ARGUMENT(radius >= 0.0 && std::isfinite(radius),
@@ -442,7 +450,7 @@ bool PlaneRegion::follow(const Vec2& tip, double level, double step, double max_
   // (along the gap's gradient) with R on the left, to the first point `step` from the tip.
   *pieces = 0;
   if (nodes_.empty() || !(level > 0.0) || !(step > 0.0)) return false;
-  const Near nr = nearest(tip, tip, kInf);
+  const Near nr = nearest_noted(tip, tip, kInf);
   if (!(nr.distance > 0.0) || !std::isfinite(nr.distance) || nr.segment < 0 || inside_from(nr, tip)) return false;
   const double l = level;
   auto acceptable = [&](const Vec2& x) { return (x - root).norm() <= reach && x.y() >= lowest; };
@@ -1372,6 +1380,40 @@ bool PlaneRegion::visit_segments(Skip&& skip, Visit&& visit, bool root_kept) con
   return false;
 }
 
+namespace {
+
+/// This thread's last point query of PlaneRegion::nearest_noted that found a piece: the
+/// region's id (0: none), the point, the answer. Out of line, as span_scratch.
+struct NearMemo {
+  std::uint64_t region = 0;
+  Vec2 a;
+  PlaneRegion::Near out;
+};
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+NearMemo& near_memo() {
+  thread_local NearMemo memo;
+  return memo;
+}
+
+}  // namespace
+
+PlaneRegion::Near PlaneRegion::nearest_noted(const Vec2& a, const Vec2& b, double cap) const {
+  if (!(a == b)) return nearest(a, b, cap);
+  NearMemo& memo = near_memo();
+  if (memo.region == id_ && std::memcmp(memo.a.data(), a.data(), sizeof(Vec2)) == 0 &&
+      memo.out.distance <= std::max(cap, 0.0))
+    return memo.out;
+  const Near out = nearest(a, b, cap);
+  if (out.distance < kInf) {
+    memo.region = id_;
+    memo.a = a;
+    memo.out = out;
+  }
+  return out;
+}
+
 PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap) const {
   Near out;
   if (nodes_.empty()) return out;
@@ -2253,7 +2295,7 @@ Touch SectionSkin::link(const FingerPlane& plane, const Vec2& a, const Vec2& b, 
   const PlaneRegion* R = region(plane, radius);
   if (!R) return Sensing::link(plane, a, b, radius, cap);
   const double c = cap >= 0.0 ? cap : 0.0;
-  PlaneRegion::Near nr = R->nearest(a, b, c);
+  PlaneRegion::Near nr = R->nearest_noted(a, b, c);
   Touch t;
   auto dir = [&](const Vec2& v) { return Vec3(v.x() * plane.u + v.y() * plane.p); };
   if (nr.distance == 0.0) {

@@ -88,6 +88,10 @@ class PlaneRegion {
   /// Nearest boundary piece to segment [a, b] (a == b: a point) within `cap`; distance is +inf
   /// when nothing is within cap.
   Near nearest(const Vec2& a, const Vec2& b, double cap = kInf) const;
+  /// nearest() of a point (a == b) as the thread's last query of this region found it, when that
+  /// one asked the same point and found a piece within `cap`: the answer (within its cap) does not
+  /// depend on the cap. A point's contact query and the boundary walk from it ask it in turn.
+  Near nearest_noted(const Vec2& a, const Vec2& b, double cap) const;
   /// True when some boundary piece comes within `distance` of segment [a, b] (or touches it).
   bool any_within(const Vec2& a, const Vec2& b, double distance) const;
   /// True when segment [a, b] stays out of R: no boundary piece touches it and a lies outside R
@@ -331,6 +335,9 @@ class PlaneRegion {
   void add_segment(const Vec2& a, const Vec2& b, const Vec2& outward, int piece);
 
   std::shared_ptr<const Object> object_;
+  /// Unique to this region in the process (nearest_noted's memory names regions by it: an
+  /// address may be reused by a later region).
+  std::uint64_t id_;
   FingerPlane plane_;
   double radius_ = 0.0, flatten_ = kDefaultFlatten;
   std::vector<Segment> segments_;
