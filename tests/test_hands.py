@@ -624,3 +624,24 @@ def test_exported_joint_values_lie_within_the_exported_limits_exactly():
                                                re.S).groups())
         assert lo <= q[name] <= hi, (name, lo, q[name], hi)
     assert q["f0_j1"] == hand.joint_limits[0, 1, 0] - hand.rest_angles[0, 1]
+
+
+def test_exported_joint_values_of_a_joint_limited_on_one_side_lie_within_its_exported_range():
+    # a side without a limit is written at +-pi (where joint angles end); an angle beyond it was
+    # exported outside the range the same file gives the joint
+    import re
+
+    hand = hugger.Hand.from_layout(roots=[[0.02, 0, 0], [-0.02, 0, 0]], directions=[[1, 0, 0], [-1, 0, 0]],
+                                   link_lengths=[[0.03, 0.03], [0.03, 0.03]],
+                                   limits=[[[-np.inf, 1.0], [0.0, 1.5]], [[-0.5, 0.5], [0.0, 1.5]]])
+    angles = np.zeros((2, 2))
+    angles[0, 0] = -3.5  # beyond -pi, on the side without a limit
+    with pytest.raises(ValueError, match=r"angles\[0, 0\] = -3\.5 rad is outside \[-3\.14159, 1\].*\[-pi, pi\]"):
+        hands.grasp_joint_values(hand, angles)
+    with pytest.raises(ValueError, match=r"outside \[-3\.14159, 1\]"):
+        hands.to_mjcf(hand, angles)
+    angles[0, 0] = -np.pi
+    q = hands.grasp_joint_values(hand, angles)
+    lo, hi = (float(x) for x in re.search(r'<joint name="f0_j0".*?lower="([^"]+)" upper="([^"]+)"',
+                                           hands.to_urdf(hand, angles), re.S).groups())
+    assert lo <= q["f0_j0"] <= hi and lo == -np.pi

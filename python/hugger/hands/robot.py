@@ -561,7 +561,6 @@ def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
                                                          geometry=U.Geometry(cylinder=U.Cylinder(
                                                              radius=g.palm_radius, length=g.palm_thickness)))])]
     joints = []
-    lim = g.joint_limits
     for m, (pts, axis) in enumerate(_finger_geometry(g)):
         parent = "palm"
         for n in range(g.links):
@@ -570,13 +569,12 @@ def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
             links.append(U.Link(name=child, collisions=[U.Collision(
                 name=child, origin=tf(d / 2, along(d)),
                 geometry=U.Geometry(cylinder=U.Cylinder(radius=g.link_radius, length=float(g.link_lengths[m, n]))))]))
-            lo, hi = np.clip(lim[m, n], -math.pi, math.pi) - g.rest_angles[m, n]  # +-pi: no bound
-            finite = bool(np.isfinite(lim[m, n]).any())
+            span = _joint_range(g, m, n)
             xyz = pts[0] if n == 0 else pts[n] - pts[n - 1]
-            joints.append(U.Joint(name=f"f{m}_j{n}", type="revolute" if finite else "continuous", parent=parent,
+            joints.append(U.Joint(name=f"f{m}_j{n}", type="revolute" if span else "continuous", parent=parent,
                                   child=child, origin=tf(xyz), axis=axis,
-                                  limit=U.Limit(effort=10.0, velocity=2.0, lower=float(lo), upper=float(hi))
-                                  if finite else None))
+                                  limit=U.Limit(effort=10.0, velocity=2.0, lower=span[0], upper=span[1])
+                                  if span else None))
             parent = child
         links.append(U.Link(name=f"f{m}_tip"))
         joints.append(U.Joint(name=f"f{m}_tip", type="fixed", parent=parent, child=f"f{m}_tip",
@@ -590,6 +588,16 @@ def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
     return _embed(text, hand)
 
 
+def _joint_range(g: Hand, m: int, n: int) -> tuple[float, float] | None:
+    """The range (rad) URDF and MJCF give joint f{m}_j{n}: its limits less its rest angle, a side
+    without a limit at +-pi (where hugger's angles end) less it; None for a joint without limits."""
+    lim = g.joint_limits[m, n]
+    if not np.isfinite(lim).any():
+        return None
+    lo, hi = np.clip(lim, -math.pi, math.pi) - g.rest_angles[m, n]
+    return float(lo), float(hi)
+
+
 def _joint_values(hand: Hand, angles: Any) -> np.ndarray:
     """URDF/MJCF joint values q = theta - rest (M, N) of hugger angles (M, N)."""
     a = np.asarray(angles, dtype=np.float64)
@@ -597,12 +605,17 @@ def _joint_values(hand: Hand, angles: Any) -> np.ndarray:
         raise ValueError(f"angles must have shape ({hand.fingers}, {hand.links}), got {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError("angles must be finite (rad)")
-    lim = hand.joint_limits  # a plan's angles lie within them up to rounding
+    # A plan's angles lie within the limits and within [-pi, pi] (the relative angle of two
+    # directions), up to rounding; so do the files' ranges (_joint_range).
+    lim = np.clip(hand.joint_limits, -math.pi, math.pi)
     outside = np.argwhere((a < lim[..., 0] - LIMIT_TOLERANCE) | (a > lim[..., 1] + LIMIT_TOLERANCE))
     if len(outside):
         m, n = (int(i) for i in outside[0])
-        raise ValueError(f"angles[{m}, {n}] = {a[m, n]:.6g} rad is outside that joint's limits "
-                         f"[{lim[m, n, 0]:.6g}, {lim[m, n, 1]:.6g}]")
+        lo, hi = hand.joint_limits[m, n]
+        where = (f"that joint's limits [{lo:.6g}, {hi:.6g}]" if lim[m, n, 0] == lo and lim[m, n, 1] == hi else
+                 f"[{lim[m, n, 0]:.6g}, {lim[m, n, 1]:.6g}] (that joint's limits [{lo:.6g}, {hi:.6g}] within "
+                 f"[-pi, pi], where a joint angle lies)")
+        raise ValueError(f"angles[{m}, {n}] = {a[m, n]:.6g} rad is outside {where}")
     # Onto the limits where rounding put them beyond (the planner's slack): within the file's limits,
     # computed as these are, exactly (a controller may refuse a value 1e-16 beyond one).
     return cast(np.ndarray, np.clip(a, lim[..., 0], lim[..., 1]) - hand.rest_angles)
@@ -760,14 +773,14 @@ def to_mjcf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
     palm = ET.SubElement(world, "body", name="palm")
     ET.SubElement(palm, "geom", name="palm", type="cylinder", pos=f([0, 0, -g.palm_thickness / 2]),
                   size=f([g.palm_radius, g.palm_thickness / 2]))
-    lim = g.joint_limits
     for m, (pts, axis) in enumerate(_finger_geometry(g)):
         parent, base = palm, np.zeros(3)
         for n in range(g.links):
             body = ET.SubElement(parent, "body", name=f"f{m}_l{n}", pos=f(pts[n] - base))
             attrs = {"name": f"f{m}_j{n}", "type": "hinge", "axis": f(axis)}
-            if np.isfinite(lim[m, n]).any():
-                lo, hi = np.clip(lim[m, n], -math.pi, math.pi) - g.rest_angles[m, n]
+            span = _joint_range(g, m, n)
+            if span:
+                lo, hi = span
                 attrs["range"] = f([lo, max(hi, lo + 1e-12)])  # MuJoCo needs lower < upper: a held joint
                 attrs["limited"] = "true"
             ET.SubElement(body, "joint", attrs)
