@@ -223,7 +223,9 @@ void HandModel::planar_angles(const std::vector<Vec2>& joints, double* angles) {
   double prev = 0.0;
   for (std::size_t n = 0; n + 1 < joints.size(); ++n) {
     const Vec2 d = joints[n + 1] - joints[n];
-    const double abs_angle = std::atan2(-d.x(), d.y());
+    // A link along p (the rest chains of a rim hand, and their translations) needs no call:
+    // atan2(+-0, y > 0) is +-0, the sign of -d.x() (C Annex F), bit for bit.
+    const double abs_angle = d.x() == 0.0 && d.y() > 0.0 ? -d.x() : std::atan2(-d.x(), d.y());
     // Into [-pi, pi]: both angles lie in [-pi, pi], so rel lies in [-2 pi, 2 pi], where one
     // turn taken off its magnitude is exact (Sterbenz) and gives std::remainder(rel, 2 pi) bit
     // for bit, the sign of a zero included.
