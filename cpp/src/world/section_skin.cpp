@@ -1382,11 +1382,13 @@ bool PlaneRegion::visit_segments(Skip&& skip, Visit&& visit, bool root_kept) con
 
 namespace {
 
-/// This thread's last point query of PlaneRegion::nearest_noted that found a piece: the
-/// region's id (0: none), the point, the answer. Out of line, as span_scratch.
+/// This thread's last point query of PlaneRegion::nearest_noted whose first find lay within its
+/// cap: the region's id (0: none), the point, the cap, the answer. Out of line, as span_scratch
+/// (below) is: a thread-local's address in a shared library is a call.
 struct NearMemo {
   std::uint64_t region = 0;
   Vec2 a;
+  double cap = 0.0;
   PlaneRegion::Near out;
 };
 #if defined(__GNUC__)
@@ -1401,20 +1403,30 @@ NearMemo& near_memo() {
 
 PlaneRegion::Near PlaneRegion::nearest_noted(const Vec2& a, const Vec2& b, double cap) const {
   if (!(a == b)) return nearest(a, b, cap);
+  const double c = std::max(cap, 0.0);
   NearMemo& memo = near_memo();
-  if (memo.region == id_ && std::memcmp(memo.a.data(), a.data(), sizeof(Vec2)) == 0 &&
-      memo.out.distance <= std::max(cap, 0.0))
+  if (memo.region == id_ && memo.cap <= c && std::memcmp(memo.a.data(), a.data(), sizeof(Vec2)) == 0)
     return memo.out;
-  const Near out = nearest(a, b, cap);
-  if (out.distance < kInf) {
+  double first = kInf;
+  const Near out = search_nearest(a, b, cap, &first);
+  // A search whose first find lies within its cap gives what a search with a larger cap gives,
+  // bit for bit: the larger one visits the same nodes in the same order but for nodes only it
+  // keeps, whose pieces lie farther than the cap and the tie margin, and the first find within
+  // the cap then starts its answer afresh (ties included), as it starts the smaller one's.
+  if (first <= c) {
     memo.region = id_;
     memo.a = a;
+    memo.cap = c;
     memo.out = out;
   }
   return out;
 }
 
 PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap) const {
+  return search_nearest(a, b, cap, nullptr);
+}
+
+PlaneRegion::Near PlaneRegion::search_nearest(const Vec2& a, const Vec2& b, double cap, double* first) const {
   Near out;
   if (nodes_.empty()) return out;
   const Query q(a, b);
@@ -1441,6 +1453,7 @@ PlaneRegion::Near PlaneRegion::nearest(const Vec2& a, const Vec2& b, double cap)
         const double d = segment_distance(a, b, s.a, s.b, &c1, &c2);
         if (d > best + kTie) continue;
         if (!found || d < best - kTie) {
+          if (!found && first != nullptr) *first = d;
           found = true;
           out.normal_sum = s.normal;
           out.ties = 1;

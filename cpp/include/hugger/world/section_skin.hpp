@@ -88,9 +88,10 @@ class PlaneRegion {
   /// Nearest boundary piece to segment [a, b] (a == b: a point) within `cap`; distance is +inf
   /// when nothing is within cap.
   Near nearest(const Vec2& a, const Vec2& b, double cap = kInf) const;
-  /// nearest() of a point (a == b) as the thread's last query of this region found it, when that
-  /// one asked the same point and found a piece within `cap`: the answer (within its cap) does not
-  /// depend on the cap. A point's contact query and the boundary walk from it ask it in turn.
+  /// nearest(), for a point (a == b) answered from the thread's last such query of this region
+  /// when that one asked the same point with a cap at most `cap` and found its first piece within
+  /// its cap: then the answers agree bit for bit (see there). A tip's contact query (capped at the
+  /// contact tolerance) and the boundary walk from it (uncapped) ask it in turn.
   Near nearest_noted(const Vec2& a, const Vec2& b, double cap) const;
   /// True when some boundary piece comes within `distance` of segment [a, b] (or touches it).
   bool any_within(const Vec2& a, const Vec2& b, double distance) const;
@@ -333,6 +334,10 @@ class PlaneRegion {
   void add_arcs(Kind kind, std::int64_t feature, const Vec2& centre, const Vec2& U, const Vec2& V,
                 const std::vector<std::array<double, 2>>& allowed, Outward&& outward);
   void add_segment(const Vec2& a, const Vec2& b, const Vec2& outward, int piece);
+
+  /// nearest(); `first` (or nullptr): set to the distance of the first piece it found (kept
+  /// unchanged when it found none).
+  Near search_nearest(const Vec2& a, const Vec2& b, double cap, double* first) const;
 
   std::shared_ptr<const Object> object_;
   /// Unique to this region in the process (nearest_noted's memory names regions by it: an
