@@ -613,6 +613,7 @@ def test_exported_joint_values_lie_within_the_exported_limits_exactly():
     # below a lower limit of 0, which a strict controller may refuse
     import re
 
+    pytest.importorskip("yourdfpy")
     hand = hands.preset("barrett_bh8")
     angles = np.clip(np.zeros((hand.fingers, hand.links)), hand.joint_limits[..., 0], hand.joint_limits[..., 1])
     angles[0, 1] = hand.joint_limits[0, 1, 0] - 1e-13
@@ -631,6 +632,7 @@ def test_exported_joint_values_of_a_joint_limited_on_one_side_lie_within_its_exp
     # exported outside the range the same file gives the joint
     import re
 
+    pytest.importorskip("yourdfpy")
     hand = hugger.Hand.from_layout(roots=[[0.02, 0, 0], [-0.02, 0, 0]], directions=[[1, 0, 0], [-1, 0, 0]],
                                    link_lengths=[[0.03, 0.03], [0.03, 0.03]],
                                    limits=[[[-np.inf, 1.0], [0.0, 1.5]], [[-0.5, 0.5], [0.0, 1.5]]])
@@ -645,3 +647,7 @@ def test_exported_joint_values_of_a_joint_limited_on_one_side_lie_within_its_exp
     lo, hi = (float(x) for x in re.search(r'<joint name="f0_j0".*?lower="([^"]+)" upper="([^"]+)"',
                                            hands.to_urdf(hand, angles), re.S).groups())
     assert lo <= q["f0_j0"] <= hi and lo == -np.pi
+    # a joint without limits (written continuous): the same [-pi, pi], said so
+    free = hugger.Hand.from_layout(roots=[[0.02, 0, 0]], directions=[[1, 0, 0]], link_lengths=[[0.03]])
+    with pytest.raises(ValueError, match=r"outside \[-pi, pi\], where joint angles lie \(that joint has no limits\)"):
+        hands.grasp_joint_values(free, [[4.0]])

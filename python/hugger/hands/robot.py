@@ -276,7 +276,7 @@ def _hand_from_chains(chains: list[_Chain], source: str, link_radius: float | No
 
 # ------------------------------------------------------------------------------------- URDF
 
-#: How far (rad) exported angles may lie beyond a joint limit: rounding, not motion.
+#: How far (rad) exported angles may lie beyond a joint limit, or beyond +-pi: rounding, not motion.
 LIMIT_TOLERANCE = 1e-6
 
 
@@ -588,13 +588,18 @@ def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
     return _embed(text, hand)
 
 
+def _angle_limits(hand: Hand) -> np.ndarray:
+    """The hand's joint limits (M, N, 2; rad) within [-pi, pi], where joint angles lie (the
+    relative angle of two directions): a side without a limit at +-pi."""
+    return cast(np.ndarray, np.clip(hand.joint_limits, -math.pi, math.pi))
+
+
 def _joint_range(g: Hand, m: int, n: int) -> tuple[float, float] | None:
-    """The range (rad) URDF and MJCF give joint f{m}_j{n}: its limits less its rest angle, a side
-    without a limit at +-pi (where hugger's angles end) less it; None for a joint without limits."""
-    lim = g.joint_limits[m, n]
-    if not np.isfinite(lim).any():
+    """The range (rad) URDF and MJCF give joint f{m}_j{n}: its _angle_limits less its rest angle;
+    None for a joint without limits (URDF's continuous joint, MJCF's hinge without a range)."""
+    if not np.isfinite(g.joint_limits[m, n]).any():
         return None
-    lo, hi = np.clip(lim, -math.pi, math.pi) - g.rest_angles[m, n]
+    lo, hi = _angle_limits(g)[m, n] - g.rest_angles[m, n]
     return float(lo), float(hi)
 
 
@@ -605,16 +610,19 @@ def _joint_values(hand: Hand, angles: Any) -> np.ndarray:
         raise ValueError(f"angles must have shape ({hand.fingers}, {hand.links}), got {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError("angles must be finite (rad)")
-    # A plan's angles lie within the limits and within [-pi, pi] (the relative angle of two
-    # directions), up to rounding; so do the files' ranges (_joint_range).
-    lim = np.clip(hand.joint_limits, -math.pi, math.pi)
+    # A plan's angles lie within these up to rounding; so do the files' ranges (_joint_range).
+    lim = _angle_limits(hand)
     outside = np.argwhere((a < lim[..., 0] - LIMIT_TOLERANCE) | (a > lim[..., 1] + LIMIT_TOLERANCE))
     if len(outside):
         m, n = (int(i) for i in outside[0])
         lo, hi = hand.joint_limits[m, n]
-        where = (f"that joint's limits [{lo:.6g}, {hi:.6g}]" if lim[m, n, 0] == lo and lim[m, n, 1] == hi else
-                 f"[{lim[m, n, 0]:.6g}, {lim[m, n, 1]:.6g}] (that joint's limits [{lo:.6g}, {hi:.6g}] within "
-                 f"[-pi, pi], where a joint angle lies)")
+        if lim[m, n, 0] == lo and lim[m, n, 1] == hi:
+            where = f"that joint's limits [{lo:.6g}, {hi:.6g}]"
+        elif not np.isfinite([lo, hi]).any():
+            where = "[-pi, pi], where joint angles lie (that joint has no limits)"
+        else:
+            where = (f"[{lim[m, n, 0]:.6g}, {lim[m, n, 1]:.6g}] (that joint's limits [{lo:.6g}, {hi:.6g}] within "
+                     f"[-pi, pi], where joint angles lie)")
         raise ValueError(f"angles[{m}, {n}] = {a[m, n]:.6g} rad is outside {where}")
     # Onto the limits where rounding put them beyond (the planner's slack): within the file's limits,
     # computed as these are, exactly (a controller may refuse a value 1e-16 beyond one).
@@ -623,7 +631,8 @@ def _joint_values(hand: Hand, angles: Any) -> np.ndarray:
 
 def grasp_joint_values(hand: Hand, angles: Any) -> dict[str, float]:
     """URDF/MJCF joint values ``{f{m}_j{n}: q}`` (rad) of hugger angles (M, N): q = theta - rest,
-    with theta within the joint's limits (an angle beyond one by rounding is taken onto it)."""
+    with theta within the joint's limits and within [-pi, pi] (an angle beyond by rounding, up to
+    LIMIT_TOLERANCE, is taken onto the bound; one farther is a ValueError)."""
     q = _joint_values(hand, angles)
     return {f"f{m}_j{n}": float(q[m, n]) for m in range(hand.fingers) for n in range(hand.links)}
 
