@@ -471,7 +471,8 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
     bound = std::max(bound, D[n]);
   }
   const double h = std::max(r, s) / 4.0;
-  const int S = std::clamp(static_cast<int>(std::ceil(bound / h - 1e-9)), 1, 128);
+  // (Clamped before the cast: a bound beyond INT_MAX samples would not fit an int.)
+  const int S = static_cast<int>(std::clamp(std::ceil(bound / h - 1e-9), 1.0, 128.0));
   // No sample between the ends (checked as configurations): no link needs asking.
   if (S == 1) return true;
   int last = -1;  // the distal-most link sampled
