@@ -762,6 +762,16 @@ def _check_shard(z: dict[str, np.ndarray], k: int, path: Path) -> None:
         raise _not_whole(path, f"best is {z['best']!r}")
 
 
+def _item_index(i: Any, count: int, what: str) -> int:
+    """Index ``i`` (negative counts from the end) of a dataset's ``count`` shards or grasps
+    (``what``): ``TypeError`` for what is no integer, ``IndexError`` naming the range."""
+    if isinstance(i, bool) or not isinstance(i, (int, np.integer)):
+        raise TypeError(f"a {what} index must be an integer, got {type(i).__name__}")
+    if not -count <= i < count:
+        raise IndexError(f"{what} {i!r} is out of range for a dataset of {count} {what}s")
+    return int(i) % count
+
+
 class Dataset:
     """A dataset written by :func:`generate` / ``hugger generate``: ``len(ds)`` grasps over
     ``ds.shards``; ``ds[i]`` is a :class:`Grasp`; ``ds.trajectory(i)`` re-plans grasp i
@@ -794,11 +804,7 @@ class Dataset:
 
     def shard(self, i: int) -> dict[str, np.ndarray]:
         """Every array of shard i (see docs/generation.md), loaded without pickles."""
-        if isinstance(i, bool) or not isinstance(i, (int, np.integer)):
-            raise TypeError(f"a shard index must be an integer, got {type(i).__name__}")
-        if not -len(self.shards) <= i < len(self.shards):
-            raise IndexError(f"shard {i!r} is out of range for a dataset of {len(self.shards)} shards")
-        i = int(i) % len(self.shards)
+        i = _item_index(i, len(self.shards), "shard")
         if i not in self._cache:
             path = self.root / self.shards[i]["file"]
             data = path.read_bytes() if path.is_file() else None  # once: loaded and hashed (None: missing)
@@ -813,11 +819,7 @@ class Dataset:
         return self._cache[i]
 
     def _locate(self, i: int) -> tuple[int, int]:
-        if isinstance(i, bool) or not isinstance(i, (int, np.integer)):
-            raise TypeError(f"a grasp index must be an integer, got {type(i).__name__}")
-        if not -len(self) <= i < len(self):
-            raise IndexError(f"grasp {i!r} is out of range for a dataset of {len(self)} grasps")
-        i = int(i) % len(self)
+        i = _item_index(i, len(self), "grasp")
         s = int(np.searchsorted(self._starts, i, side="right") - 1)
         return s, i - int(self._starts[s])
 

@@ -326,6 +326,15 @@ def _urdf_origin(source: str, j: Any) -> np.ndarray:
     return origin
 
 
+def _urdf_axis(source: str, j: Any) -> np.ndarray:
+    """Joint ``j``'s axis in its frame as the file gives it (URDF's default x; not normalised); a
+    ValueError naming it when that is no direction."""
+    axis = np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0], dtype=np.float64)
+    if not (np.all(np.isfinite(axis)) and float(_stable.norm(axis)) > 0.0):
+        raise ValueError(f"{source}: joint {j.name!r} has axis {axis.tolist()}: not a direction")
+    return axis
+
+
 def _urdf_limits(source: str, j: Any) -> tuple[float, float]:
     """Revolute joint ``j``'s limits (rad), a side the file leaves out 0 as URDF says; a
     ValueError naming it when it has no ``<limit>`` (URDF requires one), or one with neither side
@@ -414,9 +423,7 @@ def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dic
     def motion(j: Any, value: float) -> np.ndarray:
         origin = _urdf_origin(source, j)
         if j.type in ("revolute", "continuous", "prismatic") and value != 0.0:
-            axis = np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0], dtype=np.float64)
-            if not (np.all(np.isfinite(axis)) and float(_stable.norm(axis)) > 0.0):
-                raise ValueError(f"{source}: joint {j.name!r} has axis {axis.tolist()}: not a direction")
+            axis = _urdf_axis(source, j)
             move = np.eye(4)
             if j.type == "prismatic":  # (held by fixed_joints, in m: it was taken at 0)
                 move[:3, 3] = value * axis / _stable.norm(axis)
@@ -457,9 +464,7 @@ def _urdf_hand(robot: Any, source: str, palm_link: str | None, fixed_joints: dic
             f = _stable.matmul(frame, motion(j, 0.0))
             c.joints.append(j.name)
             c.anchors.append(f[:3, 3].copy())
-            axis = np.asarray(j.axis if j.axis is not None else [1.0, 0.0, 0.0], dtype=np.float64)
-            if not (np.all(np.isfinite(axis)) and float(_stable.norm(axis)) > 0.0):
-                raise ValueError(f"{source}: joint {j.name!r} has axis {axis.tolist()}: not a direction")
+            axis = _urdf_axis(source, j)
             c.axes.append(_stable.matmul(f[:3, :3], axis / _stable.norm(axis)))
             c.limits.append((-math.inf, math.inf) if j.type == "continuous" else _urdf_limits(source, j))
             if getattr(j, "mimic", None) is not None:
@@ -561,6 +566,7 @@ def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
                                                          geometry=U.Geometry(cylinder=U.Cylinder(
                                                              radius=g.palm_radius, length=g.palm_thickness)))])]
     joints = []
+    limits, rest = g.joint_limits, g.rest_angles
     for m, (pts, axis) in enumerate(_finger_geometry(g)):
         parent = "palm"
         for n in range(g.links):
@@ -569,7 +575,7 @@ def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
             links.append(U.Link(name=child, collisions=[U.Collision(
                 name=child, origin=tf(d / 2, along(d)),
                 geometry=U.Geometry(cylinder=U.Cylinder(radius=g.link_radius, length=float(g.link_lengths[m, n]))))]))
-            span = _joint_range(g, m, n)
+            span = _joint_range(limits[m, n], rest[m, n])
             xyz = pts[0] if n == 0 else pts[n] - pts[n - 1]
             joints.append(U.Joint(name=f"f{m}_j{n}", type="revolute" if span else "continuous", parent=parent,
                                   child=child, origin=tf(xyz), axis=axis,
@@ -588,18 +594,19 @@ def to_urdf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
     return _embed(text, hand)
 
 
-def _angle_limits(hand: Hand) -> np.ndarray:
-    """The hand's joint limits (M, N, 2; rad) within [-pi, pi], where joint angles lie (the
+def _angle_limits(limits: np.ndarray) -> np.ndarray:
+    """Joint limits ([..., 2] lower, upper; rad) within [-pi, pi], where joint angles lie (the
     relative angle of two directions): a side without a limit at +-pi."""
-    return cast(np.ndarray, np.clip(hand.joint_limits, -math.pi, math.pi))
+    return cast(np.ndarray, np.clip(limits, -math.pi, math.pi))
 
 
-def _joint_range(g: Hand, m: int, n: int) -> tuple[float, float] | None:
-    """The range (rad) URDF and MJCF give joint f{m}_j{n}: its _angle_limits less its rest angle;
-    None for a joint without limits (URDF's continuous joint, MJCF's hinge without a range)."""
-    if not np.isfinite(g.joint_limits[m, n]).any():
+def _joint_range(limits: np.ndarray, rest: float) -> tuple[float, float] | None:
+    """The range (rad) URDF and MJCF give a joint of ``limits`` (lower, upper) and ``rest`` angle:
+    its _angle_limits less its rest angle; None for a joint without limits (URDF's continuous
+    joint, MJCF's hinge without a range)."""
+    if not np.isfinite(limits).any():
         return None
-    lo, hi = _angle_limits(g)[m, n] - g.rest_angles[m, n]
+    lo, hi = _angle_limits(limits) - rest
     return float(lo), float(hi)
 
 
@@ -611,7 +618,7 @@ def _joint_values(hand: Hand, angles: Any) -> np.ndarray:
     if not np.all(np.isfinite(a)):
         raise ValueError("angles must be finite (rad)")
     # A plan's angles lie within these up to rounding; so do the files' ranges (_joint_range).
-    lim = _angle_limits(hand)
+    lim = _angle_limits(hand.joint_limits)
     outside = np.argwhere((a < lim[..., 0] - LIMIT_TOLERANCE) | (a > lim[..., 1] + LIMIT_TOLERANCE))
     if len(outside):
         m, n = (int(i) for i in outside[0])
@@ -782,12 +789,13 @@ def to_mjcf(hand: Hand, angles: Any = None, name: str = "hugger_hand") -> str:
     palm = ET.SubElement(world, "body", name="palm")
     ET.SubElement(palm, "geom", name="palm", type="cylinder", pos=f([0, 0, -g.palm_thickness / 2]),
                   size=f([g.palm_radius, g.palm_thickness / 2]))
+    limits, rest = g.joint_limits, g.rest_angles
     for m, (pts, axis) in enumerate(_finger_geometry(g)):
         parent, base = palm, np.zeros(3)
         for n in range(g.links):
             body = ET.SubElement(parent, "body", name=f"f{m}_l{n}", pos=f(pts[n] - base))
             attrs = {"name": f"f{m}_j{n}", "type": "hinge", "axis": f(axis)}
-            span = _joint_range(g, m, n)
+            span = _joint_range(limits[m, n], rest[m, n])
             if span:
                 lo, hi = span
                 attrs["range"] = f([lo, max(hi, lo + 1e-12)])  # MuJoCo needs lower < upper: a held joint
