@@ -226,6 +226,18 @@ Vec2 Planner::root2d(int m, double eta) const {
 
 namespace {
 
+/// (cos x, sin x): their Taylor series for |x| <= 0.1 (the motion check's turns between samples,
+/// which rarely exceed a link's radius over its length; the first term left out is below
+/// 1e-22), else the library's.
+Vec2 cos_sin(double x) {
+  if (!(std::abs(x) <= 0.1)) return Vec2(std::cos(x), std::sin(x));
+  const double x2 = x * x;
+  const double sin = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0 * (1.0 - x2 / 110.0)))));
+  const double cos =
+      1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0 * (1.0 - x2 / 90.0 * (1.0 - x2 / 132.0)))));
+  return Vec2(cos, sin);
+}
+
 /// The same chain to the bit (the memories' test: chains that differ only in a zero's sign can
 /// give different angles and points).
 bool same_chain_bits(const Chain& x, const Chain& y) {
@@ -448,7 +460,7 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
   // On the stack: this runs for every finger that moves, in every iteration (and a skin's
   // callback may plan on this thread meanwhile). chain_angles' memory is shared across calls,
   // but its answers are copied out at once and a hit is the same chain bit for bit.
-  std::array<double, kMaxLinks> a0, a1, a;
+  std::array<double, kMaxLinks> a0, a1;
   std::array<char, kMaxLinks> sample{};
   std::copy_n(chain_angles(m, old), N, a0.data());
   std::copy_n(chain_angles(m, next), N, a1.data());
@@ -482,11 +494,28 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
     if (sample[n]) last = n;
   }
   if (last < 0) return true;
+  // Along the line in joint space every link turns at a constant rate: between two samples link
+  // n turns by the same angle, the sum of its joints' steps over S. Each link's direction is
+  // turned by that rotation from sample to sample, starting from its direction in `old`, rather
+  // than computed afresh from the interpolated angles (a sine and a cosine per link and sample).
+  // The samples then lie within a few units of rounding of the checker's, far below the depth
+  // allowed at them.
+  std::array<Vec2, kMaxLinks> dir, turn;  // link n's direction at the sample; its turn (cos, sin)
+  double cum_turn = 0.0;
+  for (int n = 0; n <= last; ++n) {
+    cum_turn += a1[n] - a0[n];
+    dir[n] = (old[n + 1] - old[n]) / hand_.link_length(m, n);
+    turn[n] = cos_sin(cum_turn / S);
+  }
   std::array<Vec2, kMaxLinks + 1> c;  // the joints up to the last sampled link's end
   for (int i = 1; i < S; ++i) {
     const double t = static_cast<double>(i) / S;
-    for (int n = 0; n <= last; ++n) a[n] = a0[n] + t * (a1[n] - a0[n]);
-    hand_.forward_planar(m, old[0] + t * (next[0] - old[0]), a.data(), last + 1, c.data());
+    c[0] = old[0] + t * (next[0] - old[0]);
+    for (int n = 0; n <= last; ++n) {
+      const Vec2& q = turn[n];
+      dir[n] = Vec2(q.x() * dir[n].x() - q.y() * dir[n].y(), q.y() * dir[n].x() + q.x() * dir[n].y());
+      c[n + 1] = c[n] + hand_.link_length(m, n) * dir[n];
+    }
     for (int n = 0; n <= last; ++n)
       if (sample[n] && !swept_link_ok(m, c[n], c[n + 1])) return false;
   }
