@@ -1,6 +1,7 @@
 """The hand: construction, counts and sizes, their refusals and warnings, kinematics."""
 from __future__ import annotations
 
+import json
 import tracemalloc
 from pathlib import Path
 
@@ -23,6 +24,18 @@ def test_hand_properties_and_json(hand):
     assert hugger.Hand.from_dict(d).to_dict() == d
     per_link = hugger.Hand(fingers=2, links=3, link_length=[[0.01, 0.02, 0.03], [0.03, 0.02, 0.01]], link_radius=0)
     assert per_link.link_lengths[1, 0] == 0.03
+
+
+def test_hand_json_is_its_dict_and_follows_its_name():
+    # to_json is made once per hand and name (every trajectory records it): it must still be
+    # to_dict's text, and follow a name given after the hand was made (as presets do).
+    hand = hugger.Hand(fingers=3, links=2)
+    assert json.loads(hand.to_json()) == hand.to_dict() and "name" not in hand.to_dict()
+    assert hand.to_json() is hand.to_json()
+    hand.name = "mine"
+    assert json.loads(hand.to_json())["name"] == "mine"
+    hand.name = None
+    assert json.loads(hand.to_json()) == hugger.Hand(fingers=3, links=2).to_dict()
 
 
 @pytest.mark.parametrize("kwargs, match", [

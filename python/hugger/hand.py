@@ -329,7 +329,12 @@ class Hand:
         return d
 
     def to_json(self) -> str:
-        return json.dumps(self.to_dict())
+        """:meth:`to_dict` as JSON (every trajectory records it): made once per hand and name, as
+        the hand is immutable (its ``name`` alone may be set after it is made)."""
+        made = self.__dict__.get("_json")
+        if made is None or made[0] != self.name:
+            made = self._json = (self.name, json.dumps(self.to_dict()))
+        return made[1]
 
     @classmethod
     def from_dict(cls, d: dict[str, Any], strict: bool = False) -> Hand:
