@@ -95,6 +95,8 @@ class Hand:
     """
 
     name: str | None = None
+    #: to_json's text, with the name it was made for.
+    _json: tuple[str | None, str] | None = None
 
     def __init__(self, fingers: int = 5, links: int = 5, link_length: Any = 0.02, link_radius: float = 0.004,
                  palm_radius: float = 0.03, palm_thickness: float = 0.01) -> None:
@@ -331,7 +333,7 @@ class Hand:
     def to_json(self) -> str:
         """:meth:`to_dict` as JSON (every trajectory records it): made once per hand and name, as
         the hand is immutable (its ``name`` alone may be set after it is made)."""
-        made = self.__dict__.get("_json")
+        made = self._json
         if made is None or made[0] != self.name:
             made = self._json = (self.name, json.dumps(self.to_dict()))
         return made[1]

@@ -207,13 +207,10 @@ std::vector<Vec2> HandModel::forward_planar(int m, const Vec2& root, const doubl
 
 void HandModel::forward_planar(int m, const Vec2& root, const double* angles, std::vector<Vec2>* out) const {
   out->resize(links_ + 1);
-  forward_planar(m, root, angles, links_, out->data());
-}
-
-void HandModel::forward_planar(int m, const Vec2& root, const double* angles, int links, Vec2* j) const {
+  Vec2* j = out->data();
   j[0] = root;
   double theta = 0.0;
-  for (int n = 0; n < links; ++n) {
+  for (int n = 0; n < links_; ++n) {
     theta += angles[n];
     j[n + 1] = j[n] + lengths_(m, n) * Vec2(-std::sin(theta), std::cos(theta));
   }

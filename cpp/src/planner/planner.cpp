@@ -226,9 +226,9 @@ Vec2 Planner::root2d(int m, double eta) const {
 
 namespace {
 
-/// (cos x, sin x): their Taylor series for |x| <= 0.1 (the motion check's turns between samples,
-/// which rarely exceed a link's radius over its length; the first term left out is below
-/// 1e-22), else the library's.
+/// (cos x, sin x): their Taylor series for |x| <= 0.1 (the first term left out is below 1e-22;
+/// the motion check's turns between samples are at most max(r, s) / 4 over a link's length,
+/// 0.05 rad on the default hand, unless its sample count is clamped), else the library's.
 Vec2 cos_sin(double x) {
   if (!(std::abs(x) <= 0.1)) return Vec2(std::cos(x), std::sin(x));
   const double x2 = x * x;

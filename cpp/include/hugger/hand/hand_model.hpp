@@ -99,9 +99,6 @@ class HandModel {
   /// The same into `out` (resized to N+1; no allocation once it has the room). `root` must not
   /// be an element of `*out`.
   void forward_planar(int m, const Vec2& root, const double* angles, std::vector<Vec2>* out) const;
-  /// The same for the first `links` links only (0 <= links <= N): joints 0..links into `out`
-  /// (links + 1 points, the same bits as the whole chain's first ones).
-  void forward_planar(int m, const Vec2& root, const double* angles, int links, Vec2* out) const;
   /// Joint angles of one finger from its in-plane joint positions (N+1 points).
   static void planar_angles(const std::vector<Vec2>& joints, double* angles);
   /// Joint angles (M x N) from world joint positions (finger-major, M*(N+1)).
