@@ -461,7 +461,6 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
   // callback may plan on this thread meanwhile). chain_angles' memory is shared across calls,
   // but its answers are copied out at once and a hit is the same chain bit for bit.
   std::array<double, kMaxLinks> a0, a1;
-  std::array<char, kMaxLinks> sample{};
   std::copy_n(chain_angles(m, old), N, a0.data());
   std::copy_n(chain_angles(m, next), N, a1.data());
   // How far any joint can move along the straight line in joint space (as the checker bounds it).
@@ -475,9 +474,9 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
   const double rest_gap = 2.0 * snake_tolerance();
   // A chain Tail2Head made (`turned` given) has every link found free: its joints lie outside O.
   const bool joints_outside = turned != nullptr;
-  std::array<double, kMaxLinks> D;
+  std::array<double, kMaxLinks> D, swing;  // swing[n]: how far link n turns (its joints' steps summed)
   for (int n = 0; n < N; ++n) {
-    cum += a1[n] - a0[n];
+    swing[n] = cum += a1[n] - a0[n];
     reach += hand_.link_length(m, n) * std::abs(cum);
     D[n] = d_root + reach;
     bound = std::max(bound, D[n]);
@@ -488,6 +487,7 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
   // No sample between the ends (checked as configurations): no link needs asking.
   if (S == 1) return true;
   int last = -1;  // the distal-most link sampled
+  std::array<char, kMaxLinks> sample;  // (set for every link below)
   for (int n = 0; n < N; ++n) {
     sample[n] = (turned != nullptr && turned[n] && D[n] > rest_gap) ||
                 sensing_->link_gap_below(planes_[m], next[n], next[n + 1], r, D[n], joints_outside);
@@ -495,17 +495,15 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
   }
   if (last < 0) return true;
   // Along the line in joint space every link turns at a constant rate: between two samples link
-  // n turns by the same angle, the sum of its joints' steps over S. Each link's direction is
-  // turned by that rotation from sample to sample, starting from its direction in `old`, rather
-  // than computed afresh from the interpolated angles (a sine and a cosine per link and sample).
+  // n turns by the same angle, its swing over S. Each link's direction is turned by that
+  // rotation from sample to sample, starting from its direction in `old`, rather than computed
+  // afresh from the interpolated angles (a sine and a cosine per link and sample).
   // The samples then lie within a few units of rounding of the checker's, far below the depth
   // allowed at them.
   std::array<Vec2, kMaxLinks> dir, turn;  // link n's direction at the sample; its turn (cos, sin)
-  double cum_turn = 0.0;
   for (int n = 0; n <= last; ++n) {
-    cum_turn += a1[n] - a0[n];
     dir[n] = (old[n + 1] - old[n]) / hand_.link_length(m, n);
-    turn[n] = cos_sin(cum_turn / S);
+    turn[n] = cos_sin(swing[n] / S);
   }
   std::array<Vec2, kMaxLinks + 1> c;  // the joints up to the last sampled link's end
   for (int i = 1; i < S; ++i) {
