@@ -655,16 +655,18 @@ bool Planner::approach() {
   // part can translate before it touches O). Each gap is asked only up to the smallest so far:
   // beyond that cap a gap is reported as some value above the cap, which leaves the minimum as it
   // is. The palm last, as its query in space is the costliest: not at all while its lasting
-  // bound shows it farther than the fingers, else exactly. Its bound is held to kGapFarSteps
-  // steps, as the FROZEN fingers' are: a skin's object may move between iterations (closed loop),
-  // and a bound that lasts longer assumes more.
+  // bound shows it farther than the fingers, else capped at the larger of the fingers' minimum
+  // and kGapFarSteps steps (above that cap neither the minimum nor the bound changes). Its bound
+  // is held to kGapFarSteps steps, as the FROZEN fingers' are: a skin's object may move between
+  // iterations (closed loop), and a bound that lasts longer assumes more.
   double free = kInf;
   for (int m = 0; m < M; ++m) {
     const Chain& c = chains_[m];
     for (int n = 0; n < N; ++n) free = std::min(free, link_gap(m, c[n], c[n + 1], free));
   }
   if (!(palm_lb_ > free)) {
-    const double palm_gap = sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), kInf);
+    const double palm_gap =
+        sensing_->palm(palm, hand_.palm_radius(), hand_.palm_thickness(), std::max(free, kGapFarSteps * s));
     free = std::min(free, palm_gap);
     palm_lb_ = std::min(palm_gap, kGapFarSteps * s);
   }
