@@ -291,9 +291,12 @@ Configuration Planner::make_configuration(int phase) const {
   c.angles.resize(M, N);
   for (int m = 0; m < M; ++m) {
     for (const Vec2& x : chains_[m]) c.joints.push_back(planes_[m].to_world(x));
-    // A DONE finger moves only rigidly: its angles are those it had when it became DONE, bit
-    // for bit (recomputed from the translated joints they could differ by rounding).
-    if (states_[m] == TipState::kDone && !history_.empty() && history_.back().tip_state[m] == TipState::kDone)
+    // A FROZEN or DONE finger moves only rigidly with the palm: from one configuration to the
+    // next in either state it keeps its angles bit for bit (recomputed from the translated
+    // joints they could differ by rounding), those it had when it became DONE, its rest angles
+    // while FROZEN.
+    auto rigid = [](TipState t) { return t == TipState::kFrozen || t == TipState::kDone; };
+    if (rigid(states_[m]) && !history_.empty() && rigid(history_.back().tip_state[m]))
       c.angles.row(m) = history_.back().angles.row(m);
     else
       std::copy_n(chain_angles(m, chains_[m]), N, c.angles.row(m).data());
