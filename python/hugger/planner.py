@@ -109,9 +109,17 @@ def _timeout(value: Any) -> float | None:
     return None if value is None else _core.check_timeout(value)
 
 
+# Each record type's field names, in their C++ order, found once (a trajectory asks for them).
+_FIELD_NAMES: dict[type, tuple[str, ...]] = {}
+
+
 def _fields(record: Any) -> dict[str, Any]:
     """The fields of a typed engine record (PlannerParams, PlannerStats) as a dict, in their C++ order."""
-    return {name: getattr(record, name) for name in vars(type(record)) if not name.startswith("_")}
+    kind = type(record)
+    names = _FIELD_NAMES.get(kind)
+    if names is None:
+        names = _FIELD_NAMES[kind] = tuple(name for name in vars(kind) if not name.startswith("_"))
+    return {name: getattr(record, name) for name in names}
 
 
 class Planner:
@@ -180,6 +188,9 @@ class Planner:
             raise ValueError(f"contact_tolerance {tolerance:g} m{default} is below the resolution this scene allows "
                              f"({MIN_RELATIVE_TOLERANCE:g} x its largest coordinate, {extent:g} m)")
         self.hand, self.object, self.sensing, self.target = hand, obj, sensing, t
+        # The parameters are fixed once the planner is made: their JSON, which every trajectory
+        # records, is made once, here.
+        self._params_json = json.dumps(self.params)
         # Configurations handed out (by step(), or all of them by plan()): the index step() hands
         # out next, and the end of trajectory().
         self._handed = 0
@@ -251,7 +262,7 @@ class Planner:
         h = self._core.history(0, self._handed)
         return Trajectory(
             hand_json=self.hand.to_json(),
-            params_json=json.dumps(self.params),
+            params_json=self._params_json,
             object_vertices=self.object.vertices if self.object is not None else np.zeros((0, 3)),
             object_faces=self.object.faces if self.object is not None else np.zeros((0, 3), dtype=np.int64),
             target=self.target,
