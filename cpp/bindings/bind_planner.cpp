@@ -10,6 +10,7 @@
 #include <mutex>
 #include <optional>
 #include <sstream>
+#include <string>
 
 #include "common.hpp"
 #include "hugger/planner/planner.hpp"
@@ -22,6 +23,45 @@ using namespace hugger;
 using namespace hugger::py_helpers;
 
 namespace {
+
+/// PlannerStats' counters in their order: their Python attributes, and the JSON a trajectory
+/// records (stats_json).
+struct StatsField {
+  const char* name;
+  long PlannerStats::*member;
+  const char* doc;
+};
+constexpr StatsField kStatsFields[] = {
+    {"phase1_configurations", &PlannerStats::phase1_configurations, "Configurations of Phase 1"},
+    {"phase2_iterations", &PlannerStats::phase2_iterations, "Phase 2 iterations"},
+    {"first_contact_iteration", &PlannerStats::first_contact_iteration,
+     "Phase 2 iteration of the first touch (-1: none yet)"},
+    {"palm_contact_iteration", &PlannerStats::palm_contact_iteration,
+     "Phase 2 iteration at which the palm touched (-1: none yet)"},
+    {"sigma_retries", &PlannerStats::sigma_retries, "Palm steps refused (each step asked and refused counts)"},
+    {"finger_collisions", &PlannerStats::finger_collisions, "Fingers stopped by another finger or themselves"},
+    {"clinging_failures", &PlannerStats::clinging_failures, "Fingers stopped because no free link position was found"},
+    {"motion_rejections", &PlannerStats::motion_rejections,
+     "Finger moves refused: a joint would move > 4 s, or the swept motion collides"},
+    {"approach_configurations", &PlannerStats::approach_configurations,
+     "Configurations emitted by the approach before the first contact"},
+    {"fingers_opened", &PlannerStats::fingers_opened,
+     "Hug rule H5: iterations in which a finger turned its root joint back to let the palm land"},
+    {"reclose_steps", &PlannerStats::reclose_steps, "Hug rule H5: steps closing an opened finger's root joint again"},
+};
+
+/// The counters as Python's json.dumps writes their dict: {"name": value, ...}, in order.
+std::string stats_json(const PlannerStats& stats) {
+  std::string out = "{";
+  for (const StatsField& f : kStatsFields) {
+    if (out.size() > 1) out += ", ";
+    out += '"';
+    out += f.name;
+    out += "\": ";
+    out += std::to_string(stats.*f.member);
+  }
+  return out + "}";
+}
 
 /// A planner with a lock: one thread at a time may advance it; others get a clear error.
 struct PyPlanner {
@@ -159,26 +199,8 @@ void bind_planner(py::module_& m) {
         return os.str();
       });
 
-  py::class_<PlannerStats>(m, "PlannerStats", "Counters of one plan, for inspection and benchmarks.")
-      .def_readonly("phase1_configurations", &PlannerStats::phase1_configurations, "Configurations of Phase 1")
-      .def_readonly("phase2_iterations", &PlannerStats::phase2_iterations, "Phase 2 iterations")
-      .def_readonly("first_contact_iteration", &PlannerStats::first_contact_iteration,
-                    "Phase 2 iteration of the first touch (-1: none yet)")
-      .def_readonly("palm_contact_iteration", &PlannerStats::palm_contact_iteration,
-                    "Phase 2 iteration at which the palm touched (-1: none yet)")
-      .def_readonly("sigma_retries", &PlannerStats::sigma_retries, "Palm steps refused (each step asked and refused counts)")
-      .def_readonly("finger_collisions", &PlannerStats::finger_collisions,
-                    "Fingers stopped by another finger or themselves")
-      .def_readonly("clinging_failures", &PlannerStats::clinging_failures,
-                    "Fingers stopped because no free link position was found")
-      .def_readonly("motion_rejections", &PlannerStats::motion_rejections,
-                    "Finger moves refused: a joint would move > 4 s, or the swept motion collides")
-      .def_readonly("approach_configurations", &PlannerStats::approach_configurations,
-                    "Configurations emitted by the approach before the first contact")
-      .def_readonly("fingers_opened", &PlannerStats::fingers_opened,
-                    "Hug rule H5: iterations in which a finger turned its root joint back to let the palm land")
-      .def_readonly("reclose_steps", &PlannerStats::reclose_steps,
-                    "Hug rule H5: steps closing an opened finger's root joint again");
+  py::class_<PlannerStats> stats(m, "PlannerStats", "Counters of one plan, for inspection and benchmarks.");
+  for (const StatsField& f : kStatsFields) stats.def_readonly(f.name, f.member, f.doc);
 
   py::class_<Configuration>(m, "Configuration", "One hand configuration of a plan (docs/model.md).")
       .def_property_readonly("palm_pose", [](const Configuration& c) { return from_pose(c.palm); }, "(4, 4) T_WP")
@@ -309,7 +331,9 @@ void bind_planner(py::module_& m) {
                              "How the object is sensed: 'mesh', 'section', or 'custom' (a Sensing skin)")
       .def_property_readonly("params", [](PyPlanner& p) { return p.planner->params(); },
                              "The parameters in force, defaults resolved")
-      .def_property_readonly("stats", [](PyPlanner& p) { return p.planner->stats(); }, "The plan's counters");
+      .def_property_readonly("stats", [](PyPlanner& p) { return p.planner->stats(); }, "The plan's counters")
+      .def_property_readonly("stats_json", [](PyPlanner& p) { return stats_json(p.planner->stats()); },
+                             "The plan's counters as the JSON a trajectory records (json.dumps of their dict)");
 
   m.def("resolve_params", [](const HandModel& hand, const PlannerParams& params) { return resolve_params(hand, params); },
         py::arg("hand"), py::arg("params"),

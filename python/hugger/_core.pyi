@@ -401,6 +401,11 @@ class Planner:
         The plan's counters
         """
     @property
+    def stats_json(self) -> str:
+        """
+        The plan's counters as the JSON a trajectory records (json.dumps of their dict)
+        """
+    @property
     def status(self) -> str:
         ...
 class QualityResult:

@@ -272,7 +272,7 @@ class Planner:
             tip_state=h.tip_state,
             phase=h.phase,
             status=self.status,
-            stats_json=json.dumps(self.stats),
+            stats_json=self._core.stats_json,
         )
 
 
