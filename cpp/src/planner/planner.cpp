@@ -292,11 +292,13 @@ Configuration Planner::make_configuration(int phase) const {
   for (int m = 0; m < M; ++m) {
     for (const Vec2& x : chains_[m]) c.joints.push_back(planes_[m].to_world(x));
     // A FROZEN or DONE finger moves only rigidly with the palm: from one configuration to the
-    // next in either state it keeps its angles bit for bit (recomputed from the translated
-    // joints they could differ by rounding), those it had when it became DONE, its rest angles
-    // while FROZEN.
-    auto rigid = [](TipState t) { return t == TipState::kFrozen || t == TipState::kDone; };
-    if (rigid(states_[m]) && !history_.empty() && rigid(history_.back().tip_state[m]))
+    // next in the same one of those states it keeps its angles bit for bit (recomputed from the
+    // translated joints they could differ by rounding), its rest angles while FROZEN, those it
+    // had when it became DONE. (A FROZEN finger that becomes DONE may have touched and moved
+    // within the iteration.)
+    const TipState st = states_[m];
+    if ((st == TipState::kFrozen || st == TipState::kDone) && !history_.empty() &&
+        history_.back().tip_state[m] == st)
       c.angles.row(m) = history_.back().angles.row(m);
     else
       std::copy_n(chain_angles(m, chains_[m]), N, c.angles.row(m).data());
