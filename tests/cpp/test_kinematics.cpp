@@ -6,6 +6,7 @@
 #include <random>
 #include <vector>
 
+#include "hugger/geometry/distance.hpp"
 #include "hugger/hand/hand_model.hpp"
 #include "meshes.hpp"
 
@@ -117,4 +118,50 @@ TEST(Kinematics, RejectsBadHands) {
   EXPECT_THROW(HandModel::uniform(3, 3, 0.02, 0.0, 0.03, std::nan("")), std::invalid_argument);
   EXPECT_THROW(HandModel::uniform(3, 3, 0.005, 0.003, 0.03, 0.01), std::invalid_argument);  // links overlap
   EXPECT_THROW(HandModel::uniform(32, 3, 0.02, 0.004, 0.03, 0.01), std::invalid_argument);  // roots collide
+}
+
+// plane_pair's bound: points of two finger planes at signed distances s_a, s_b from the line
+// where the planes meet are at least sqrt(sin2) max(|s_a|, |s_b|) apart; so are segments, by
+// apart_from_line's distances. Random planes (the rim hand's, sharing the palm axis, and general
+// ones), random segments in each, against the segments' distance in the world.
+TEST(Kinematics, PlanePairBoundsTheDistanceOfSegmentsInTwoPlanes) {
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> U(-1, 1);
+  int bounded = 0, tight = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    FingerPlane pl[2];
+    const bool rim = trial % 2 == 0;  // both through one axis, as the rim hand's planes
+    const Pose palm = random_pose(rng);
+    for (FingerPlane& f : pl) {
+      const double phi = 3.2 * U(rng);
+      const Vec3 u_local(std::cos(phi), std::sin(phi), 0.0);
+      f.u = palm.linear() * u_local;
+      f.p = palm.linear().col(2);
+      f.origin = palm.translation() + (rim ? Vec3::Zero() : Vec3(palm.linear() * Vec3(0.05 * U(rng), 0.05 * U(rng), 0.0)));
+      if (!rim) {  // a general plane: its own tilt about u
+        const Eigen::AngleAxisd tilt(0.6 * U(rng), f.u);
+        f.p = tilt * f.p;
+      }
+    }
+    const PlanePair ab = plane_pair(pl[0], pl[1]), ba = plane_pair(pl[1], pl[0]);
+    EXPECT_NEAR(ab.sin2, ba.sin2, 1e-12);
+    if (ab.sin2 == 0.0) continue;
+    ++bounded;
+    Vec2 sa[2], sb[2];
+    for (Vec2& x : sa) x = Vec2(0.08 * U(rng), 0.08 * U(rng));
+    for (Vec2& x : sb) x = Vec2(0.08 * U(rng), 0.08 * U(rng));
+    const double d = std::max(apart_from_line(sa, 2, ab), apart_from_line(sb, 2, ba));
+    const double world = std::sqrt(segment_segment_squared(pl[0].to_world(sa[0]), pl[0].to_world(sa[1]),
+                                                           pl[1].to_world(sb[0]), pl[1].to_world(sb[1])));
+    const double bound = std::sqrt(ab.sin2) * d;
+    EXPECT_LE(bound, world * (1.0 + 1e-12) + 1e-13) << "trial " << trial;
+    if (bound > 0.5 * world) ++tight;
+    // On the line itself: a point of plane a there is at distance 0, and lies in plane b too.
+    const Vec2 on = ab.offset * ab.w;  // w is a unit vector: w.on - offset = 0
+    EXPECT_NEAR(apart_from_line(&on, 1, ab), 0.0, 1e-12);  // (coordinates of about 1 m)
+    const Vec3 x = pl[0].to_world(on);
+    EXPECT_NEAR((x - pl[1].origin).dot(pl[1].normal().normalized()), 0.0, 1e-12);
+  }
+  EXPECT_GT(bounded, 3500);  // parallel planes are rare
+  EXPECT_GT(tight, 200);     // the bound is not vacuous
 }

@@ -216,6 +216,34 @@ void HandModel::forward_planar(int m, const Vec2& root, const double* angles, st
   }
 }
 
+PlanePair plane_pair(const FingerPlane& a, const FingerPlane& b) {
+  PlanePair out;
+  const Vec3 na = a.normal().normalized(), nb = b.normal().normalized();
+  const Vec3 e = na.cross(nb);  // along the line where the planes meet
+  const double e2 = e.squaredNorm();
+  if (!(e2 > 1e-12)) return out;  // parallel, to within 1e-6 rad
+  // In each plane the unit normal to that line, w = e x n (a point a = q + l e/|e| + s w of plane
+  // a and b = q + l' e/|e| + s' w' of plane b are then |s w - s' w'| >= sin |s|, |s'| apart).
+  const Vec3 wa = e.cross(na).normalized(), wb = e.cross(nb).normalized();
+  const double sin2 = wa.cross(wb).squaredNorm();  // 1 - (wa.wb)^2, without the cancellation
+  if (!(sin2 >= 1e-6)) return out;
+  const Vec3 q = (na.dot(a.origin) * nb.cross(e) + nb.dot(b.origin) * e.cross(na)) / e2;  // in both planes
+  out.w = Vec2(wa.dot(a.u), wa.dot(a.p));
+  out.offset = wa.dot(q - a.origin);
+  out.sin2 = sin2;
+  return out;
+}
+
+double apart_from_line(const Vec2* points, int count, const PlanePair& pair) {
+  double lo = kInf, hi = -kInf;
+  for (int i = 0; i < count; ++i) {
+    const double d = pair.w.dot(points[i]) - pair.offset;
+    lo = std::min(lo, d);
+    hi = std::max(hi, d);
+  }
+  return lo > 0.0 ? lo : (hi < 0.0 ? -hi : 0.0);
+}
+
 void HandModel::planar_angles(const std::vector<Vec2>& joints, double* angles) {
   double prev = 0.0;
   for (std::size_t n = 0; n + 1 < joints.size(); ++n) {

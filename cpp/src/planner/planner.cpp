@@ -201,6 +201,11 @@ void Planner::plan_phase1(const Pose& start) {
     planes_.push_back(hand_.plane(palm2_, m));
     chains_.push_back(hand_.rest_chain(m));  // the rim hand's rest is straight: (R, 0), (R, L0), ...
   }
+  const int M = hand_.fingers();
+  pairs_.assign(static_cast<std::size_t>(M) * M, PlanePair());
+  for (int m = 0; m < M; ++m)
+    for (int k = 0; k < M; ++k)
+      if (k != m) pairs_[static_cast<std::size_t>(m) * M + k] = plane_pair(planes_[m], planes_[k]);
   states_.assign(hand_.fingers(), TipState::kFrozen);
   anchors_.assign(hand_.fingers(), Vec2(kInf, kInf));
   recent_chains_.assign(hand_.fingers(), {});
@@ -402,23 +407,35 @@ double Planner::finger_separation() const { return std::max(2.0 * hand_.link_rad
 
 bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>& others,
                             const SnakeRequest* placed) const {
-  const int N = hand_.links();
+  const int M = hand_.fingers(), N = hand_.links();
   const double sep = finger_separation();
   const double sep2 = sep * sep;
   const bool self_clear = placed != nullptr && placed->self_separation >= sep;
   // The finger against itself within its plane (an isometric copy of the world's), then the
-  // others in the world. Its chain in the world is remembered too: accepted, it is the chain the
-  // fingers after it are tested against.
+  // others: first by the line where their planes meet, else in the world (where its chain is
+  // remembered too: accepted, it is the chain the fingers after it are tested against).
   for (int b = 2; b < N && !self_clear; ++b)
     if (!link_clear_of_chain(chain.data(), b, sep)) return false;
-  const WorldChain& mine = chain_in_world(m, chain);
-  for (int k = 0; k < hand_.fingers(); ++k) {
+  // The planes' bound decides only with a margin far above the rounding of the tests in the
+  // world, which would find those links apart too: the same answers, without world coordinates.
+  const double enough = sep2 * (1.0 + 1e-9);
+  const WorldChain* mine = nullptr;
+  for (int k = 0; k < M; ++k) {
     if (k == m) continue;
+    // Two fingers either of which keeps away from the line where their planes meet are apart.
+    const PlanePair& mk = pairs_[static_cast<std::size_t>(m) * M + k];
+    if (mk.sin2 > 0.0) {
+      const double da = apart_from_line(chain.data(), N + 1, mk);
+      if (mk.sin2 * da * da >= enough) continue;
+      const double db = apart_from_line(others[k].data(), N + 1, pairs_[static_cast<std::size_t>(k) * M + m]);
+      if (mk.sin2 * db * db >= enough) continue;
+    }
+    if (mine == nullptr) mine = &chain_in_world(m, chain);
     const WorldChain& theirs = chain_in_world(k, others[k]);
-    if (mine.box.squared_distance(theirs.box) >= sep2) continue;  // the fingers' boxes are apart
+    if (mine->box.squared_distance(theirs.box) >= sep2) continue;  // the fingers' boxes are apart
     for (int a = 0; a < N; ++a)
       for (int b = 0; b < N; ++b)
-        if (segment_segment_squared(mine.joints[a], mine.joints[a + 1], theirs.joints[b], theirs.joints[b + 1]) <
+        if (segment_segment_squared(mine->joints[a], mine->joints[a + 1], theirs.joints[b], theirs.joints[b + 1]) <
             sep2)
           return false;
   }

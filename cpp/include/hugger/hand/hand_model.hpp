@@ -25,6 +25,21 @@ struct FingerPlane {
   Vec3 normal() const { return p.cross(u); }
 };
 
+/// Where two finger planes a and b meet, as plane a sees it: a point x of plane a (its plane
+/// coordinates) lies at signed distance s = w.x - offset from that line, within the plane. A
+/// point of plane a at distance s_a and one of plane b at s_b (b's PlanePair toward a) are at
+/// least sqrt(sin2) max(|s_a|, |s_b|) apart, sin2 being the squared sine of the planes' angle;
+/// sin2 = 0 (no bound) for planes too near parallel.
+struct PlanePair {
+  Vec2 w = Vec2::Zero();
+  double offset = 0.0;
+  double sin2 = 0.0;
+};
+PlanePair plane_pair(const FingerPlane& a, const FingerPlane& b);
+/// How far the segments between `count` points of a plane keep from the line of `pair`: the
+/// distance of 0 from the range of the points' signed distances.
+double apart_from_line(const Vec2* points, int count, const PlanePair& pair);
+
 /// A general finger layout (real hands). Every matrix has one row per finger; all in the palm
 /// frame P. Empty matrices select the defaults: the rim layout, rest all 0, no limits.
 struct HandLayout {
