@@ -282,7 +282,6 @@ def test_the_engine_gives_typed_results(hand, sphere):
     np.testing.assert_array_equal(h.joints, traj.joints[1:3])
 
 
-
 def test_a_trajectory_records_the_stats_and_params_as_json_dumps_writes_them(hand, sphere):
     """The engine writes the counters' JSON itself (stats_json) and the parameters' JSON is made
     when the planner is made: both are json.dumps of the dicts Planner.stats and Planner.params
@@ -300,6 +299,7 @@ def test_a_trajectory_records_the_stats_and_params_as_json_dumps_writes_them(han
             break
     assert -1 in seen and len(seen) > 1  # before and after the first touch
     assert json.loads(p.trajectory().stats_json) == p.stats and p.stats["phase2_iterations"] > 0
+
 
 def test_step_equal_to_a_link_is_allowed_and_ends(hand, sphere):
     traj = hugger.Planner(hand, sphere, [0, 0, 0], start(), step=0.02, epsilon=0.002).plan()

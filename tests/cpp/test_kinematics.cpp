@@ -165,3 +165,47 @@ TEST(Kinematics, PlanePairBoundsTheDistanceOfSegmentsInTwoPlanes) {
   EXPECT_GT(bounded, 3500);  // parallel planes are rare
   EXPECT_GT(tight, 200);     // the bound is not vacuous
 }
+
+// planes_keep_apart, as fingers_clear asks it: the finger planes of general layouts (roots
+// anywhere on the palm, directions anywhere in its plane: the planes meet in lines along the palm
+// normal, off its axis) and of the rim hand, chains of 2 to 6 links, and a separation from a
+// millimetre to 5 cm. Wherever it says apart, every pair of links is at least that far apart in
+// the world; and it says so often, also where the links come within twice the separation.
+TEST(Kinematics, PlanesKeepApartOnlyWhereTheLinksAreApartInTheWorld) {
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> U(-1, 1);
+  int apart = 0, near = 0;
+  for (int trial = 0; trial < 6000; ++trial) {
+    const Pose palm = random_pose(rng);
+    const bool rim = trial % 3 == 0;
+    FingerPlane pl[2];
+    for (FingerPlane& f : pl) {
+      const double phi = 3.2 * U(rng);
+      const Vec3 root = rim ? Vec3(0.03 * std::cos(phi), 0.03 * std::sin(phi), 0.0) : Vec3(0.03 * U(rng), 0.03 * U(rng), 0.0);
+      const double psi = rim ? phi : 3.2 * U(rng);
+      f.origin = palm * root;
+      f.u = palm.linear() * Vec3(std::cos(psi), std::sin(psi), 0.0);
+      f.p = palm.linear().col(2);
+      // Plane coordinates from the root: the hand's own planes may put their origin elsewhere on
+      // the plane, which the bound does not mind.
+    }
+    const PlanePair ab = plane_pair(pl[0], pl[1]), ba = plane_pair(pl[1], pl[0]);
+    const int n = 3 + trial % 5;  // joints
+    std::vector<Vec2> ca(n), cb(n);
+    for (Vec2& x : ca) x = Vec2(0.06 * U(rng), 0.04 + 0.04 * U(rng));
+    for (Vec2& x : cb) x = Vec2(0.06 * U(rng), 0.04 + 0.04 * U(rng));
+    const double sep = 0.001 + 0.049 * (U(rng) + 1) / 2;
+    double world = kInf;
+    for (int i = 0; i + 1 < n; ++i)
+      for (int j = 0; j + 1 < n; ++j)
+        world = std::min(world, std::sqrt(segment_segment_squared(pl[0].to_world(ca[i]), pl[0].to_world(ca[i + 1]),
+                                                                  pl[1].to_world(cb[j]), pl[1].to_world(cb[j + 1]))));
+    if (planes_keep_apart(ab, ca.data(), n, ba, cb.data(), n, sep, 0.0)) {
+      ++apart;
+      EXPECT_GT(world, sep) << "trial " << trial;
+      if (world < 2.0 * sep) ++near;
+    }
+  }
+  EXPECT_GT(apart, 600) << near;
+  EXPECT_GT(near, 60) << apart;
+}

@@ -220,14 +220,13 @@ PlanePair plane_pair(const FingerPlane& a, const FingerPlane& b) {
   PlanePair out;
   const Vec3 na = a.normal().normalized(), nb = b.normal().normalized();
   const Vec3 e = na.cross(nb);  // along the line where the planes meet
-  const double e2 = e.squaredNorm();
-  if (!(e2 > 1e-12)) return out;  // parallel, to within 1e-6 rad
-  // In each plane the unit normal to that line, w = e x n (a point a = q + l e/|e| + s w of plane
-  // a and b = q + l' e/|e| + s' w' of plane b are then |s w - s' w'| >= sin |s|, |s'| apart).
-  const Vec3 wa = e.cross(na).normalized(), wb = e.cross(nb).normalized();
-  const double sin2 = wa.cross(wb).squaredNorm();  // 1 - (wa.wb)^2, without the cancellation
-  if (!(sin2 >= 1e-6)) return out;
-  const Vec3 q = (na.dot(a.origin) * nb.cross(e) + nb.dot(b.origin) * e.cross(na)) / e2;  // in both planes
+  const double sin2 = e.squaredNorm();  // the squared sine of the planes' angle
+  if (!(sin2 >= 1e-6)) return out;      // within 1e-3 rad of parallel: no bound
+  // In each plane the unit normal to that line, w = e x n. A point of plane a, x = q + l e/|e| +
+  // s wa, and one of plane b, y = q + l' e/|e| + s' wb, are at least |s wa - s' wb| apart, which
+  // is at least sin(angle) max(|s|, |s'|): wa and wb make the planes' angle.
+  const Vec3 wa = e.cross(na).normalized();
+  const Vec3 q = (na.dot(a.origin) * nb.cross(e) + nb.dot(b.origin) * e.cross(na)) / sin2;  // in both planes
   out.w = Vec2(wa.dot(a.u), wa.dot(a.p));
   out.offset = wa.dot(q - a.origin);
   out.sin2 = sin2;
@@ -242,6 +241,17 @@ double apart_from_line(const Vec2* points, int count, const PlanePair& pair) {
     hi = std::max(hi, d);
   }
   return lo > 0.0 ? lo : (hi < 0.0 ? -hi : 0.0);
+}
+
+bool planes_keep_apart(const PlanePair& ab, const Vec2* pa, int na, const PlanePair& ba, const Vec2* pb, int nb,
+                       double distance, double slack) {
+  if (!(ab.sin2 > 0.0)) return false;
+  const double need = distance * (1.0 + 1e-9) + slack;
+  const double need2 = need * need;
+  const double da = apart_from_line(pa, na, ab);
+  if (ab.sin2 * da * da >= need2) return true;
+  const double db = apart_from_line(pb, nb, ba);
+  return ab.sin2 * db * db >= need2;
 }
 
 void HandModel::planar_angles(const std::vector<Vec2>& joints, double* angles) {

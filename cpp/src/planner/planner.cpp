@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -201,11 +202,24 @@ void Planner::plan_phase1(const Pose& start) {
     planes_.push_back(hand_.plane(palm2_, m));
     chains_.push_back(hand_.rest_chain(m));  // the rim hand's rest is straight: (R, 0), (R, L0), ...
   }
+  // fingers_clear's first test: the lines where the finger planes meet, and a bound on the
+  // rounding of the world test it spares (the scale of the world coordinates and of the planes'
+  // signed distances in Phase 2: the planes' origins, the hand's reach, the approach to T, the
+  // lines' offsets).
   const int M = hand_.fingers();
   pairs_.assign(static_cast<std::size_t>(M) * M, PlanePair());
-  for (int m = 0; m < M; ++m)
-    for (int k = 0; k < M; ++k)
-      if (k != m) pairs_[static_cast<std::size_t>(m) * M + k] = plane_pair(planes_[m], planes_[k]);
+  double scale = 0.0, offsets = 0.0;
+  for (int m = 0; m < M; ++m) {
+    scale = std::max(scale, planes_[m].origin.cwiseAbs().maxCoeff());
+    for (int k = 0; k < M; ++k) {
+      if (k == m) continue;
+      PlanePair& pp = pairs_[static_cast<std::size_t>(m) * M + k];
+      pp = plane_pair(planes_[m], planes_[k]);
+      offsets = std::max(offsets, std::abs(pp.offset));
+    }
+  }
+  pairs_slack_ = 64.0 * std::numeric_limits<double>::epsilon() *
+                 (scale + offsets + hand_.extended_radius() + std::abs(eta_target_));
   states_.assign(hand_.fingers(), TipState::kFrozen);
   anchors_.assign(hand_.fingers(), Vec2(kInf, kInf));
   recent_chains_.assign(hand_.fingers(), {});
@@ -416,20 +430,15 @@ bool Planner::fingers_clear(int m, const Chain& chain, const std::vector<Chain>&
   // remembered too: accepted, it is the chain the fingers after it are tested against).
   for (int b = 2; b < N && !self_clear; ++b)
     if (!link_clear_of_chain(chain.data(), b, sep)) return false;
-  // The planes' bound decides only with a margin far above the rounding of the tests in the
-  // world, which would find those links apart too: the same answers, without world coordinates.
-  const double enough = sep2 * (1.0 + 1e-9);
   const WorldChain* mine = nullptr;
   for (int k = 0; k < M; ++k) {
     if (k == m) continue;
     // Two fingers either of which keeps away from the line where their planes meet are apart.
-    const PlanePair& mk = pairs_[static_cast<std::size_t>(m) * M + k];
-    if (mk.sin2 > 0.0) {
-      const double da = apart_from_line(chain.data(), N + 1, mk);
-      if (mk.sin2 * da * da >= enough) continue;
-      const double db = apart_from_line(others[k].data(), N + 1, pairs_[static_cast<std::size_t>(k) * M + m]);
-      if (mk.sin2 * db * db >= enough) continue;
-    }
+    // The bound decides only with a margin above the rounding of the test in the world, which
+    // would find those links apart too: the same answers, without world coordinates.
+    if (planes_keep_apart(pairs_[static_cast<std::size_t>(m) * M + k], chain.data(), N + 1,
+                          pairs_[static_cast<std::size_t>(k) * M + m], others[k].data(), N + 1, sep, pairs_slack_))
+      continue;
     if (mine == nullptr) mine = &chain_in_world(m, chain);
     const WorldChain& theirs = chain_in_world(k, others[k]);
     if (mine->box.squared_distance(theirs.box) >= sep2) continue;  // the fingers' boxes are apart

@@ -29,7 +29,7 @@ struct FingerPlane {
 /// coordinates) lies at signed distance s = w.x - offset from that line, within the plane. A
 /// point of plane a at distance s_a and one of plane b at s_b (b's PlanePair toward a) are at
 /// least sqrt(sin2) max(|s_a|, |s_b|) apart, sin2 being the squared sine of the planes' angle;
-/// sin2 = 0 (no bound) for planes too near parallel.
+/// sin2 = 0 (no bound) for planes within 1e-3 rad of parallel.
 struct PlanePair {
   Vec2 w = Vec2::Zero();
   double offset = 0.0;
@@ -39,6 +39,12 @@ PlanePair plane_pair(const FingerPlane& a, const FingerPlane& b);
 /// How far the segments between `count` points of a plane keep from the line of `pair`: the
 /// distance of 0 from the range of the points' signed distances.
 double apart_from_line(const Vec2* points, int count, const PlanePair& pair);
+/// True when the segments between the `na` points `pa` of plane a and the `nb` points `pb` of
+/// plane b are sure to be more than `distance` apart: by plane_pair's bound, with a margin of
+/// 1e-9 of the distance plus `slack` (the caller's bound on the rounding of the test it spares).
+/// ab = plane_pair(a, b), ba = plane_pair(b, a). False where the bound does not decide.
+bool planes_keep_apart(const PlanePair& ab, const Vec2* pa, int na, const PlanePair& ba, const Vec2* pb, int nb,
+                       double distance, double slack);
 
 /// A general finger layout (real hands). Every matrix has one row per finger; all in the palm
 /// frame P. Empty matrices select the defaults: the rim layout, rest all 0, no limits.

@@ -210,6 +210,7 @@ class Planner {
   /// plane_pair of the finger planes m and k of Phase 2, at pairs_[m * M + k]: fingers_clear's
   /// first test.
   std::vector<PlanePair> pairs_;
+  double pairs_slack_ = 0.0;  ///< planes_keep_apart's slack: the world test's rounding, bounded
   double link_gap(int m, const Vec2& a, const Vec2& b, double cap) const;
   /// Remembers CONTACT finger m's chain of this iteration, the palm still, and returns for how
   /// many iterations running the finger has come back to within epsilon (every joint) of one of
