@@ -233,27 +233,6 @@ PlanePair plane_pair(const FingerPlane& a, const FingerPlane& b) {
   return out;
 }
 
-double apart_from_line(const Vec2* points, int count, const PlanePair& pair) {
-  double lo = kInf, hi = -kInf;
-  for (int i = 0; i < count; ++i) {
-    const double d = pair.w.dot(points[i]) - pair.offset;
-    lo = std::min(lo, d);
-    hi = std::max(hi, d);
-  }
-  return lo > 0.0 ? lo : (hi < 0.0 ? -hi : 0.0);
-}
-
-bool planes_keep_apart(const PlanePair& ab, const Vec2* pa, int na, const PlanePair& ba, const Vec2* pb, int nb,
-                       double distance, double slack) {
-  if (!(ab.sin2 > 0.0)) return false;
-  const double need = distance * (1.0 + 1e-9) + slack;
-  const double need2 = need * need;
-  const double da = apart_from_line(pa, na, ab);
-  if (ab.sin2 * da * da >= need2) return true;
-  const double db = apart_from_line(pb, nb, ba);
-  return ab.sin2 * db * db >= need2;
-}
-
 void HandModel::planar_angles(const std::vector<Vec2>& joints, double* angles) {
   double prev = 0.0;
   for (std::size_t n = 0; n + 1 < joints.size(); ++n) {

@@ -2,6 +2,7 @@
 /// The hand (docs/model.md): a round palm and M planar fingers of N revolute links.
 #pragma once
 
+#include <algorithm>
 #include <vector>
 
 #include "hugger/types.hpp"
@@ -37,14 +38,31 @@ struct PlanePair {
 };
 PlanePair plane_pair(const FingerPlane& a, const FingerPlane& b);
 /// How far the segments between `count` points of a plane keep from the line of `pair`: the
-/// distance of 0 from the range of the points' signed distances.
-double apart_from_line(const Vec2* points, int count, const PlanePair& pair);
+/// distance of 0 from the range of the points' signed distances. (Inline: the planner asks it
+/// for every pair of fingers it tests.)
+inline double apart_from_line(const Vec2* points, int count, const PlanePair& pair) {
+  double lo = kInf, hi = -kInf;
+  for (int i = 0; i < count; ++i) {
+    const double d = pair.w.dot(points[i]) - pair.offset;
+    lo = std::min(lo, d);
+    hi = std::max(hi, d);
+  }
+  return lo > 0.0 ? lo : (hi < 0.0 ? -hi : 0.0);
+}
 /// True when the segments between the `na` points `pa` of plane a and the `nb` points `pb` of
 /// plane b are sure to be more than `distance` apart: by plane_pair's bound, with a margin of
 /// 1e-9 of the distance plus `slack` (the caller's bound on the rounding of the test it spares).
 /// ab = plane_pair(a, b), ba = plane_pair(b, a). False where the bound does not decide.
-bool planes_keep_apart(const PlanePair& ab, const Vec2* pa, int na, const PlanePair& ba, const Vec2* pb, int nb,
-                       double distance, double slack);
+inline bool planes_keep_apart(const PlanePair& ab, const Vec2* pa, int na, const PlanePair& ba, const Vec2* pb,
+                              int nb, double distance, double slack) {
+  if (!(ab.sin2 > 0.0)) return false;
+  const double need = distance * (1.0 + 1e-9) + slack;
+  const double need2 = need * need;
+  const double da = apart_from_line(pa, na, ab);
+  if (ab.sin2 * da * da >= need2) return true;
+  const double db = apart_from_line(pb, nb, ba);
+  return ab.sin2 * db * db >= need2;
+}
 
 /// A general finger layout (real hands). Every matrix has one row per finger; all in the palm
 /// frame P. Empty matrices select the defaults: the rim layout, rest all 0, no limits.
