@@ -109,17 +109,9 @@ def _timeout(value: Any) -> float | None:
     return None if value is None else _core.check_timeout(value)
 
 
-# Each record type's field names, in their C++ order, found once (a trajectory asks for them).
-_FIELD_NAMES: dict[type, tuple[str, ...]] = {}
-
-
 def _fields(record: Any) -> dict[str, Any]:
     """The fields of a typed engine record (PlannerParams, PlannerStats) as a dict, in their C++ order."""
-    kind = type(record)
-    names = _FIELD_NAMES.get(kind)
-    if names is None:
-        names = _FIELD_NAMES[kind] = tuple(name for name in vars(kind) if not name.startswith("_"))
-    return {name: getattr(record, name) for name in names}
+    return {name: getattr(record, name) for name in vars(type(record)) if not name.startswith("_")}
 
 
 class Planner:

@@ -541,8 +541,7 @@ bool Planner::motion_ok(int m, const Chain& old, const Chain& next, const char* 
     const double t = static_cast<double>(i) / S;
     c[0] = old[0] + t * (next[0] - old[0]);
     for (int n = 0; n <= last; ++n) {
-      const Vec2& q = turn[n];
-      dir[n] = Vec2(q.x() * dir[n].x() - q.y() * dir[n].y(), q.y() * dir[n].x() + q.x() * dir[n].y());
+      dir[n] = rotate_planar(dir[n], turn[n].x(), turn[n].y());
       c[n + 1] = c[n] + hand_.link_length(m, n) * dir[n];
     }
     for (int n = 0; n <= last; ++n)
