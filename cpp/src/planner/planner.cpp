@@ -603,17 +603,16 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
   const Vec2 root = root2d(m, new_eta);
   SnakeRequest req = snake_request(m, new_eta, true);  // a folding chain is refused below
   req.fold_early = true;  // most chains tried here fold (on the cylinder 235 of 331)
+  // Each angle's chain is made in `out`'s room (the caller's scratch), not in a new vector.
+  std::vector<double> b = a;
   for (double phi = inc; phi <= max_turn + 1e-12; phi += inc) {
     if (a[0] - phi < lowest - kLimitSlack) return false;
-    std::vector<double> b = a;
-    b[0] -= phi;
-    Chain c = hand_.forward_planar(m, root, b.data());
+    b[0] = a[0] - phi;
+    hand_.forward_planar(m, root, b.data(), &out);
     std::array<char, kMaxLinks> turned;
-    if (!tail_to_head(*sensing_, req, root, c, turned.data())) continue;
+    if (!tail_to_head(*sensing_, req, root, out, turned.data())) continue;
     // The cheap test first: a chain that hits a finger needs no motion check.
-    if (!fingers_clear(m, c, others, &req) || !motion_ok(m, old, c, turned.data())) continue;
-    out = std::move(c);
-    return true;
+    if (fingers_clear(m, out, others, &req) && motion_ok(m, old, out, turned.data())) return true;
   }
   return false;
 }
