@@ -52,9 +52,6 @@ constexpr double kMaxJointSteps = 4.0 * (1.0 - 1e-6);
 constexpr double kMaxClingSteps = 8.0;
 /// Hug rule: a joint closing until contact flexes at most to this angle (rad).
 constexpr double kMaxCloseFlexion = kPi / 2.0;
-/// Hug rule: a step closing a finger until contact moves its tip at most this many steps s, so
-/// that with the palm's step (at most s) no joint moves more than the motion rules' 4 s.
-constexpr double kCloseTipSteps = 3.0;
 /// Lasting gap bounds (the FROZEN fingers', the palm's) ask their gaps up to this many steps s:
 /// a bound beyond what is needed lasts several palm steps.
 constexpr double kGapFarSteps = 4.0;
@@ -567,7 +564,7 @@ bool Planner::close_step(int m, Chain& chain) const {
   // Flexing joints first..N-1 by d moves the tip by at most d * sum_k L_k (k - first + 1).
   double lever = 0.0;
   for (int k = first; k < N; ++k) lever += hand_.link_length(m, k) * (k - first + 1);
-  double d = kCloseTipSteps * s / lever;
+  double d = 2.0 * s / lever;
   for (int tries = 0; tries < 8; ++tries, d *= 0.5) {
     std::vector<double> b = a;
     bool moved = false;
