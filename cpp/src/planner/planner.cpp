@@ -588,7 +588,9 @@ bool Planner::close_step(int m, Chain& chain) const {
 
 bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vector<Chain>& others, Chain& out) {
   const double s = params_.step;
-  const std::vector<double> a = joint_angles(m, old);
+  // The joint angles of each angle's chain: the old chain's, its root joint turned back by phi.
+  std::vector<double> b = joint_angles(m, old);
+  const double root_angle = b[0];
   // The root joint may open to the palm's front plane and its lower limit.
   const double lowest = std::max(-kPi / 2.0, hand_.lower()(m, 0));
   const double dist = farthest_joint(old);
@@ -601,10 +603,9 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
   SnakeRequest req = snake_request(m, new_eta, true);  // a folding chain is refused below
   req.fold_early = true;  // most chains tried here fold (on the cylinder 235 of 331)
   // Each angle's chain is made in `out`'s room (the caller's scratch), not in a new vector.
-  std::vector<double> b = a;
   for (double phi = inc; phi <= max_turn + 1e-12; phi += inc) {
-    if (a[0] - phi < lowest - kLimitSlack) return false;
-    b[0] = a[0] - phi;
+    if (root_angle - phi < lowest - kLimitSlack) return false;
+    b[0] = root_angle - phi;
     hand_.forward_planar(m, root, b.data(), &out);
     std::array<char, kMaxLinks> turned;
     if (!tail_to_head(*sensing_, req, root, out, turned.data())) continue;
