@@ -48,6 +48,8 @@ constexpr std::size_t kCycleMemory = 64;
 /// No joint may move more than this many steps s in one Phase 2 iteration (a little under the
 /// checker's 4, for rounding).
 constexpr double kMaxJointSteps = 4.0 * (1.0 - 1e-6);
+/// Hug rule H5's opening search asks every kOpenStride-th of its sampled angles first.
+constexpr int kOpenStride = 3;
 /// A clinging rotation turns a link by at most this many s / L (radians): larger turns are jumps.
 constexpr double kMaxClingSteps = 8.0;
 /// Hug rule: a joint closing until contact flexes at most to this angle (rad).
@@ -602,17 +604,43 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
   const Vec2 root = root2d(m, new_eta);
   SnakeRequest req = snake_request(m, new_eta, true);  // a folding chain is refused below
   req.fold_early = true;  // most chains tried here fold (on the cylinder 235 of 331)
+  // The sampled angles in turn (each the last plus inc, as the search has always summed them), up
+  // to the lower limit. (At most 16: the farthest joint moves a quarter of s per angle.)
+  std::vector<double>& phis = scratch_.open_angles;
+  phis.clear();
+  for (double phi = inc; phi <= max_turn + 1e-12 && root_angle - phi >= lowest - kLimitSlack; phi += inc)
+    phis.push_back(phi);
+  const int count = static_cast<int>(phis.size());
   // Each angle's chain is made in `out`'s room (the caller's scratch), not in a new vector.
-  for (double phi = inc; phi <= max_turn + 1e-12; phi += inc) {
-    if (root_angle - phi < lowest - kLimitSlack) return false;
-    b[0] = root_angle - phi;
+  auto passes = [&](int k) {
+    b[0] = root_angle - phis[k];
     hand_.forward_planar(m, root, b.data(), &out);
     std::array<char, kMaxLinks> turned;
-    if (!tail_to_head(*sensing_, req, root, out, turned.data())) continue;
+    if (!tail_to_head(*sensing_, req, root, out, turned.data())) return false;
     // The cheap test first: a chain that hits a finger needs no motion check.
-    if (fingers_clear(m, out, others, &req) && motion_ok(m, old, out, turned.data())) return true;
+    return fingers_clear(m, out, others, &req) && motion_ok(m, old, out, turned.data());
+  };
+  // Coarse to fine: the first angle, every kOpenStride-th after it and the last; past the first of
+  // those that passes, the angles skipped before it in turn, the first of them that passes taken
+  // (else that one). Where the angles that pass form one run, as in most searches measured, the
+  // angle found is the first that passes; most searches pass at the first angle or at none.
+  int failed = -1;  // the last angle asked that failed
+  for (int c = 0;; c += kOpenStride) {
+    const int k = std::min(c, count - 1);
+    if (k <= failed) return false;  // the last angle has failed (or there is none)
+    if (!passes(k)) {
+      failed = k;
+      continue;
+    }
+    if (k > failed + 1) {
+      Chain& kept = scratch_.kept;
+      kept.swap(out);
+      for (int j = failed + 1; j < k; ++j)
+        if (passes(j)) return true;
+      out.swap(kept);
+    }
+    return true;
   }
-  return false;
 }
 
 bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others) const {

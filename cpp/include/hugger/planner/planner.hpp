@@ -293,6 +293,8 @@ class Planner {
     std::vector<Chain> cand, next;
     std::vector<TipState> next_states;
     Chain chain;
+    Chain kept;                      ///< open_step: a coarse angle's chain that passed, while finer ones are tried
+    std::vector<double> open_angles;  ///< open_step: its sampled angles
   };
   Scratch scratch_;
 };
