@@ -603,9 +603,9 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
   const double max_turn = budget / dist, inc = 0.25 * s / dist;
   const Vec2 root = root2d(m, new_eta);
   SnakeRequest req = snake_request(m, new_eta, true);  // a folding chain is refused below
-  req.fold_early = true;  // most chains tried here fold (on the cylinder 235 of 331)
+  req.fold_early = true;  // most chains tried here fold (on the cylinder 124 of 212)
   // The sampled angles in turn (each the last plus inc, as the search has always summed them), up
-  // to the lower limit. (At most 16: the farthest joint moves a quarter of s per angle.)
+  // to the lower limit: at most 15, the farthest joint moving a quarter of s per angle.
   std::vector<double>& phis = scratch_.open_angles;
   phis.clear();
   for (double phi = inc; phi <= max_turn + 1e-12 && root_angle - phi >= lowest - kLimitSlack; phi += inc)
@@ -622,8 +622,10 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
   };
   // Coarse to fine: the first angle, every kOpenStride-th after it and the last; past the first of
   // those that passes, the angles skipped before it in turn, the first of them that passes taken
-  // (else that one). Where the angles that pass form one run, as in most searches measured, the
-  // angle found is the first that passes; most searches pass at the first angle or at none.
+  // (else that one). Where the angles that pass form one run holding an angle asked first (a run
+  // of kOpenStride or more, or one reaching the last angle), the angle found is the first that
+  // passes; a shorter run between two of them is missed. Most searches measured pass at the first
+  // angle or at none.
   int failed = -1;  // the last angle asked that failed
   for (int c = 0;; c += kOpenStride) {
     const int k = std::min(c, count - 1);

@@ -175,9 +175,10 @@ class Planner {
   /// translate along p staying clear of O (sampled; at least their gaps allow).
   double free_along_p(const Pose& palm, double palm_gap, double sigma);
   /// Hug rule H5: finger m, which cannot follow the palm to new_eta otherwise, opens: its root
-  /// joint turns back (extension) by the smallest sampled angle at which Tail2Head from the moved
-  /// root finds a free chain (into `out`) whose motion is allowed and which clears the other
-  /// fingers. Returns false when no such angle exists (`out` is then unspecified).
+  /// joint turns back (extension) by a sampled angle at which Tail2Head from the moved root finds
+  /// a free chain (into `out`) whose motion is allowed and which clears the other fingers, the
+  /// angles asked coarse to fine (in the definition). Returns false when none of the angles asked
+  /// passes (`out` is then unspecified).
   bool open_step(int m, const Chain& old, double new_eta, const std::vector<Chain>& others, Chain& out);
   /// Hug rule H5: one step of closing finger m's root joint again after it opened (Tail2Head
   /// clinging for the rest). Returns false when the finger moves less than epsilon or the motion
