@@ -620,29 +620,11 @@ bool Planner::open_step(int m, const Chain& old, double new_eta, const std::vect
     // The cheap test first: a chain that hits a finger needs no motion check.
     return fingers_clear(m, out, others, &req) && motion_ok(m, old, out, turned.data());
   };
-  // Coarse to fine: the first angle, every kOpenStride-th after it and the last; past the first of
-  // those that passes, the angles skipped before it in turn, the first of them that passes taken
-  // (else that one). Where the angles that pass form one run holding an angle asked first (a run
-  // of kOpenStride or more, or one reaching the last angle), the angle found is the first that
-  // passes; a shorter run between two of them is missed. Most searches measured pass at the first
-  // angle or at none.
-  int failed = -1;  // the last angle asked that failed
-  for (int c = 0;; c += kOpenStride) {
-    const int k = std::min(c, count - 1);
-    if (k <= failed) return false;  // the last angle has failed (or there is none)
-    if (!passes(k)) {
-      failed = k;
-      continue;
-    }
-    if (k > failed + 1) {
-      Chain& kept = scratch_.kept;
-      kept.swap(out);
-      for (int j = failed + 1; j < k; ++j)
-        if (passes(j)) return true;
-      out.swap(kept);
-    }
-    return true;
-  }
+  // Coarse to fine (coarse_to_fine): the angle found is the first that passes wherever those that
+  // pass form one run holding an angle asked first. Most searches measured pass at the first
+  // angle or at none. A coarse angle's chain waits in the scratch while finer ones are tried.
+  Chain& kept = scratch_.kept;
+  return coarse_to_fine(count, kOpenStride, passes, [&] { kept.swap(out); }, [&] { out.swap(kept); }) >= 0;
 }
 
 bool Planner::reclose_step(int m, Chain& chain, const std::vector<Chain>& others) const {

@@ -99,6 +99,36 @@ struct PlannerStats {
   long reclose_steps = 0;             ///< hug rule H5: steps closing an opened finger's root joint again
 };
 
+/// The search of hug rule H5's opening (Planner::open_step) over the candidates 0..count-1, in
+/// order of preference: coarse to fine. It asks candidate 0, every stride-th (>= 1) after it and
+/// the last; past the first of those that passes, it asks the ones skipped before it in turn,
+/// and takes the first of them that passes, else that one. `passes(k)` asks candidate k and
+/// leaves its result in the caller's slot; before the skipped ones are asked, `keep()` sets the
+/// slot's result aside, and `restore()` brings it back when none of them passes, so that the slot
+/// holds the result of the candidate returned. Returns that candidate, or -1 when none of those
+/// asked passes. No candidate is asked twice. Where the candidates that pass form one run holding
+/// a candidate asked first (a run of stride or more, or one reaching the last), the one returned
+/// is the first that passes; a shorter run between two of those is missed.
+template <class Passes, class Keep, class Restore>
+int coarse_to_fine(int count, int stride, Passes&& passes, Keep&& keep, Restore&& restore) {
+  int failed = -1;  // the last candidate asked that failed
+  for (long long c = 0;; c += stride) {  // (wide: c passes the last candidate by up to 2 strides)
+    const int k = c < count - 1 ? static_cast<int>(c) : count - 1;
+    if (k <= failed) return -1;  // the last has failed (or there is none)
+    if (!passes(k)) {
+      failed = k;
+      continue;
+    }
+    if (k > failed + 1) {
+      keep();
+      for (int j = failed + 1; j < k; ++j)
+        if (passes(j)) return j;
+      restore();
+    }
+    return k;
+  }
+}
+
 class Planner {
  public:
   /// Checks the inputs and plans Phase 1, then hands the skin the finger planes of Phase 2
