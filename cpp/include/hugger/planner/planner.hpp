@@ -207,8 +207,8 @@ class Planner {
   /// Hug rule H5: finger m, which cannot follow the palm to new_eta otherwise, opens: its root
   /// joint turns back (extension) by a sampled angle at which Tail2Head from the moved root finds
   /// a free chain (into `out`) whose motion is allowed and which clears the other fingers, the
-  /// angles asked coarse to fine (in the definition). Returns false when none of the angles asked
-  /// passes (`out` is then unspecified).
+  /// angles asked coarse to fine (coarse_to_fine, with planner.cpp's kOpenStride). Returns false
+  /// when none of the angles asked passes (`out` is then unspecified).
   bool open_step(int m, const Chain& old, double new_eta, const std::vector<Chain>& others, Chain& out);
   /// Hug rule H5: one step of closing finger m's root joint again after it opened (Tail2Head
   /// clinging for the rest). Returns false when the finger moves less than epsilon or the motion
