@@ -113,6 +113,19 @@ def test_builtin_counts_take_numpy_integers():
     assert len(objects.blob(seed=np.int64(3), subdivisions=1).faces) == 80
 
 
+@pytest.mark.parametrize("call, shown", [
+    (lambda: objects.box(extents=np.array([0.1, -0.1, 0.1])), "got -0.1"),
+    (lambda: objects.torus(major_radius=np.float64(0.02), minor_radius=np.float64(0.05)), "got 0.05 and 0.02"),
+    (lambda: hugger.Hand(link_length=np.float32(-1.0)), "got -1.0"),
+    (lambda: scenarios.default_case("sphere", hugger.Hand(), turn_deg=np.float64(200.0)), "got 200.0"),
+])
+def test_numpy_numbers_in_messages_read_as_plain_numbers(call, shown):
+    """A NumPy scalar in a refusal is shown as the number it holds, not as np.float64(...)."""
+    with pytest.raises(ValueError, match=shown) as err:
+        call()
+    assert "np." not in str(err.value)
+
+
 def test_unknown_builtin_names_the_choices():
     with pytest.raises(ValueError, match="choose from sphere, apple"):
         objects.get("banana")

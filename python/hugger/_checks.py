@@ -9,15 +9,21 @@ from typing import Any
 import numpy as np
 
 
+def shown(value: Any) -> str:
+    """``value`` as the messages show it: its repr, a NumPy scalar as the Python number it holds
+    (``-0.1``, not ``np.float64(-0.1)``)."""
+    return repr(value.item() if isinstance(value, np.generic) else value)
+
+
 def number(name: str, value: Any) -> float:
     """``value`` as a float (any sign, not checked for finiteness); otherwise a ValueError naming
     ``name``. Text and bools are not numbers here (``float`` reads "0.04" and True as 1)."""
     if isinstance(value, (str, bytes, bool, np.bool_)):
-        raise ValueError(f"{name} must be a number, got {value!r}")
+        raise ValueError(f"{name} must be a number, got {shown(value)}")
     try:
         return float(value)
     except (TypeError, ValueError, OverflowError):
-        raise ValueError(f"{name} must be a number, got {value!r}") from None
+        raise ValueError(f"{name} must be a number, got {shown(value)}") from None
 
 
 def positive(name: str, value: Any, allow_zero: bool = False, most: float | None = None,
@@ -28,11 +34,11 @@ def positive(name: str, value: Any, allow_zero: bool = False, most: float | None
     x = number(name, value)
     if not math.isfinite(x) or x < 0 or (x == 0 and not allow_zero):
         kind = "non-negative" if allow_zero else "positive"
-        raise ValueError(f"{name} must be a {kind} finite number, got {value!r}")
+        raise ValueError(f"{name} must be a {kind} finite number, got {shown(value)}")
     if most is not None and x > most:
-        raise ValueError(f"{name} must be at most {most:g}, got {value!r}")
+        raise ValueError(f"{name} must be at most {most:g}, got {shown(value)}")
     if least is not None and x < least:
-        raise ValueError(f"{name} must be at least {least:g}, got {value!r}")
+        raise ValueError(f"{name} must be at least {least:g}, got {shown(value)}")
     return x
 
 
@@ -74,13 +80,13 @@ def whole(name: str, value: Any, lo: int | None = None, hi: int | None = None) -
         rule = f"a whole number <= {hi}"
     else:
         rule = "a whole number"
-    raise ValueError(f"{name} must be {rule}, got {value!r}")
+    raise ValueError(f"{name} must be {rule}, got {shown(value)}")
 
 
 def flag(name: str, value: Any) -> bool:
     """``value`` as a bool: True or False (a NumPy bool too); otherwise a ValueError naming ``name``."""
     if not isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} must be True or False, got {value!r}")
+        raise ValueError(f"{name} must be True or False, got {shown(value)}")
     return bool(value)
 
 
@@ -103,5 +109,5 @@ def workers(name: str, value: Any) -> int:
     if value is None:
         return cpus()
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
-        raise ValueError(f"{name} must be a whole number >= 1 or None, got {value!r}")
+        raise ValueError(f"{name} must be a whole number >= 1 or None, got {shown(value)}")
     return int(value)

@@ -9,7 +9,7 @@ from typing import Any, Callable
 import numpy as np
 
 from . import _core, _stable
-from ._checks import positive, real_array, whole
+from ._checks import positive, real_array, shown, whole
 
 from ._types import MAX_FINGERS, MAX_LINKS  # noqa: F401  (hugger.hand.MAX_FINGERS as before)
 
@@ -41,7 +41,7 @@ def rim_directions(finger_angles: Any) -> np.ndarray:
 
 def _size(name: str, value: Any, allow_zero: bool = False) -> float:
     if isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} must be a number, got {value!r}")
+        raise ValueError(f"{name} must be a number, got {shown(value)}")
     v = positive(name, value, allow_zero)
     if v > MAX_LENGTH:
         raise ValueError(f"{name} = {v:g} m is larger than {MAX_LENGTH:g} m: sizes are in metres")
@@ -192,7 +192,7 @@ class Hand:
         palm_r, palm_t = _size("palm_radius", palm_radius), _size("palm_thickness", palm_thickness)
         if not np.all(np.isfinite(lengths)) or not np.all(lengths > 0):
             bad = float(lengths[~(np.isfinite(lengths) & (lengths > 0))][0])
-            raise ValueError(f"link_length must be a positive finite number, got {bad!r}")
+            raise ValueError(f"link_length must be a positive finite number, got {shown(bad)}")
         for name, value in (("link_length", float(lengths.min())), ("palm_radius", palm_r), ("palm_thickness", palm_t)):
             if value < MIN_LENGTH:
                 raise ValueError(f"{name} = {value:g} m is smaller than {MIN_LENGTH:g} m, below what the engine "

@@ -26,6 +26,7 @@ import numpy as np
 
 from . import _core
 from . import physics as _ph
+from ._checks import shown
 from ._rotation import quaternion_wxyz
 from ._types import CONTACT_DISTANCE
 from .planner import Planner
@@ -78,7 +79,7 @@ class Simulation:
         self.centre = np.asarray(info["object_centre"])  # the object's frame origin in its mesh coordinates
         self.latency = int(latency)
         if self.latency < 0:
-            raise ValueError(f"latency must be >= 0 control periods, got {latency!r}")
+            raise ValueError(f"latency must be >= 0 control periods, got {shown(latency)}")
         self._ctrl_to: np.ndarray | None = None
         self._poses: list[tuple[list[np.ndarray], list[np.ndarray]]] = []
         self._record_pose()

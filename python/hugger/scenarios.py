@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from . import _stable, objects
-from ._checks import number, positive, real_array
+from ._checks import number, positive, real_array, shown
 from .hand import Hand
 from .planner import look_at
 from .world import Object
@@ -51,7 +51,7 @@ def _turn(turn_deg: Any) -> float:
     """A start's turn in degrees: a number from -180 to 180 (the one rule of start_pose and default_case)."""
     x = number("turn_deg (--turn)", turn_deg)
     if not (math.isfinite(x) and -180.0 <= x <= 180.0):
-        raise ValueError(f"turn_deg (--turn) must be within [-180, 180] degrees, got {turn_deg!r}")
+        raise ValueError(f"turn_deg (--turn) must be within [-180, 180] degrees, got {shown(turn_deg)}")
     return x
 
 

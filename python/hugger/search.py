@@ -237,7 +237,7 @@ def rank(candidates: Sequence[Candidate], judge: Callable[[Candidate], Candidate
             except (TypeError, ValueError):
                 s = math.nan  # not a number at all: refused below, as NaN is
             if not math.isfinite(s):
-                raise ValueError(f"score must return a finite number, got {answer!r} for candidate {c.index}")
+                raise ValueError(f"score must return a finite number, got {_checks.shown(answer)} for candidate {c.index}")
             out[c.index] = replace(j, score=s)
         chosen = max((c for c in out if c.ok), key=lambda c: (c.score, -c.index))
         return chosen.index, out

@@ -11,7 +11,7 @@ from typing import Any, cast
 import numpy as np
 
 from . import _core
-from ._checks import positive
+from ._checks import positive, shown
 from ._files import atomic_path
 from ._npz import READ_ERRORS, Archive, ArchiveError
 from ._types import CONTACT_DISTANCE, MAX_FINGERS, MAX_LINKS, VERSION, Configuration
@@ -40,7 +40,7 @@ def configuration_index(count: int, k: Any) -> int:
     """Index ``k`` (negative counts from the end) of a trajectory of ``count`` configurations:
     ``ValueError`` for what is no whole number, ``IndexError`` naming the range otherwise."""
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
-        raise ValueError(f"k must be a whole configuration index, got {k!r}")
+        raise ValueError(f"k must be a whole configuration index, got {shown(k)}")
     if not -count <= k < count:
         raise IndexError(f"configuration k={k} is out of range for a trajectory of {count} configurations")
     return int(range(count)[k])

@@ -30,7 +30,7 @@ import numpy as np
 
 from . import _palette, analysis
 from ._palette import rgb255
-from ._checks import whole
+from ._checks import shown, whole
 from ._files import write_atomic
 from ._rotation import quaternion_wxyz
 from .trajectory import Trajectory
@@ -220,7 +220,7 @@ def check_fps(fps: Any) -> float:
 
     x = check(fps)
     if x < MIN_FPS:
-        raise ValueError(f"fps must be at least {MIN_FPS:g}, got {fps!r}")
+        raise ValueError(f"fps must be at least {MIN_FPS:g}, got {shown(fps)}")
     return x
 
 
@@ -346,7 +346,7 @@ class Viewer:
         if self._closed.is_set():
             raise ValueError("the viewer is closed: its server has stopped")
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
-            raise ValueError(f"k must be a whole number, got {k!r}")
+            raise ValueError(f"k must be a whole number, got {shown(k)}")
         k = int(k) if k >= 0 else self.count + int(k)
         if not 0 <= k < self.count:
             raise ValueError(f"k must be in 0..{self.count - 1} (or negative from the end), got {k}")

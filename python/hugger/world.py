@@ -8,7 +8,7 @@ from typing import Any, cast
 import numpy as np
 
 from . import _core
-from ._checks import real_array
+from ._checks import real_array, shown
 from .hand import implausible_size
 
 #: Vertex coordinates beyond this (m) are refused: no grasp scene spans a thousand kilometres, and
@@ -135,7 +135,7 @@ class Object:
         try:
             bound = float(max_distance)
         except (TypeError, ValueError):
-            raise ValueError(f"max_distance must be a number >= 0 (inf: no bound), got {max_distance!r}") from None
+            raise ValueError(f"max_distance must be a number >= 0 (inf: no bound), got {shown(max_distance)}") from None
         return self._core.closest(p, bound)  # the core checks the value
 
     def segment_distance(self, a: Any, b: Any) -> np.ndarray:
