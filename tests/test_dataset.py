@@ -678,9 +678,10 @@ def test_a_shard_keyed_by_its_path_as_given_is_still_resumed(tmp_path, monkeypat
 
 def test_opening_what_is_no_dataset_says_what_it_is(tmp_path):
     (tmp_path / "file").write_text("x")
-    for path, match in ((tmp_path / "nowhere", "nowhere: no such folder"), (tmp_path / "file", "is not a folder"),
-                        (tmp_path, "holds no dataset index")):
-        with pytest.raises(ValueError, match=match):
+    for path, error, match in ((tmp_path / "nowhere", FileNotFoundError, "no such dataset folder: .*nowhere"),
+                               (tmp_path / "file", NotADirectoryError, "is not a folder"),
+                               (tmp_path, ValueError, "holds no dataset index")):
+        with pytest.raises(error, match=match):
             hugger.Dataset(path)
 
 

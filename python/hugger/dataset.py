@@ -781,9 +781,12 @@ class Dataset:
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.root = Path(path)
         index_path = self.root / "index.json"
+        # A path that is not there, or no folder, is refused as objects.load and Trajectory.load
+        # refuse theirs (an OSError); a folder that holds no dataset is a ValueError (below).
+        if not self.root.exists():
+            raise FileNotFoundError(f"no such dataset folder: {self.root}")
         if not self.root.is_dir():
-            raise ValueError(f"{self.root}: no such folder" if not self.root.exists() else
-                             f"{self.root} is not a folder (a dataset is a folder, made by 'hugger generate')")
+            raise NotADirectoryError(f"{self.root} is not a folder (a dataset is a folder, made by 'hugger generate')")
         if not index_path.is_file():
             raise ValueError(f"{self.root} holds no dataset index (index.json); make one with 'hugger generate'")
         self.index = _read_index(index_path)
