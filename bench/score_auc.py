@@ -31,7 +31,7 @@ def main() -> int:
     args = ap.parse_args()
     try:
         ds = hugger.Dataset(args.dataset)
-    except ValueError as exc:  # no dataset there: argparse's one-line error, exit 2
+    except (ValueError, OSError) as exc:  # no dataset there: argparse's one-line error, exit 2
         ap.error(str(exc))
     eps, links, hug, slide, firm, key, held = [], [], [], [], [], [], []
     chosen_held = default_held = 0
