@@ -979,7 +979,7 @@ void Planner::phase2_iteration() {
   bool committed = false;
   // After an iteration that refused every palm step, the shortest step is asked first: refused
   // again, the hand is still blocked and the longer ones are not asked (a longer step moves
-  // every finger farther; asked anyway, none passed on any object measured, docs/performance.md).
+  // every finger farther; asked anyway, none passed on any object measured, docs/performance-history.md).
   // Passed, the steps are asked from the longest as always (the shortest, asked again last if
   // need be, is the same attempt: its work and counters then come twice, rarely).
   bool still_blocked = false;
