@@ -114,16 +114,22 @@ def test_builtin_counts_take_numpy_integers():
 
 
 @pytest.mark.parametrize("call, shown", [
-    (lambda: objects.box(extents=np.array([0.1, -0.1, 0.1])), "got -0.1"),
-    (lambda: objects.torus(major_radius=np.float64(0.02), minor_radius=np.float64(0.05)), "got 0.05 and 0.02"),
-    (lambda: hugger.Hand(link_length=np.float32(-1.0)), "got -1.0"),
-    (lambda: scenarios.default_case("sphere", hugger.Hand(), turn_deg=np.float64(200.0)), "got 200.0"),
+    (lambda: objects.box(extents=np.array([0.1, -0.1, 0.1])), "got -0.1$"),
+    (lambda: scenarios.default_case("sphere", hugger.Hand(), turn_deg=np.float64(200.0)), "got 200.0$"),
+    (lambda: hugger.skins.SensorModel(objects.sphere(subdivisions=1), gap_noise=np.float64(-0.5)), "got -0.5$"),
+    (lambda: hugger.objects.sphere(radius=np.array(-0.02)), "got -0.02$"),  # a 0-d array
 ])
 def test_numpy_numbers_in_messages_read_as_plain_numbers(call, shown):
     """A NumPy scalar in a refusal is shown as the number it holds, not as np.float64(...)."""
     with pytest.raises(ValueError, match=shown) as err:
         call()
     assert "np." not in str(err.value)
+
+
+def test_a_float32_is_shown_at_its_own_precision():
+    from hugger._checks import shown
+
+    assert shown(np.float32(-0.1)) == "-0.1" and shown(np.int64(9)) == "9" and shown("x") == "'x'"
 
 
 def test_unknown_builtin_names_the_choices():

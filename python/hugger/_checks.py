@@ -10,8 +10,12 @@ import numpy as np
 
 
 def shown(value: Any) -> str:
-    """``value`` as the messages show it: its repr, a NumPy scalar as the Python number it holds
-    (``-0.1``, not ``np.float64(-0.1)``)."""
+    """``value`` as the messages show it: its repr, but a NumPy number (or a 0-d array) as the
+    number it holds: ``-0.1``, not ``np.float64(-0.1)``; a float32 at its own precision."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if isinstance(value, np.floating):
+        return str(value)  # (item() would widen a float32: -0.10000000149011612)
     return repr(value.item() if isinstance(value, np.generic) else value)
 
 

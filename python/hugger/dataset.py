@@ -759,7 +759,7 @@ def _check_shard(z: dict[str, np.ndarray], k: int, path: Path) -> None:
             or any(len(z[key]) != c for key in ("contact_normals", "contact_finger", "contact_link"))):
         raise _not_whole(path, "its contact offsets do not split its contacts")
     if z["best"].dtype.kind not in "iu" or not 0 <= int(z["best"]) < max(k, 1):
-        raise _not_whole(path, f"best is {z['best']!r}")
+        raise _not_whole(path, f"best is {_checks.shown(z['best'])}")
 
 
 def _item_index(i: Any, count: int, what: str) -> int:
@@ -768,7 +768,7 @@ def _item_index(i: Any, count: int, what: str) -> int:
     if isinstance(i, bool) or not isinstance(i, (int, np.integer)):
         raise TypeError(f"a {what} index must be an integer, got {type(i).__name__}")
     if not -count <= i < count:
-        raise IndexError(f"{what} {i!r} is out of range for a dataset of {count} {what}s")
+        raise IndexError(f"{what} {_checks.shown(i)} is out of range for a dataset of {count} {what}s")
     return int(i) % count
 
 

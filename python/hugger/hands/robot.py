@@ -20,7 +20,7 @@ from typing import Any, Callable, Mapping, cast
 
 import numpy as np
 
-from .._checks import number
+from .._checks import number, shown
 from .._signals import kept
 from .._rotation import axis_angle
 from .. import _stable
@@ -291,9 +291,9 @@ def _fixed_joints(value: Any) -> dict[str, float]:
         try:  # (text and bools are not angles)
             x = number(f"fixed_joints[{name!r}]", angle)
         except ValueError:
-            raise ValueError(f"fixed_joints[{name!r}] must be an angle (rad), got {angle!r}") from None
+            raise ValueError(f"fixed_joints[{name!r}] must be an angle (rad), got {shown(angle)}") from None
         if not math.isfinite(x):
-            raise ValueError(f"fixed_joints[{name!r}] must be a finite angle (rad), got {angle!r}")
+            raise ValueError(f"fixed_joints[{name!r}] must be a finite angle (rad), got {shown(angle)}")
         out[str(name)] = x
     return out
 

@@ -25,14 +25,14 @@ from typing import Any, cast
 
 import numpy as np
 
-from .._checks import whole
+from .._checks import shown, whole
 from .._core import Sensing, Touch
 
 
 def _setting(name: str, value: Any, allow_inf: bool = False) -> float:
     v = float(value)
     if math.isnan(v) or v < 0 or (math.isinf(v) and not allow_inf):
-        raise ValueError(f"{name} must be a number >= 0{' or inf' if allow_inf else ''}, got {value!r}")
+        raise ValueError(f"{name} must be a number >= 0{' or inf' if allow_inf else ''}, got {shown(value)}")
     return v
 
 
