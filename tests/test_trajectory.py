@@ -360,6 +360,22 @@ def test_a_damaged_npy_header_is_a_value_error(saved, tmp_path):
         hugger.Trajectory.load(path)
 
 
+@pytest.mark.parametrize("header", [b"PK\x01\x02", b"PK\x03\x04"])  # the central directory's flags, a member's own
+def test_a_member_flagged_encrypted_is_a_value_error(saved, tmp_path, header):
+    # found by test_fuzz: a flipped flag bit makes zipfile ask for a password (a RuntimeError)
+    _, path, _ = saved
+    b = bytearray(path.read_bytes())
+    flags = b.index(header) + (8 if header == b"PK\x01\x02" else 6)  # the first member's general-purpose flags
+    b[flags] |= 0x1
+    (tmp_path / "flagged.npz").write_bytes(bytes(b))
+    try:
+        back = hugger.Trajectory.load(tmp_path / "flagged.npz")
+    except ValueError as exc:
+        assert "cannot read" in str(exc)
+    else:  # a reader that takes a member's flags from its directory entry alone: harmless
+        assert header == b"PK\x03\x04" and np.array_equal(back.joints, saved[0].joints)
+
+
 @pytest.mark.parametrize("content, match", [
     (b"", "cannot read"),
     (b"PK\x05\x06" + b"\0" * 18, "missing keys"),  # an empty zip

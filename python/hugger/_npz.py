@@ -12,10 +12,12 @@ from typing import IO, Any
 import numpy as np
 
 #: What reading a damaged zip/npy can raise. (numpy parses a .npy header with ``tokenize`` and
-#: ``ast``: a damaged one raises TokenError or SyntaxError.)
+#: ``ast``: a damaged one raises TokenError or SyntaxError; zipfile raises RuntimeError for a
+#: member whose flags, damaged, say it is encrypted, and NotImplementedError and RecursionError are
+#: RuntimeErrors too.)
 READ_ERRORS = (OSError, ValueError, TypeError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, KeyError,
-               IndexError, zlib.error, NotImplementedError, struct.error, OverflowError, UnicodeError,
-               RecursionError, MemoryError, tokenize.TokenError, SyntaxError)
+               IndexError, zlib.error, RuntimeError, struct.error, OverflowError, UnicodeError,
+               MemoryError, tokenize.TokenError, SyntaxError)
 
 #: A member unpacking to more than this (bytes) and more than BOMB_RATIO times its packed size is
 #: refused unread: a plan's numbers pack two to ten times, a crafted run of zeros a thousand times,
@@ -41,6 +43,8 @@ def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, key: str) -> np.nda
     header must not make numpy allocate gigabytes) and decompression bombs."""
     fmt = np.lib.format
     refuse_bomb(key, info.file_size, info.compress_size)
+    if info.flag_bits & 0x1:  # (the writers never encrypt: damaged flags)
+        raise ArchiveError(f"{key}: an encrypted member (its flags are damaged, or it is no plan's file)")
     with zf.open(info) as member:
         version = fmt.read_magic(member)
         if version == (1, 0):
