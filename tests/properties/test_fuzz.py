@@ -25,9 +25,11 @@ from hypothesis.extra import numpy as hnp
 import helpers
 import hugger
 
-# no example database and no explain phase: nothing is written into the project (.hypothesis/)
+# no example database and no explain phase: nothing is written into the project (.hypothesis/);
+# a failure prints its @reproduce_failure blob instead, so that a rare one found by a long run can
+# be replayed from its output
 _QUIET = {"deadline": None, "database": None, "phases": [p for p in Phase if p is not Phase.explain],
-          "suppress_health_check": [HealthCheck.too_slow, HealthCheck.filter_too_much]}
+          "suppress_health_check": [HealthCheck.too_slow, HealthCheck.filter_too_much], "print_blob": True}
 settings.register_profile("ci", max_examples=40, derandomize=True, **_QUIET)
 settings.register_profile("long", max_examples=3000, **_QUIET)
 PROFILE = os.environ.get("HUGGER_FUZZ_PROFILE", "ci")
@@ -476,5 +478,5 @@ def test_random_valid_case_plans_to_a_known_end(checker, kind, seed, size, step_
 
 def test_profiles_are_registered():
     assert settings.get_profile("ci").max_examples < settings.get_profile("long").max_examples
-    assert FUZZ.database is None and FUZZ.deadline is None
+    assert FUZZ.database is None and FUZZ.deadline is None and FUZZ.print_blob
     assert math.isfinite(PLANS.max_examples)
