@@ -43,8 +43,6 @@ def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, key: str) -> np.nda
     header must not make numpy allocate gigabytes) and decompression bombs."""
     fmt = np.lib.format
     refuse_bomb(key, info.file_size, info.compress_size)
-    if info.flag_bits & 0x1:  # (the writers never encrypt: damaged flags)
-        raise ArchiveError(f"{key}: an encrypted member (its flags are damaged, or it is no plan's file)")
     with zf.open(info) as member:
         version = fmt.read_magic(member)
         if version == (1, 0):

@@ -192,7 +192,7 @@ class Hand:
         palm_r, palm_t = _size("palm_radius", palm_radius), _size("palm_thickness", palm_thickness)
         if not np.all(np.isfinite(lengths)) or not np.all(lengths > 0):
             bad = float(lengths[~(np.isfinite(lengths) & (lengths > 0))][0])
-            raise ValueError(f"link_length must be a positive finite number, got {shown(bad)}")
+            raise ValueError(f"link_length must be a positive finite number, got {bad!r}")
         for name, value in (("link_length", float(lengths.min())), ("palm_radius", palm_r), ("palm_thickness", palm_t)):
             if value < MIN_LENGTH:
                 raise ValueError(f"{name} = {value:g} m is smaller than {MIN_LENGTH:g} m, below what the engine "

@@ -16,7 +16,7 @@ from typing import Any, Callable
 import numpy as np
 
 from . import _stable
-from ._checks import positive, real_array, shown, whole
+from ._checks import positive, real_array, whole
 from .world import MAX_COORDINATE, Object
 
 
@@ -223,7 +223,7 @@ def torus(major_radius: float = 0.04, minor_radius: float = 0.015, center: Any =
     the tube, at most MAX_TRIANGLES triangles."""
     major_radius, minor_radius = positive("major_radius", major_radius), positive("minor_radius", minor_radius)
     if not minor_radius < major_radius:
-        raise ValueError(f"torus needs minor_radius < major_radius, got {shown(minor_radius)} and {shown(major_radius)}")
+        raise ValueError(f"torus needs minor_radius < major_radius, got {minor_radius!r} and {major_radius!r}")
     s, r = whole("sections", sections, 3), whole("rings", rings, 3)
     _triangles("the torus", 2 * s * r)
     origin = _center(center)
