@@ -3,6 +3,7 @@ names a file the repository holds, and every #anchor a heading of the page it po
 anchor rules)."""
 from __future__ import annotations
 
+import functools
 import re
 import shutil
 import subprocess
@@ -15,7 +16,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = sorted([ROOT / "README.md", *(ROOT / "docs").glob("*.md"), ROOT / "bench" / "README.md"])
 # [text](target) or [text](target "title"); the text may hold one level of brackets ([`a[0]`](x.md))
-LINK = re.compile(r"\[(?:[^\[\]]|\[[^\[\]]*\])*\]\(\s*<?([^)\s>]+)>?(?:\s+\"[^\"]*\")?\s*\)")
+TEXT = r"(?:[^\[\]]|\[[^\[\]]*\])*"
+LINK = re.compile(r"\[" + TEXT + r"\]\(\s*<?([^)\s>]+)>?(?:\s+\"[^\"]*\")?\s*\)")
 FENCE = re.compile(r"^\s*(```|~~~)")
 CODE_SPAN = re.compile(r"(`+)(?!`).*?(?<!`)\1(?!`)", re.S)
 
@@ -40,13 +42,14 @@ def slug(heading: str) -> str:
     """GitHub's anchor for a heading's text: the text as shown (links as their text, code and
     emphasis marks and HTML tags dropped), lower case, every character but letters, digits, marks,
     spaces, hyphens and underscores dropped, spaces as hyphens."""
-    text = re.sub(r"\[((?:[^\[\]]|\[[^\[\]]*\])*)\]\([^)]*\)", r"\1", heading)  # [text](url) -> text
+    text = re.sub(r"\[(" + TEXT + r")\]\([^)]*\)", r"\1", heading)  # [text](url) -> text
     text = re.sub(r"<[^>]+>", "", text).replace("`", "").replace("*", "")
     kept = "".join(c for c in text.strip().lower() if c in " -_" or unicodedata.category(c)[0] in "LNM")
     return kept.replace(" ", "-")
 
 
-def anchors(page: Path) -> set[str]:
+@functools.lru_cache(maxsize=None)
+def anchors(page: Path) -> frozenset[str]:
     """The anchors GitHub makes for the page's ATX headings (a repeated one numbered -1, -2, ...)."""
     seen: dict[str, int] = {}
     out = set()
@@ -58,7 +61,7 @@ def anchors(page: Path) -> set[str]:
         n = seen.get(s, 0)
         seen[s] = n + 1
         out.add(s if n == 0 else f"{s}-{n}")
-    return out
+    return frozenset(out)
 
 
 def links(page: Path) -> list[str]:
