@@ -1,11 +1,19 @@
 from __future__ import annotations
 
+import signal
 import sys
 from pathlib import Path
 
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+# A suite started with SIGINT ignored (`make test &` from a script, nohup) would keep it ignored
+# here and in every child process, where Python then installs no handler of its own: the Ctrl-C
+# tests need SIGINT as a terminal delivers it. (A handler set here is reset to the default in a
+# child at exec, so the children get Python's own again.)
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 import helpers  # noqa: E402
 
